@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# The test command: set up the machine if needed, then build in release (the profile results are
+# filed under) and run every test on lavapipe.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ci/setup.sh
+# Mesa's device-select layer prints a harmless XDG_RUNTIME_DIR line per device; quiet it.
+export NODEVICE_SELECT=1
+cargo test --release --workspace --locked "$@"

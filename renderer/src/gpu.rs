@@ -1,0 +1,250 @@
+//! The Vulkan device (lavapipe on CI machines), the platform key recorded with every result,
+//! timed submission and texture readback.
+
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use crate::RenderError;
+
+/// The hint printed when no Vulkan adapter exists. It is the one line a user needs.
+pub const INSTALL_HINT: &str = "no Vulkan adapter found: install Mesa's lavapipe \
+     (Debian/Ubuntu: `sudo apt-get install mesa-vulkan-drivers`) and run again";
+
+/// Everything about the machine that makes timings and images comparable. Two results with
+/// the same [`PlatformInfo::key`] were produced by the same driver, thread count, CPU model and
+/// build profile.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PlatformInfo {
+    pub adapter: String,
+    pub driver: String,
+    pub driver_info: String,
+    pub backend: String,
+    pub device_type: String,
+    /// `LP_NUM_THREADS` as set in the environment; `None` means lavapipe picks (one per core).
+    pub lp_num_threads: Option<String>,
+    pub cpu_model: String,
+    pub cpu_cores: usize,
+    /// `release` or `debug`: CPU maths that feeds the GPU may differ by an ulp between them.
+    pub build_profile: &'static str,
+}
+
+impl PlatformInfo {
+    /// A file-name-safe key, e.g.
+    /// `llvmpipe-mesa-22.3.6-llvm-15.0.6-lp-auto-amd-epyc-7b13-release`.
+    pub fn key(&self) -> String {
+        let threads = self.lp_num_threads.as_deref().unwrap_or("auto");
+        let raw = format!(
+            "{} {} lp {} {} {}",
+            self.driver, self.driver_info, threads, self.cpu_model, self.build_profile
+        );
+        slug(&raw)
+    }
+}
+
+/// Lowercases and keeps `[a-z0-9.]`, joining the other runs with single dashes.
+fn slug(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars().flat_map(char::to_lowercase) {
+        if c.is_ascii_alphanumeric() || c == '.' {
+            out.push(c);
+        } else if !out.is_empty() && !out.ends_with('-') {
+            out.push('-');
+        }
+    }
+    out.trim_end_matches('-').to_string()
+}
+
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|info| {
+            info.lines()
+                .find(|line| line.starts_with("model name"))
+                .and_then(|line| line.split_once(':'))
+                .map(|(_, name)| name.split_whitespace().collect::<Vec<_>>().join(" "))
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string())
+}
+
+/// The device and queue, with validation errors captured instead of panicking.
+#[derive(Debug)]
+pub struct Gpu {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub platform: PlatformInfo,
+    errors: Arc<Mutex<Vec<String>>>,
+}
+
+impl Gpu {
+    /// Opens the first Vulkan adapter, or the first whose name contains `WGPU_ADAPTER_NAME`
+    /// when that variable is set. Only Vulkan is asked for: the default backends also find a
+    /// GL llvmpipe, which is a different driver with different timings.
+    pub fn new() -> Result<Gpu, RenderError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Backends::VULKAN;
+        let instance = wgpu::Instance::new(desc);
+        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+        let wanted = std::env::var("WGPU_ADAPTER_NAME").ok();
+        let adapter = adapters
+            .into_iter()
+            .find(|adapter| match &wanted {
+                Some(name) => adapter.get_info().name.to_lowercase().contains(&name.to_lowercase()),
+                None => true,
+            })
+            .ok_or(RenderError::NoAdapter)?;
+        Self::open(&adapter)
+    }
+
+    fn open(adapter: &wgpu::Adapter) -> Result<Gpu, RenderError> {
+        let info = adapter.get_info();
+        // The adapter's own limits, not wgpu's conservative defaults: 4×4 G-buffers at
+        // 1024×768 need 4096×3072 targets and more than the default buffer size.
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("aabench"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits,
+            ..Default::default()
+        }))
+        .map_err(|e| RenderError::Device(e.to_string()))?;
+
+        let errors = Arc::new(Mutex::new(Vec::new()));
+        let sink = Arc::clone(&errors);
+        device.on_uncaptured_error(Arc::new(move |error: wgpu::Error| {
+            sink.lock().expect("error sink").push(error.to_string());
+        }));
+
+        let platform = PlatformInfo {
+            adapter: info.name.clone(),
+            driver: info.driver.clone(),
+            driver_info: info.driver_info.clone(),
+            backend: format!("{:?}", info.backend).to_lowercase(),
+            device_type: format!("{:?}", info.device_type).to_lowercase(),
+            lp_num_threads: std::env::var("LP_NUM_THREADS").ok(),
+            cpu_model: cpu_model(),
+            cpu_cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            build_profile: if cfg!(debug_assertions) { "debug" } else { "release" },
+        };
+        Ok(Gpu { device, queue, platform, errors })
+    }
+
+    /// Returns the validation errors reported since the last call, as one error.
+    pub fn check(&self) -> Result<(), RenderError> {
+        let mut errors = self.errors.lock().expect("error sink");
+        if errors.is_empty() {
+            return Ok(());
+        }
+        let message = errors.join("; ");
+        errors.clear();
+        Err(RenderError::Validation(message))
+    }
+
+    /// Submits one command buffer and waits until the device has finished it. The returned
+    /// duration runs from just before the submit to the end of the wait: on a CPU driver this
+    /// wall clock is the dependable one (timestamps inside compute passes are not).
+    pub fn submit_timed(&self, encoder: wgpu::CommandEncoder) -> Result<Duration, RenderError> {
+        let commands = encoder.finish();
+        let start = Instant::now();
+        self.queue.submit([commands]);
+        self.wait()?;
+        let elapsed = start.elapsed();
+        self.check()?;
+        Ok(elapsed)
+    }
+
+    /// Blocks until all submitted work is done.
+    pub fn wait(&self) -> Result<(), RenderError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| RenderError::Device(e.to_string()))
+    }
+
+    pub fn encoder(&self, label: &str) -> wgpu::CommandEncoder {
+        self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
+    }
+
+    /// Copies mip 0 of a 2D texture (colour, or the depth of a depth format) into memory, rows
+    /// tightly packed.
+    pub fn read_texture(&self, texture: &wgpu::Texture) -> Result<Vec<u8>, RenderError> {
+        let aspect = if texture.format().is_depth_stencil_format() {
+            wgpu::TextureAspect::DepthOnly
+        } else {
+            wgpu::TextureAspect::All
+        };
+        let texel =
+            texture.format().block_copy_size(Some(aspect)).expect("a format with a readable aspect") as usize;
+        let (width, height) = (texture.width() as usize, texture.height() as usize);
+        let row = width * texel;
+        let padded_row = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: (padded_row * height) as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.encoder("readback");
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo { aspect, ..texture.as_image_copy() },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded_row as u32),
+                    rows_per_image: None,
+                },
+            },
+            texture.size(),
+        );
+        self.queue.submit([encoder.finish()]);
+        let bytes = self.map_read(&buffer)?;
+        let mut packed = Vec::with_capacity(row * height);
+        for y in 0..height {
+            packed.extend_from_slice(&bytes[y * padded_row..y * padded_row + row]);
+        }
+        Ok(packed)
+    }
+
+    /// Copies a whole buffer into memory.
+    pub fn read_buffer(&self, source: &wgpu::Buffer) -> Result<Vec<u8>, RenderError> {
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: source.size(),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.encoder("readback");
+        encoder.copy_buffer_to_buffer(source, 0, &staging, 0, source.size());
+        self.queue.submit([encoder.finish()]);
+        self.map_read(&staging)
+    }
+
+    fn map_read(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RenderError> {
+        let (sender, receiver) = std::sync::mpsc::channel();
+        buffer.map_async(wgpu::MapMode::Read, .., move |result| {
+            let _ = sender.send(result);
+        });
+        self.wait()?;
+        receiver
+            .recv()
+            .map_err(|e| RenderError::Device(e.to_string()))?
+            .map_err(|e| RenderError::Device(e.to_string()))?;
+        let bytes = buffer.get_mapped_range(..).map_err(|e| RenderError::Device(e.to_string()))?.to_vec();
+        buffer.unmap();
+        self.check()?;
+        Ok(bytes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::slug;
+
+    #[test]
+    fn slug_keeps_versions_and_joins_the_rest() {
+        assert_eq!(
+            slug("llvmpipe Mesa 22.3.6 (LLVM 15.0.6) lp auto AMD EPYC 7B13 release"),
+            "llvmpipe-mesa-22.3.6-llvm-15.0.6-lp-auto-amd-epyc-7b13-release"
+        );
+    }
+}

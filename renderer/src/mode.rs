@@ -1,0 +1,180 @@
+//! Render modes and their ids: `deferred-1x1`, `reference-4x4-stalled`, `adaptive-3x3-geometry`.
+
+use std::fmt;
+use std::str::FromStr;
+
+/// Which of the adaptive metrics decide the sample count (the paper's Fig. 8 ablation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Metrics {
+    /// max(k_d, k_n, k_s): the paper's method.
+    Both,
+    /// Depth variance and normal cone only.
+    Geometry,
+    /// Luminance range of the shade-first image only.
+    Shading,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Technique {
+    /// One sample per pixel.
+    Deferred,
+    /// All M² samples of an M·w × M·h G-buffer shaded, box-filtered.
+    Reference,
+    /// Holländer et al. 2013: the same G-buffer, samples shaded where the metrics ask.
+    Adaptive(Metrics),
+}
+
+/// A technique at a supersampling factor, with or without the expensive (stalled) shader.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Mode {
+    pub technique: Technique,
+    /// Samples per pixel side: the G-buffer is M·w × M·h.
+    pub m: u32,
+    pub stalled: bool,
+}
+
+impl Mode {
+    pub const fn new(technique: Technique, m: u32, stalled: bool) -> Mode {
+        Mode { technique, m, stalled }
+    }
+
+    /// The eight modes of the foundation: deferred 1×1 and reference 2×2–4×4, each plain and
+    /// stalled.
+    pub fn baseline_modes() -> Vec<Mode> {
+        let mut modes = Vec::new();
+        for stalled in [false, true] {
+            modes.push(Mode::new(Technique::Deferred, 1, stalled));
+            for m in 2..=4 {
+                modes.push(Mode::new(Technique::Reference, m, stalled));
+            }
+        }
+        modes
+    }
+
+    /// Adaptive 2×2–4×4 with both metrics, plain and stalled.
+    pub fn adaptive_modes() -> Vec<Mode> {
+        Self::with_metrics(Metrics::Both)
+    }
+
+    /// Adaptive 2×2–4×4 with one metric each: the ablation of the paper's Fig. 8.
+    pub fn ablation_modes() -> Vec<Mode> {
+        let mut modes = Self::with_metrics(Metrics::Geometry);
+        modes.extend(Self::with_metrics(Metrics::Shading));
+        modes
+    }
+
+    fn with_metrics(metrics: Metrics) -> Vec<Mode> {
+        [false, true]
+            .into_iter()
+            .flat_map(|stalled| (2..=4).map(move |m| Mode::new(Technique::Adaptive(metrics), m, stalled)))
+            .collect()
+    }
+
+    /// Total samples per pixel of the supersampled G-buffer.
+    pub fn samples_per_pixel(&self) -> u32 {
+        self.m * self.m
+    }
+
+    /// The same mode without the stall.
+    pub fn unstalled(self) -> Mode {
+        Mode { stalled: false, ..self }
+    }
+}
+
+impl fmt::Display for Mode {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        let name = match self.technique {
+            Technique::Deferred => "deferred",
+            Technique::Reference => "reference",
+            Technique::Adaptive(_) => "adaptive",
+        };
+        write!(f, "{name}-{m}x{m}", m = self.m)?;
+        match self.technique {
+            Technique::Adaptive(Metrics::Geometry) => f.write_str("-geometry")?,
+            Technique::Adaptive(Metrics::Shading) => f.write_str("-shading")?,
+            _ => {}
+        }
+        if self.stalled {
+            f.write_str("-stalled")?;
+        }
+        Ok(())
+    }
+}
+
+/// A mode id that does not parse, with the reason.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry)"
+)]
+pub struct ModeError {
+    pub id: String,
+    pub reason: String,
+}
+
+impl FromStr for Mode {
+    type Err = ModeError;
+
+    fn from_str(id: &str) -> Result<Mode, ModeError> {
+        let fail = |reason: &str| ModeError { id: id.to_string(), reason: reason.to_string() };
+        let mut parts = id.split('-');
+        let technique = parts.next().unwrap_or_default();
+        let size = parts.next().ok_or_else(|| fail("missing the size, e.g. `-2x2`"))?;
+        let m = match size.split_once('x') {
+            Some((a, b)) if a == b => a.parse::<u32>().map_err(|_| fail("the size must be MxM"))?,
+            _ => return Err(fail("the size must be MxM with equal sides")),
+        };
+        let mut rest: Vec<&str> = parts.collect();
+        let stalled = rest.last() == Some(&"stalled");
+        if stalled {
+            rest.pop();
+        }
+        let technique = match (technique, rest.as_slice()) {
+            ("deferred", []) => Technique::Deferred,
+            ("reference", []) => Technique::Reference,
+            ("adaptive", []) => Technique::Adaptive(Metrics::Both),
+            ("adaptive", ["geometry"]) => Technique::Adaptive(Metrics::Geometry),
+            ("adaptive", ["shading"]) => Technique::Adaptive(Metrics::Shading),
+            ("deferred" | "reference" | "adaptive", _) => return Err(fail("unexpected suffix")),
+            _ => return Err(fail("the technique must be deferred, reference or adaptive")),
+        };
+        let allowed = match technique {
+            Technique::Deferred => 1..=1,
+            // reference-1x1 exists to check that the supersampling path equals deferred-1x1.
+            Technique::Reference => 1..=4,
+            Technique::Adaptive(_) => 2..=4,
+        };
+        if !allowed.contains(&m) {
+            return Err(fail(&format!("M must be in {}..={}", allowed.start(), allowed.end())));
+        }
+        Ok(Mode::new(technique, m, stalled))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_listed_mode_round_trips_through_its_id() {
+        let all = [Mode::baseline_modes(), Mode::adaptive_modes(), Mode::ablation_modes()].concat();
+        assert_eq!(all.len(), 8 + 6 + 12);
+        for mode in all {
+            assert_eq!(mode.to_string().parse::<Mode>(), Ok(mode));
+        }
+    }
+
+    #[test]
+    fn bad_ids_say_why() {
+        let check = |id: &str, reason: &str| {
+            let error = id.parse::<Mode>().unwrap_err();
+            assert!(error.reason.contains(reason), "{id}: {error}");
+        };
+        check("deferred-2x2", "M must be in 1..=1");
+        check("adaptive-1x1", "M must be in 2..=4");
+        check("reference-5x5", "M must be in 1..=4");
+        check("reference-2x3", "equal sides");
+        check("fxaa3", "missing the size");
+        check("reference-2x2-geometry", "unexpected suffix");
+        check("supersample-2x2", "technique must be");
+    }
+}

@@ -1,0 +1,286 @@
+//! The generated scenes. Units are metres, +Y is up.
+
+use glam::{Affine3A, Quat, Vec3};
+
+use super::Builder;
+use super::mesh::{self, Mesh};
+use super::textures;
+use crate::scene::write::MaterialDesc;
+
+const TEXTURE_SIZE: u32 = 512;
+
+fn at(x: f32, y: f32, z: f32) -> Affine3A {
+    Affine3A::from_translation(Vec3::new(x, y, z))
+}
+
+fn turned(angle_y: f32, x: f32, y: f32, z: f32) -> Affine3A {
+    Affine3A::from_rotation_translation(Quat::from_rotation_y(angle_y), Vec3::new(x, y, z))
+}
+
+/// A Sponza-like court, 30 m × 13 m, two storeys of colonnades along both long sides.
+pub(super) fn atrium(b: &mut Builder) {
+    let tiles = b.texture("floor-tiles", &textures::floor_tiles(TEXTURE_SIZE));
+    let bricks = b.texture("bricks", &textures::bricks(TEXTURE_SIZE));
+    let fabric = b.texture("fabric", &textures::fabric(TEXTURE_SIZE));
+    let leaves = b.texture("leaves", &textures::leaves(TEXTURE_SIZE));
+    let stone = b.texture("stone", &textures::stone(TEXTURE_SIZE));
+    let floor = b.material(MaterialDesc::new("floor", [1.0; 3], 0.35).textured(tiles));
+    let brick = b.material(MaterialDesc::new("brick", [1.0; 3], 0.8).textured(bricks));
+    let curtain = b.material(MaterialDesc::new("curtain", [1.0; 3], 0.7).textured(fabric).double_sided());
+    let foliage =
+        b.material(MaterialDesc::new("foliage", [1.0; 3], 0.6).textured(leaves).masked(0.5).double_sided());
+    let sandstone = b.material(MaterialDesc::new("sandstone", [1.0; 3], 0.55).textured(stone));
+    let bronze = b.material(MaterialDesc::new("bronze", [0.8, 0.5, 0.25], 0.3).metallic(1.0));
+
+    let (half_length, court, outer) = (15.0f32, 4.0f32, 6.6f32);
+    let bay = 2.5f32;
+    let columns: Vec<f32> = (0..11).map(|i| -12.5 + bay * i as f32).collect();
+
+    b.mesh(floor).append(&mesh::floor(2.0 * half_length, 2.0 * outer, 60, 26, 0.5), Affine3A::IDENTITY);
+    let height = 10.25;
+    for side in [-1.0f32, 1.0] {
+        let wall = mesh::cuboid(Vec3::new(2.0 * half_length, height, 0.3), 0.25);
+        b.mesh(brick).append(&wall, at(0.0, height / 2.0, side * (outer + 0.15)));
+        let end = mesh::cuboid(Vec3::new(0.3, height, 2.0 * outer), 0.25);
+        b.mesh(brick).append(&end, at(side * (half_length + 0.15), height / 2.0, 0.0));
+    }
+
+    // Two storeys: (column foot, column height, radius, arch inner radius, arch outer radius).
+    let storeys = [(0.0f32, 3.6f32, 0.3f32, 0.95f32, 1.25f32), (5.45, 3.0, 0.25, 1.0, 1.25)];
+    for (storey, &(foot, shaft, radius, inner, outer_radius)) in storeys.iter().enumerate() {
+        // Fluted shaft with a slight taper (entasis).
+        let column = mesh::cylinder(shaft, 48, 36, |angle, t| {
+            radius * (1.0 + 0.035 * (20.0 * angle).cos()) * (1.0 - 0.08 * t)
+        });
+        let base = mesh::cuboid(Vec3::new(2.6 * radius, 0.3, 2.6 * radius), 1.0);
+        let capital = mesh::cuboid(Vec3::new(2.8 * radius, 0.3, 2.8 * radius), 1.0);
+        let spring = foot + shaft + 0.3;
+        let arch = mesh::arch(inner, outer_radius, 2.0 * radius, 48, 1.0);
+        for side in [-1.0f32, 1.0] {
+            let z = side * court;
+            for &x in &columns {
+                b.mesh(sandstone).append(&column, at(x, foot, z));
+                b.mesh(sandstone).append(&base, at(x, foot + 0.15, z));
+                b.mesh(sandstone).append(&capital, at(x, foot + shaft + 0.15, z));
+            }
+            for pair in columns.windows(2) {
+                b.mesh(sandstone).append(&arch, at((pair[0] + pair[1]) / 2.0, spring, z));
+            }
+            // The entablature over the arches, and the gallery floor behind it.
+            let top = spring + outer_radius;
+            let beam = mesh::cuboid(Vec3::new(2.0 * half_length, 0.3, 0.7), 1.0);
+            b.mesh(sandstone).append(&beam, at(0.0, top + 0.15, z));
+            if storey == 0 {
+                let slab = mesh::cuboid(Vec3::new(2.0 * half_length, 0.3, outer - court), 0.5);
+                b.mesh(floor).append(&slab, at(0.0, top + 0.15, side * (court + outer) / 2.0));
+            }
+        }
+    }
+
+    // Upper-storey balustrades: a rail over bulging balusters every 15 cm.
+    let baluster = mesh::cylinder(0.9, 12, 8, |_, t| 0.025 + 0.02 * (t * std::f32::consts::PI).sin());
+    let rail = mesh::cuboid(Vec3::new(2.0 * half_length, 0.08, 0.14), 1.0);
+    let gallery = 5.45;
+    for side in [-1.0f32, 1.0] {
+        let z = side * (court - 0.3);
+        b.mesh(sandstone).append(&rail, at(0.0, gallery + 0.94, z));
+        for pair in columns.windows(2) {
+            let mut x = pair[0] + 0.35;
+            while x < pair[1] - 0.3 {
+                b.mesh(bronze).append(&baluster, at(x, gallery, z));
+                x += 0.15;
+            }
+        }
+    }
+
+    // Curtains hung in the upper arcade of one side.
+    let drape = mesh::curtain(2.1, 2.9, 6.0, 0.08, 48, 64);
+    for pair in columns.windows(2) {
+        b.mesh(curtain).append(&drape, at((pair[0] + pair[1]) / 2.0, 8.6, -(court + 0.35)));
+    }
+
+    // Planters down the middle of the court, each with a bush of alpha-masked leaf cards.
+    let planter = mesh::cuboid(Vec3::new(0.8, 0.6, 0.8), 1.0);
+    let card = mesh::quad(0.6, 0.6);
+    for x in [-10.0f32, -6.0, -2.0, 2.0, 6.0, 10.0] {
+        b.mesh(sandstone).append(&planter, at(x, 0.3, 0.0));
+        for _ in 0..90 {
+            let offset = Vec3::new(b.rng.range(-0.5, 0.5), b.rng.range(0.7, 1.7), b.rng.range(-0.5, 0.5));
+            let rotation = Quat::from_euler(
+                glam::EulerRot::YXZ,
+                b.rng.range(0.0, std::f32::consts::TAU),
+                b.rng.range(-0.6, 0.6),
+                b.rng.range(-0.6, 0.6),
+            );
+            let place = Affine3A::from_rotation_translation(rotation, Vec3::new(x, 0.0, 0.0) + offset);
+            b.mesh(foliage).append(&card, place);
+        }
+    }
+
+    b.camera([-13.0, 1.8, 0.0], [10.0, 3.2, 0.0], 62.0, 80.0);
+}
+
+/// Thin geometry and grazing planes: what a single sample per pixel cannot resolve.
+pub(super) fn thin(b: &mut Builder) {
+    let checks = b.texture("checker", &textures::checker(TEXTURE_SIZE, 8));
+    let stripes = b.texture("stripes", &textures::stripes(TEXTURE_SIZE, 32));
+    let ground = b.material(MaterialDesc::new("ground", [1.0; 3], 0.8).textured(checks));
+    let facade = b.material(MaterialDesc::new("facade", [1.0; 3], 0.6).textured(stripes));
+    let steel = b.material(MaterialDesc::new("steel", [0.75, 0.75, 0.78], 0.35).metallic(1.0));
+    let wood = b.material(MaterialDesc::new("wood", [0.6, 0.45, 0.3], 0.7));
+    let cable = b.material(MaterialDesc::new("cable", [0.05, 0.05, 0.05], 0.5));
+
+    b.mesh(ground).append(&mesh::floor(400.0, 400.0, 40, 40, 0.5), Affine3A::IDENTITY);
+    // A long striped wall running away from the camera: seen at a grazing angle.
+    let wall = mesh::wall(120.0, 6.0, 60, 3, 0.25);
+    b.mesh(facade).append(&wall, turned(std::f32::consts::FRAC_PI_2, -4.0, 3.0, -55.0));
+
+    // A chain-link fence: wires 1.5 cm thick on a 12 cm diagonal grid, 20 m × 2 m.
+    let (fence_width, fence_height, spacing) = (20.0f32, 2.0f32, 0.12f32);
+    let diagonal = fence_height * std::f32::consts::SQRT_2;
+    let strand = mesh::cuboid(Vec3::new(0.015, diagonal, 0.015), 1.0);
+    let mut x = -fence_width / 2.0 - fence_height;
+    while x < fence_width / 2.0 {
+        for lean in [-1.0f32, 1.0] {
+            let rotation = Quat::from_rotation_z(lean * std::f32::consts::FRAC_PI_4);
+            let place =
+                Affine3A::from_rotation_translation(rotation, Vec3::new(x + fence_height / 2.0, 1.0, -8.0));
+            b.mesh(steel).append(&clip_x(&strand, place, fence_width / 2.0), Affine3A::IDENTITY);
+        }
+        x += spacing;
+    }
+    for post in 0..=5 {
+        let px = -fence_width / 2.0 + post as f32 * fence_width / 5.0;
+        b.mesh(steel).append(&mesh::rod(0.04, 2.1, 16), at(px, 0.0, -8.0));
+    }
+
+    // A picket fence receding along the view: slats 5 cm wide every 10 cm.
+    let slat = mesh::cuboid(Vec3::new(0.02, 1.1, 0.05), 1.0);
+    let mut z = 2.0f32;
+    while z > -80.0 {
+        b.mesh(wood).append(&slat, at(3.0, 0.55, z));
+        z -= 0.1;
+    }
+    b.mesh(wood).append(&mesh::cuboid(Vec3::new(0.03, 0.06, 82.0), 1.0), at(3.0, 0.9, -39.0));
+
+    // Power lines: sagging cables 1.6 cm thick between two poles 80 m apart.
+    let poles = [-40.0f32, 40.0];
+    for &px in &poles {
+        b.mesh(wood).append(&mesh::rod(0.12, 9.0, 16), at(px, 0.0, -30.0));
+    }
+    for wire in 0..5 {
+        let y = 8.6 - 0.45 * wire as f32;
+        let z = -30.0 + (wire as f32 - 2.0) * 0.35;
+        let segments = 64;
+        for s in 0..segments {
+            let (t0, t1) = (s as f32 / segments as f32, (s + 1) as f32 / segments as f32);
+            let point = |t: f32| {
+                let x = poles[0] + (poles[1] - poles[0]) * t;
+                Vec3::new(x, y - 2.5 * 4.0 * t * (1.0 - t), z)
+            };
+            b.mesh(cable).append(&segment(point(t0), point(t1), 0.008, 6), Affine3A::IDENTITY);
+        }
+    }
+
+    b.camera([0.0, 1.6, 6.0], [0.0, 1.9, -20.0], 60.0, 400.0);
+}
+
+/// A rod of `radius` from `a` to `b`.
+fn segment(a: Vec3, b: Vec3, radius: f32, sides: u32) -> Mesh {
+    let length = (b - a).length();
+    let rotation = Quat::from_rotation_arc(Vec3::Y, (b - a) / length);
+    let mut out = Mesh::default();
+    out.append(&mesh::rod(radius, length, sides), Affine3A::from_rotation_translation(rotation, a));
+    out
+}
+
+/// `part` moved by `place`, dropped if its centre lies beyond |x| = limit (keeps the diagonal
+/// fence strands inside the fence's width).
+fn clip_x(part: &Mesh, place: Affine3A, limit: f32) -> Mesh {
+    let mut out = Mesh::default();
+    if place.translation.x.abs() <= limit {
+        out.append(part, place);
+    }
+    out
+}
+
+/// Glossy spheres and tori on a dark floor under five coloured point lights.
+pub(super) fn specular(b: &mut Builder) {
+    let floor = b.material(MaterialDesc::new("floor", [0.08, 0.08, 0.09], 0.45));
+    b.mesh(floor).append(&mesh::floor(24.0, 24.0, 24, 24, 1.0), Affine3A::IDENTITY);
+    let ball = mesh::sphere(0.45, 96, 48);
+    let colours = [[0.9, 0.1, 0.1], [0.95, 0.8, 0.3], [0.2, 0.5, 0.95], [0.9, 0.9, 0.9], [0.2, 0.8, 0.3]];
+    for row in 0..3 {
+        for (column, colour) in colours.iter().enumerate() {
+            let roughness = 0.04 + 0.08 * (row * 5 + column) as f32 / 14.0 * 4.0;
+            let metallic = if (row + column) % 2 == 0 { 1.0 } else { 0.0 };
+            let name = format!("sphere-{row}-{column}");
+            let material = b.material(MaterialDesc::new(&name, *colour, roughness).metallic(metallic));
+            let place = at(-2.6 + 1.3 * column as f32, 0.45, -1.3 * row as f32);
+            b.mesh(material).append(&ball, place);
+        }
+    }
+    let ring = mesh::torus(0.5, 0.14, 96, 32);
+    let chrome = b.material(MaterialDesc::new("chrome", [0.95, 0.95, 0.95], 0.06).metallic(1.0));
+    for (i, x) in [-3.2f32, -1.1, 1.1, 3.2].into_iter().enumerate() {
+        let tilt = Quat::from_rotation_x(0.9 + 0.3 * i as f32) * Quat::from_rotation_z(0.4 * i as f32);
+        b.mesh(chrome).append(&ring, Affine3A::from_rotation_translation(tilt, Vec3::new(x, 0.7, 1.4)));
+    }
+    b.camera([0.0, 1.7, 3.9], [0.0, 0.35, -0.9], 52.0, 60.0);
+}
+
+/// A closed room, 10 × 4 × 8 m, with boxes and a pillar around one point light.
+pub(super) fn shadow_room(b: &mut Builder) {
+    let tiles = b.texture("floor-tiles", &textures::floor_tiles(TEXTURE_SIZE));
+    let plaster = b.texture("plaster", &textures::stone(TEXTURE_SIZE));
+    let floor = b.material(MaterialDesc::new("floor", [1.0; 3], 0.4).textured(tiles));
+    let walls = b.material(MaterialDesc::new("walls", [0.9, 0.88, 0.85], 0.9).textured(plaster));
+    let crate_ = b.material(MaterialDesc::new("boxes", [0.55, 0.4, 0.25], 0.7));
+    let (width, height, depth) = (10.0f32, 4.0f32, 8.0f32);
+    b.mesh(floor).append(&mesh::floor(width, depth, 20, 16, 0.5), Affine3A::IDENTITY);
+    // The ceiling: a floor turned upside down, facing into the room.
+    let ceiling = Affine3A::from_rotation_translation(
+        Quat::from_rotation_x(std::f32::consts::PI),
+        Vec3::new(0.0, height, 0.0),
+    );
+    b.mesh(walls).append(&mesh::floor(width, depth, 10, 8, 0.5), ceiling);
+    for (angle, distance, span) in [
+        (0.0f32, depth / 2.0, width),
+        (std::f32::consts::PI, depth / 2.0, width),
+        (std::f32::consts::FRAC_PI_2, width / 2.0, depth),
+        (-std::f32::consts::FRAC_PI_2, width / 2.0, depth),
+    ] {
+        let wall = mesh::wall(span, height, 10, 4, 0.5);
+        let (sin, cos) = angle.sin_cos();
+        b.mesh(walls).append(&wall, turned(angle, -sin * distance, height / 2.0, -cos * distance));
+    }
+    for _ in 0..14 {
+        let size = Vec3::new(b.rng.range(0.4, 1.2), b.rng.range(0.4, 1.2), b.rng.range(0.4, 1.2));
+        let (x, z) = (b.rng.range(-4.0, 4.0), b.rng.range(-3.2, 3.2));
+        if x.abs() < 1.0 && z.abs() < 1.0 {
+            continue; // Keep the light's surroundings clear.
+        }
+        let spin = b.rng.range(0.0, 1.5);
+        b.mesh(crate_).append(&mesh::cuboid(size, 1.0), turned(spin, x, size.y / 2.0, z));
+    }
+    b.mesh(walls).append(&mesh::rod(0.3, height, 48), at(2.5, 0.0, 1.5));
+    b.camera([-4.3, 2.3, 3.6], [1.0, 0.7, -1.0], 70.0, 40.0);
+}
+
+/// One untextured plane, 200 m wide, facing the camera 3 m away.
+pub(super) fn plane(b: &mut Builder) {
+    let grey = b.material(MaterialDesc::new("grey", [0.6, 0.6, 0.6], 0.8));
+    b.mesh(grey).append(&mesh::wall(200.0, 200.0, 1, 1, 1.0), Affine3A::IDENTITY);
+    b.camera([0.0, 0.0, 3.0], [0.0, 0.0, 0.0], 60.0, 50.0);
+}
+
+/// A light plane covering the left half of the view in front of a dark one; its right edge is
+/// straight and tilted by 7° so it crosses pixels at every phase.
+pub(super) fn edge(b: &mut Builder) {
+    let dark = b.material(MaterialDesc::new("dark", [0.1, 0.1, 0.1], 0.9));
+    let light = b.material(MaterialDesc::new("light", [0.8, 0.8, 0.8], 0.9));
+    b.mesh(dark).append(&mesh::wall(100.0, 100.0, 1, 1, 1.0), at(0.0, 0.0, -2.0));
+    let tilt = Affine3A::from_rotation_z(7f32.to_radians()) * at(-50.0, 0.0, 0.0);
+    b.mesh(light).append(&mesh::wall(100.0, 100.0, 1, 1, 1.0), tilt);
+    b.camera([0.0, 0.0, 4.0], [0.0, 0.0, 0.0], 60.0, 50.0);
+}

@@ -1,0 +1,136 @@
+//! The CPU scene: what a glTF file holds once imported, plus the lights and camera that a
+//! manifest adds. Generated scenes are written as glTF and read back through the same importer,
+//! so there is one path for generated scenes and users' own files.
+
+mod camera;
+pub mod generate;
+mod import;
+mod upload;
+pub mod write;
+
+pub use camera::{Camera, FrameUniforms};
+pub use import::{load_gltf, read_generator};
+pub use upload::{GpuScene, MAX_LIGHTS};
+
+use glam::Vec3;
+
+/// One vertex as the G-buffer pass reads it: world space, baked node transforms.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub uv: [f32; 2],
+    pub material: u32,
+}
+
+/// How a material treats alpha. BLEND is rendered as opaque: a deferred renderer has no
+/// place for it, and none of the scenes this tool measures rely on it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AlphaMode {
+    Opaque,
+    /// Fragments whose alpha is below the cutoff are discarded in the G-buffer pass.
+    Mask {
+        cutoff: f32,
+    },
+}
+
+/// How the G-buffer pass draws a triangle: alpha-tested or not, back faces culled or not.
+/// Each class has its own pipeline; the importer sorts triangles by class.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct DrawClass {
+    pub masked: bool,
+    pub double_sided: bool,
+}
+
+impl DrawClass {
+    /// Every class, in drawing order: opaque before masked (masked fragments discard and so
+    /// lose early depth testing; opaque depth in place first rejects more of them).
+    pub const ALL: [DrawClass; 4] = [
+        DrawClass { masked: false, double_sided: false },
+        DrawClass { masked: false, double_sided: true },
+        DrawClass { masked: true, double_sided: false },
+        DrawClass { masked: true, double_sided: true },
+    ];
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Linear RGBA factor, multiplied with the texture.
+    pub base_color: [f32; 4],
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Index into [`Scene::textures`] of the base-colour texture.
+    pub texture: Option<usize>,
+    pub alpha: AlphaMode,
+    /// Without it, back faces are culled.
+    pub double_sided: bool,
+}
+
+impl Material {
+    pub fn draw_class(&self) -> DrawClass {
+        DrawClass { masked: matches!(self.alpha, AlphaMode::Mask { .. }), double_sided: self.double_sided }
+    }
+}
+
+/// An sRGB-encoded RGBA8 image, as decoded from the file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Texture {
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
+}
+
+/// A point light from the manifest.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointLight {
+    pub position: Vec3,
+    pub color: Vec3,
+    pub intensity: f32,
+    /// Distance at which the light's contribution fades to zero.
+    pub range: f32,
+    pub casts_shadows: bool,
+}
+
+/// Lighting and display settings that a manifest gives a scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Lighting {
+    pub lights: Vec<PointLight>,
+    pub ambient: Vec3,
+    /// Radiance where no geometry covers a sample.
+    pub background: Vec3,
+    /// Linear scale applied before display encoding.
+    pub exposure: f32,
+}
+
+/// Geometry, materials and textures of an imported scene.
+#[derive(Debug, Clone, Default)]
+pub struct Scene {
+    pub vertices: Vec<Vertex>,
+    /// Triangle list, sorted by draw class.
+    pub indices: Vec<u32>,
+    /// The index range of each draw class present, in [`DrawClass::ALL`] order.
+    pub draws: Vec<(DrawClass, std::ops::Range<u32>)>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    /// The first camera found in the node hierarchy, if any.
+    pub camera: Option<Camera>,
+    /// The `asset.generator` string of the file, used to tell stale generated files.
+    pub generator: Option<String>,
+}
+
+impl Scene {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Axis-aligned bounds of all vertices; a zero box for an empty scene.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let mut positions = self.vertices.iter().map(|v| Vec3::from(v.position));
+        let Some(first) = positions.next() else {
+            return (Vec3::ZERO, Vec3::ZERO);
+        };
+        positions.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)))
+    }
+}

@@ -1,0 +1,262 @@
+//! Adaptive supersampling on lavapipe: where samples go, that the GPU metric is its CPU twin,
+//! and that forcing every sample reproduces the reference.
+
+mod support;
+
+use aabench_renderer::adaptive::{self, MetricSet, WindowSample};
+use aabench_renderer::scene::generate::Generator;
+use aabench_renderer::scene::{Camera, Lighting, PointLight};
+use aabench_renderer::{
+    AdaptiveSettings, ExtraSamples, FrameImages, GBufferImages, PreparedMode, SceneRenderer,
+};
+use glam::{DVec3, Vec3};
+use support::*;
+
+fn counts(image: &FrameImages) -> &[u8] {
+    image.sample_counts.as_deref().expect("an adaptive mode reads back its sample counts")
+}
+
+/// Per pixel, whether more than one material shows among the G-buffer texels of its M×M window
+/// widened by `ring` texels on each side: with ring 0, windows the edge runs through; with ring
+/// 1, also those it runs along.
+fn edge_pixels(gbuffer: &GBufferImages, m: u32, ring: i64) -> Vec<bool> {
+    let (gw, gh) = (i64::from(gbuffer.width), i64::from(gbuffer.height));
+    let (w, m) = (gw / i64::from(m), i64::from(m));
+    (0..(gw / m) * (gh / m))
+        .map(|p| {
+            let (x0, y0) = ((p % w) * m, (p / w) * m);
+            let mut materials = (y0 - ring..y0 + m + ring)
+                .flat_map(|y| (x0 - ring..x0 + m + ring).map(move |x| (x, y)))
+                .filter(|&(x, y)| (0..gw).contains(&x) && (0..gh).contains(&y))
+                .map(|(x, y)| gbuffer.normal_material[(y * gw + x) as usize][3]);
+            let first = materials.next().expect("a window");
+            materials.any(|material| material != first)
+        })
+        .collect()
+}
+
+#[test]
+fn only_pixels_along_a_straight_edge_get_more_than_one_sample() {
+    let (mut renderer, _gpu) = renderer(Generator::Edge, &ambient_only(), settings(96, 64));
+    for m in 2..=4 {
+        let prepared = renderer.prepare(format!("adaptive-{m}x{m}").parse().unwrap()).unwrap();
+        prepared.render().unwrap();
+        let image = prepared.read_images().unwrap();
+        let gbuffer = prepared.read_gbuffer().unwrap();
+        let (through, along) = (edge_pixels(&gbuffer, m, 0), edge_pixels(&gbuffer, m, 1));
+        // The shading metric looks one pixel further, at the neighbours' colours.
+        let near_edge = |p: usize| {
+            let (x, y) = ((p % 96) as i64, (p / 96) as i64);
+            (-1..=1).any(|dy| {
+                (-1..=1).any(|dx| {
+                    let (nx, ny) = (x + dx, y + dy);
+                    (0..96).contains(&nx) && (0..64).contains(&ny) && along[(ny * 96 + nx) as usize]
+                })
+            })
+        };
+        let counts = counts(&image);
+        // The edge crosses all 64 rows; at 2×2 it can pass between two windows in some.
+        assert!(through.iter().filter(|&&e| e).count() >= 32, "{m}×{m}: too few windows on the edge");
+        for (p, &n) in counts.iter().enumerate() {
+            if through[p] {
+                assert_eq!(u32::from(n), m * m, "{m}×{m}: edge pixel {p} shaded {n} samples");
+            } else if n > 1 {
+                assert!(near_edge(p), "{m}×{m}: pixel {p}, away from the edge, shaded {n} samples");
+            }
+        }
+    }
+}
+
+/// One point light in front of the plane: smooth shading across the image.
+fn softly_lit() -> Lighting {
+    Lighting {
+        lights: vec![PointLight {
+            position: Vec3::new(0.6, 0.4, 2.0),
+            color: Vec3::ONE,
+            intensity: 3.0,
+            range: 30.0,
+            casts_shadows: false,
+        }],
+        ambient: Vec3::splat(0.05),
+        ..ambient_only()
+    }
+}
+
+#[test]
+fn a_flat_plane_facing_the_camera_takes_one_sample_and_matches_the_reference() {
+    let (mut renderer, _gpu) = renderer(Generator::Plane, &softly_lit(), settings(96, 64));
+    for m in 2..=4 {
+        let adaptive = render(&mut renderer, &format!("adaptive-{m}x{m}"));
+        assert!(counts(&adaptive).iter().all(|&n| n == 1), "{m}×{m}: a flat plane got extra samples");
+        let reference = render(&mut renderer, &format!("reference-{m}x{m}"));
+        assert!(colours(&reference).len() > 20, "the light should shade the plane smoothly");
+        assert!(
+            max_step(&adaptive, &reference) <= 1,
+            "{m}×{m}: {} steps from the reference",
+            max_step(&adaptive, &reference)
+        );
+    }
+}
+
+#[test]
+fn forcing_every_sample_reproduces_the_reference_within_one_step() {
+    for generator in [Generator::Atrium, Generator::Thin, Generator::Specular] {
+        for strategy in [ExtraSamples::Compact, ExtraSamples::Loop] {
+            let mut forced = settings(128, 96);
+            forced.adaptive =
+                AdaptiveSettings { force_all_samples: true, extra_samples: strategy, ..forced.adaptive };
+            let (mut renderer, _gpu) = renderer(generator, &lit(), forced);
+            for m in 2..=4 {
+                let adaptive = render(&mut renderer, &format!("adaptive-{m}x{m}"));
+                assert!(counts(&adaptive).iter().all(|&n| u32::from(n) == m * m));
+                let reference = render(&mut renderer, &format!("reference-{m}x{m}"));
+                let steps = max_step(&adaptive, &reference);
+                assert!(steps <= 1, "{generator} {m}×{m} {strategy:?}: {steps} steps from the reference");
+            }
+        }
+    }
+}
+
+#[test]
+fn sample_counts_stay_in_the_window_on_every_generated_scene() {
+    let harsh = Lighting {
+        lights: vec![PointLight {
+            position: Vec3::new(0.0, 1.0, 1.0),
+            color: Vec3::ONE,
+            intensity: 1e6,
+            range: 50.0,
+            casts_shadows: false,
+        }],
+        ..lit()
+    };
+    for generator in Generator::ALL {
+        for lighting in [lit(), harsh.clone()] {
+            let (mut renderer, _gpu) = renderer(generator, &lighting, settings(96, 72));
+            for m in 2..=4 {
+                let image = render(&mut renderer, &format!("adaptive-{m}x{m}"));
+                assert!(
+                    counts(&image).iter().all(|&n| n >= 1 && u32::from(n) <= m * m),
+                    "{generator} {m}×{m}"
+                );
+                assert!(image.hdr.iter().all(|v| v.is_finite()), "{generator} {m}×{m}: non-finite HDR");
+            }
+        }
+    }
+}
+
+/// Recomputes the count map on the CPU from the G-buffer and S the GPU used.
+fn cpu_counts(
+    prepared: &PreparedMode,
+    m: u32,
+    settings: &AdaptiveSettings,
+    exposure: f64,
+) -> (Vec<f64>, Vec<bool>) {
+    let gbuffer = prepared.read_gbuffer().unwrap();
+    let first = prepared.read_first().unwrap().expect("S");
+    let (gw, w, h) = (gbuffer.width as usize, (gbuffer.width / m) as usize, (gbuffer.height / m) as usize);
+    let metrics = MetricSet { geometry: true, shading: true };
+    let luma = |x: i64, y: i64| {
+        let p = &first[(y.clamp(0, h as i64 - 1) as usize) * w + x.clamp(0, w as i64 - 1) as usize];
+        adaptive::metric_luma([p[0], p[1], p[2]].map(f64::from), exposure)
+    };
+    let mut ks = Vec::new();
+    let mut ambiguous = Vec::new();
+    for p in 0..w * h {
+        let (x, y) = (p % w, p / w);
+        let window: Vec<WindowSample> = (0..(m * m) as usize)
+            .map(|i| {
+                let s = (y * m as usize + i / m as usize) * gw + x * m as usize + i % m as usize;
+                let [nx, ny, nz, material] = gbuffer.normal_material[s];
+                WindowSample {
+                    depth: gbuffer.depth[s],
+                    normal: [nx, ny, nz].map(f64::from),
+                    covered: material >= 0.0,
+                }
+            })
+            .collect();
+        let (xi, yi) = (x as i64, y as i64);
+        let cross = [luma(xi, yi), luma(xi - 1, yi), luma(xi + 1, yi), luma(xi, yi - 1), luma(xi, yi + 1)];
+        let k = adaptive::metric_k(&window, &cross, m, settings, metrics);
+        // f32 on the GPU, f64 here: results within a hair of a rounding boundary or of the
+        // shading threshold may fall either way.
+        let l_max = cross.iter().copied().fold(0.0, f64::max);
+        let range = l_max - cross.iter().copied().fold(1.0, f64::min);
+        let threshold = f64::from(settings.t_min).max(l_max * f64::from(settings.t_edge));
+        let near_rounding = k < f64::from(m * m) && ((k - k.floor()) - 0.5).abs() < 1e-3 * k.max(1.0);
+        let near_threshold = (range - threshold).abs() < 1e-3;
+        ks.push(k);
+        ambiguous.push(near_rounding || near_threshold);
+    }
+    (ks, ambiguous)
+}
+
+#[test]
+fn gpu_sample_counts_match_the_cpu_twin() {
+    let base = settings(128, 96);
+    let (mut renderer, _gpu) = renderer(Generator::Atrium, &lit(), base.clone());
+    for m in 2..=4 {
+        let prepared = renderer.prepare(format!("adaptive-{m}x{m}").parse().unwrap()).unwrap();
+        prepared.render().unwrap();
+        let image = prepared.read_images().unwrap();
+        let (ks, ambiguous) = cpu_counts(&prepared, m, &base.adaptive, f64::from(lit().exposure));
+        let mut checked = 0;
+        for (p, (&n, (&k, &unsure))) in counts(&image).iter().zip(ks.iter().zip(&ambiguous)).enumerate() {
+            if unsure {
+                continue;
+            }
+            checked += 1;
+            assert_eq!(u32::from(n), adaptive::clamp_count(k, m * m), "{m}×{m}: pixel {p} (k = {k})");
+        }
+        assert!(checked > 128 * 96 * 95 / 100, "{m}×{m}: only {checked} pixels unambiguous");
+        let extra = counts(&image).iter().filter(|&&n| n > 1).count();
+        assert!(extra > 500, "{m}×{m}: the atrium should need extra samples somewhere ({extra} pixels)");
+    }
+}
+
+#[test]
+fn compact_and_loop_shading_agree_within_one_step() {
+    let mut images = Vec::new();
+    for strategy in [ExtraSamples::Compact, ExtraSamples::Loop] {
+        let mut s = settings(128, 96);
+        s.adaptive.extra_samples = strategy;
+        let (mut renderer, _gpu) = renderer(Generator::Atrium, &lit(), s);
+        images.push(render(&mut renderer, "adaptive-3x3"));
+    }
+    assert_eq!(counts(&images[0]), counts(&images[1]));
+    assert!(max_step(&images[0], &images[1]) <= 1);
+}
+
+#[test]
+fn the_full_method_takes_the_larger_of_the_two_ablations() {
+    let (mut renderer, _gpu) = renderer(Generator::Atrium, &lit(), settings(128, 96));
+    let both = render(&mut renderer, "adaptive-3x3");
+    let geometry = render(&mut renderer, "adaptive-3x3-geometry");
+    let shading = render(&mut renderer, "adaptive-3x3-shading");
+    let mut differ = 0;
+    for ((&b, &g), &s) in counts(&both).iter().zip(counts(&geometry)).zip(counts(&shading)) {
+        // round(max(a, b)) = max(round(a), round(b)): k = max(k_d, k_n, k_s) is per pixel.
+        assert_eq!(b, g.max(s));
+        differ += usize::from(g != s);
+    }
+    assert!(differ > 100, "the two metrics should disagree somewhere ({differ} pixels)");
+}
+
+#[test]
+fn a_slightly_tilted_plane_five_kilometres_away_needs_no_extra_samples() {
+    // True depth spread per pixel is about a centimetre; E[d²] − E[d]² in f32 at 5000 m
+    // would return noise of order one (m²) and take every sample.
+    let (gpu, _lock) = gpu();
+    let (scene, _) = generated(Generator::Plane);
+    let camera = Camera {
+        near: 1.0,
+        far: 10_000.0,
+        ..Camera::look_at(DVec3::new(0.0, 50.0, 5000.0), DVec3::ZERO, 1.5)
+    };
+    let lighting = Lighting { lights: Vec::new(), ..ambient_only() };
+    let mut renderer = SceneRenderer::new(gpu, &scene, &camera, &lighting, settings(96, 64)).unwrap();
+    for m in 2..=4 {
+        let image = render(&mut renderer, &format!("adaptive-{m}x{m}"));
+        assert!(counts(&image).iter().all(|&n| n == 1), "{m}×{m}: far plane got extra samples");
+        assert_eq!(colours(&image).len(), 1);
+    }
+}

@@ -1,0 +1,132 @@
+//! The foundation's invariants, on lavapipe: the supersampling path at M = 1 is the deferred
+//! path, flat surfaces do not change with M, edges blend only when supersampled, renders are
+//! deterministic, and the G-buffer really is written.
+
+mod support;
+
+use aabench_renderer::scene::generate::Generator;
+use support::*;
+
+#[test]
+fn reference_1x1_equals_deferred_1x1_bit_for_bit() {
+    for generator in [Generator::Specular, Generator::Atrium] {
+        let (mut renderer, _gpu) = renderer(generator, &lit(), settings(160, 120));
+        let deferred = render(&mut renderer, "deferred-1x1");
+        let reference = render(&mut renderer, "reference-1x1");
+        assert_eq!(deferred.display, reference.display, "{generator}: display images differ");
+        assert_eq!(deferred.hdr, reference.hdr, "{generator}: HDR images differ");
+    }
+}
+
+#[test]
+fn a_flat_untextured_plane_has_one_colour_at_every_m() {
+    let (mut renderer, _gpu) = renderer(Generator::Plane, &ambient_only(), settings(96, 64));
+    let mut seen = Vec::new();
+    for mode in ["deferred-1x1", "reference-2x2", "reference-3x3", "reference-4x4"] {
+        let image = render(&mut renderer, mode);
+        let colours = colours(&image);
+        assert_eq!(colours.len(), 1, "{mode}: {} colours on a flat plane", colours.len());
+        seen.push(*colours.first().unwrap());
+    }
+    assert!(seen.windows(2).all(|w| w[0] == w[1]), "the plane's colour changes with M: {seen:?}");
+    // Ambient 1 × albedo 0.6, sRGB-encoded: 0.6 → 203.
+    assert_eq!(seen[0], [203, 203, 203]);
+}
+
+#[test]
+fn an_edge_has_intermediate_values_only_when_supersampled() {
+    let (mut renderer, _gpu) = renderer(Generator::Edge, &ambient_only(), settings(96, 64));
+    let deferred = render(&mut renderer, "deferred-1x1");
+    let flat = colours(&deferred);
+    assert_eq!(flat.len(), 2, "one sample per pixel sees either plane: {flat:?}");
+    let (dark, light) = (*flat.first().unwrap(), *flat.last().unwrap());
+    let is_between = |p: &[u8]| p[0] > dark[0] && p[0] < light[0];
+    for m in 2..=4 {
+        let image = render(&mut renderer, &format!("reference-{m}x{m}"));
+        let rows: Vec<&[u8]> = image.display.chunks_exact(4 * 96).collect();
+        let mut blended = 0;
+        for row in &rows {
+            let pixels: Vec<&[u8]> = row.chunks_exact(4).collect();
+            for (x, p) in pixels.iter().enumerate().filter(|(_, p)| is_between(p)) {
+                blended += 1;
+                // A blended pixel sits on the edge: light on its left, dark on its right.
+                let near = |range: std::ops::Range<usize>, colour: [u8; 3]| {
+                    range.filter_map(|i| pixels.get(i)).any(|q| q[..3] == colour)
+                };
+                assert!(
+                    near(x.saturating_sub(2)..x, light),
+                    "reference-{m}x{m}: blend at x={x} without light to its left"
+                );
+                assert!(
+                    near(x + 1..x + 3, dark),
+                    "reference-{m}x{m}: blend at x={x} without dark to its right"
+                );
+                let _ = p;
+            }
+        }
+        // The edge crosses 64 rows; at M = 2 about half of them blend, more at larger M.
+        assert!((28..=3 * 64).contains(&blended), "reference-{m}x{m}: {blended} blended pixels");
+    }
+}
+
+#[test]
+fn renders_are_bit_identical_across_frames_and_renderers() {
+    let mode = "reference-2x2-stalled";
+    let (mut first, _gpu) = renderer(Generator::Atrium, &lit(), settings(160, 120));
+    let prepared = first.prepare(mode.parse().unwrap()).unwrap();
+    prepared.render().unwrap();
+    let a = prepared.read_images().unwrap();
+    prepared.render().unwrap();
+    let b = prepared.read_images().unwrap();
+    drop(_gpu);
+    let (mut second, _gpu) = renderer(Generator::Atrium, &lit(), settings(160, 120));
+    let c = render(&mut second, mode);
+    assert_eq!(a, b, "two frames of one renderer differ");
+    assert_eq!(a, c, "two renderers differ");
+}
+
+#[test]
+fn the_gbuffer_is_written_and_the_background_is_marked() {
+    let (mut renderer, _gpu) = renderer(Generator::Atrium, &lit(), settings(128, 96));
+    let prepared = renderer.prepare("reference-2x2".parse().unwrap()).unwrap();
+    prepared.render().unwrap();
+    let gbuffer = prepared.read_gbuffer().unwrap();
+    assert_eq!((gbuffer.width, gbuffer.height), (256, 192));
+    let covered: Vec<usize> =
+        (0..gbuffer.depth.len()).filter(|&i| gbuffer.normal_material[i][3] >= 0.0).collect();
+    let fraction = covered.len() as f64 / gbuffer.depth.len() as f64;
+    // The atrium's camera sees sky above the court and geometry everywhere else.
+    assert!((0.6..0.99).contains(&fraction), "covered fraction {fraction}");
+    for &i in &covered {
+        let [x, y, z, material] = gbuffer.normal_material[i];
+        let length = (x * x + y * y + z * z).sqrt();
+        assert!((length - 1.0).abs() < 2e-3, "sample {i}: normal length {length}");
+        assert!(material.fract() == 0.0, "sample {i}: material {material}");
+        assert!(gbuffer.depth[i] > 0.05 && gbuffer.depth[i] < 80.0, "sample {i}: depth {}", gbuffer.depth[i]);
+    }
+    // A pixel whose 2×2 window is all background shows the background radiance.
+    let image = prepared.read_images().unwrap();
+    let sky = (0..128 * 96)
+        .find(|&p| {
+            let (x, y) = (2 * (p % 128), 2 * (p / 128));
+            [(0, 0), (1, 0), (0, 1), (1, 1)]
+                .iter()
+                .all(|(dx, dy)| gbuffer.normal_material[(y + dy) * 256 + x + dx][3] < 0.0)
+        })
+        .expect("some sky");
+    // Within one f16 step: lavapipe truncates when it stores f16, where `half` rounds.
+    for (c, expected) in image.hdr[4 * sky..4 * sky + 3].iter().zip(lit().background.to_array()) {
+        let ulp = half::f16::from_f32(expected).to_f32() * 2f32.powi(-10);
+        assert!((c - expected).abs() <= ulp, "sky pixel {sky}: {c} for {expected}");
+    }
+}
+
+#[test]
+fn stalled_modes_render_the_same_image() {
+    let (mut renderer, _gpu) = renderer(Generator::Specular, &lit(), settings(128, 96));
+    for mode in ["deferred-1x1", "reference-3x3"] {
+        let plain = render(&mut renderer, mode);
+        let stalled = render(&mut renderer, &format!("{mode}-stalled"));
+        assert_eq!(plain.display, stalled.display, "{mode}: the stall changed the image");
+    }
+}

@@ -1,0 +1,93 @@
+//! Shared by the renderer's integration tests: one device, generated scenes, one-call renders.
+
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
+
+use aabench_renderer::scene::generate::Generator;
+use aabench_renderer::scene::{Camera, Lighting, PointLight, Scene, load_gltf};
+use aabench_renderer::{AdaptiveSettings, FrameImages, Gpu, Mode, RenderSettings, SceneRenderer};
+use glam::Vec3;
+
+/// One device for the whole test binary, and a lock so that tests render one at a time:
+/// lavapipe already uses every core.
+pub fn gpu() -> (Arc<Gpu>, MutexGuard<'static, ()>) {
+    static GPU: OnceLock<Arc<Gpu>> = OnceLock::new();
+    static LOCK: Mutex<()> = Mutex::new(());
+    let guard = LOCK.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    let gpu = GPU.get_or_init(|| Arc::new(Gpu::new().expect("a Vulkan adapter (lavapipe)")));
+    (Arc::clone(gpu), guard)
+}
+
+/// Generates a scene into a per-process temporary folder and imports it through glTF.
+pub fn generated(generator: Generator) -> (Scene, Camera) {
+    let dir = std::env::temp_dir().join(format!("aabench-renderer-tests-{}", std::process::id()));
+    let path: PathBuf = dir.join(format!("{generator}.glb"));
+    if !path.exists() {
+        generator.write(1, &path).expect("write generated scene");
+    }
+    let scene = load_gltf(&path).expect("import generated scene");
+    let mut camera = scene.camera.expect("generated scenes carry a camera");
+    if !camera.far.is_finite() {
+        camera.far = 500.0;
+    }
+    (scene, camera)
+}
+
+/// Ambient light only: every surface shows exactly ambient × albedo.
+pub fn ambient_only() -> Lighting {
+    Lighting { lights: Vec::new(), ambient: Vec3::ONE, background: Vec3::new(0.2, 0.3, 0.5), exposure: 1.0 }
+}
+
+/// A few point lights around the camera.
+pub fn lit() -> Lighting {
+    let light = |position: Vec3, color: Vec3| PointLight {
+        position,
+        color,
+        intensity: 12.0,
+        range: 30.0,
+        casts_shadows: false,
+    };
+    Lighting {
+        lights: vec![
+            light(Vec3::new(2.0, 3.0, 3.0), Vec3::new(1.0, 0.9, 0.8)),
+            light(Vec3::new(-3.0, 2.0, 1.0), Vec3::new(0.4, 0.6, 1.0)),
+        ],
+        ambient: Vec3::splat(0.05),
+        background: Vec3::new(0.2, 0.3, 0.5),
+        exposure: 1.0,
+    }
+}
+
+pub fn settings(width: u32, height: u32) -> RenderSettings {
+    RenderSettings { width, height, stall_iterations: 64, adaptive: AdaptiveSettings::default() }
+}
+
+pub fn renderer(
+    generator: Generator,
+    lighting: &Lighting,
+    settings: RenderSettings,
+) -> (SceneRenderer, MutexGuard<'static, ()>) {
+    let (gpu, guard) = gpu();
+    let (scene, camera) = generated(generator);
+    let renderer = SceneRenderer::new(gpu, &scene, &camera, lighting, settings).expect("scene upload");
+    (renderer, guard)
+}
+
+pub fn render(renderer: &mut SceneRenderer, mode: &str) -> FrameImages {
+    let mode: Mode = mode.parse().expect("mode id");
+    let prepared = renderer.prepare(mode).expect("prepare mode");
+    prepared.render().expect("render frame");
+    prepared.read_images().expect("read images")
+}
+
+/// Distinct display colours (RGB) of an image.
+pub fn colours(image: &FrameImages) -> std::collections::BTreeSet<[u8; 3]> {
+    image.display.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect()
+}
+
+/// Largest per-channel difference between two display images, in 8-bit steps.
+pub fn max_step(a: &FrameImages, b: &FrameImages) -> u8 {
+    a.display.iter().zip(&b.display).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0)
+}

@@ -1,0 +1,123 @@
+//! Image files of a run: display PNGs, linear HDR EXRs and heatmaps (sample counts, absolute
+//! differences). Every write goes to a temporary file first and is renamed into place.
+
+use std::path::{Path, PathBuf};
+
+use aabench_renderer::scene::write::write_atomic;
+use anyhow::Context;
+
+/// Writes RGBA8 pixels as PNG.
+pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> anyhow::Result<()> {
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image::write_buffer_with_format(
+        &mut bytes,
+        rgba,
+        width,
+        height,
+        image::ExtendedColorType::Rgba8,
+        image::ImageFormat::Png,
+    )
+    .with_context(|| format!("{}: PNG encoding", path.display()))?;
+    write_atomic(path, bytes.get_ref()).with_context(|| format!("{}: write", path.display()))
+}
+
+/// Writes the RGB of linear RGBA f32 pixels as a 32-bit float EXR (alpha holds the stall
+/// checksum, not coverage, so it is left out).
+pub fn write_exr(path: &Path, width: u32, height: u32, rgba: &[f32]) -> anyhow::Result<()> {
+    let temporary = temporary_beside(path);
+    let (w, h) = (width as usize, height as usize);
+    let result = exr::prelude::write_rgb_file(&temporary, w, h, |x, y| {
+        let p = &rgba[(y * w + x) * 4..];
+        (p[0], p[1], p[2])
+    });
+    if let Err(error) = result {
+        let _ = std::fs::remove_file(&temporary);
+        return Err(anyhow::anyhow!("{}: EXR encoding: {error}", path.display()));
+    }
+    std::fs::rename(&temporary, path).with_context(|| format!("{}: write", path.display()))
+}
+
+fn temporary_beside(path: &Path) -> PathBuf {
+    let mut name = path.as_os_str().to_owned();
+    name.push(format!(".tmp-{}.exr", std::process::id()));
+    PathBuf::from(name)
+}
+
+/// A perceptually ordered colour map (Google's Turbo, polynomial fit) for t in [0, 1].
+pub fn turbo(t: f64) -> [u8; 3] {
+    let t = t.clamp(0.0, 1.0);
+    let poly = |c: [f64; 6]| c[0] + t * (c[1] + t * (c[2] + t * (c[3] + t * (c[4] + t * c[5]))));
+    let r = poly([0.13572138, 4.61539260, -42.66032258, 132.13108234, -152.94239396, 59.28637943]);
+    let g = poly([0.09140261, 2.19418839, 4.84296658, -14.18503333, 4.27729857, 2.82956604]);
+    let b = poly([0.10667330, 12.64194608, -60.58204836, 110.36276771, -89.90310912, 27.34824973]);
+    [r, g, b].map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+}
+
+/// Sample counts 1…M² as a heatmap: 1 sample near black, M² samples dark red.
+pub fn sample_heatmap(counts: &[u8], m: u32) -> Vec<u8> {
+    let max = f64::from(m * m - 1).max(1.0);
+    counts
+        .iter()
+        .flat_map(|&n| {
+            let [r, g, b] = turbo((f64::from(n) - 1.0) / max);
+            [r, g, b, 255]
+        })
+        .collect()
+}
+
+/// Per-pixel absolute difference (largest over R, G, B) as a heatmap; `full_scale` 8-bit steps
+/// map to the top of the colour map.
+pub fn difference_heatmap(image: &[u8], reference: &[u8], full_scale: f64) -> Vec<u8> {
+    image
+        .chunks_exact(4)
+        .zip(reference.chunks_exact(4))
+        .flat_map(|(a, b)| {
+            let d = (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0);
+            let [r, g, b] = turbo(f64::from(d) / full_scale);
+            [r, g, b, 255]
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn turbo_runs_from_blue_to_red() {
+        let [r0, _, b0] = turbo(0.15);
+        let [r1, _, b1] = turbo(0.9);
+        assert!(b0 > r0 && r1 > b1);
+        assert!(turbo(0.0).iter().all(|&c| c < 64), "the low end is dark");
+    }
+
+    #[test]
+    fn written_files_read_back() {
+        let dir = std::env::temp_dir().join(format!("aabench-images-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let png = dir.join("a.png");
+        write_png(&png, 2, 1, &[255, 0, 0, 255, 0, 255, 0, 255]).unwrap();
+        let decoded = image::open(&png).unwrap().to_rgba8();
+        assert_eq!(decoded.as_raw(), &vec![255, 0, 0, 255, 0, 255, 0, 255]);
+
+        let exr_path = dir.join("a.exr");
+        write_exr(&exr_path, 2, 1, &[1.5, 2.0, 3.0, 0.0, 0.25, 0.5, 100.0, 0.0]).unwrap();
+        let read = exr::prelude::read_first_rgba_layer_from_file(
+            &exr_path,
+            |resolution, _| vec![[0f32; 3]; resolution.width() * resolution.height()],
+            |pixels, position, (r, g, b, _a): (f32, f32, f32, f32)| {
+                pixels[position.y() * 2 + position.x()] = [r, g, b]
+            },
+        )
+        .unwrap();
+        assert_eq!(read.layer_data.channel_data.pixels, vec![[1.5, 2.0, 3.0], [0.25, 0.5, 100.0]]);
+        assert!(
+            std::fs::read_dir(&dir).unwrap().all(|e| !e
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .contains(".tmp-"))
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,232 @@
+//! The `aabench` command line.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use aabench::manifest::Manifest;
+use aabench::plan::{self, RunPlan, Tier};
+use aabench::progress::Progress;
+use aabench::record::Status;
+use aabench::{exit, run, scenes};
+use aabench_renderer::{Mode, RenderError};
+use clap::{Parser, Subcommand};
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "aabench",
+    version,
+    about = "Benchmark and regression service for anti-aliasing in a deferred renderer"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Render every mode of the given scenes on lavapipe; write reports/<run-id>/run.json and images.
+    Run(RunArgs),
+    /// Generate the glTF files of manifests that say how (`generate`), into their cache folders.
+    GenScenes {
+        /// Manifests or folders of manifests [default: scenes/].
+        paths: Vec<PathBuf>,
+        /// Regenerate even files that are current.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Print the Vulkan adapter and the platform key that results are filed under.
+    Info,
+    /// List the mode ids and groups that --modes accepts.
+    Modes,
+}
+
+#[derive(Debug, clap::Args)]
+struct RunArgs {
+    /// Manifests or folders of manifests [default: scenes/].
+    paths: Vec<PathBuf>,
+    /// quick: small images, 3 repetitions (CI); nightly: 1024×768, 7 repetitions.
+    #[arg(long, value_enum, default_value = "quick")]
+    tier: Tier,
+    /// Comma-separated mode ids or groups: baseline, adaptive, ablation [default: the tier's].
+    #[arg(long)]
+    modes: Option<String>,
+    /// Folder that receives the run's folder.
+    #[arg(long, default_value = "reports")]
+    out: PathBuf,
+    /// Timed repetitions per mode [default: the tier's].
+    #[arg(long)]
+    repetitions: Option<u32>,
+    /// Untimed rounds before timing (lavapipe compiles shaders at the first draw).
+    #[arg(long, default_value_t = 1)]
+    warmup: u32,
+    /// Longest a single frame may take, in seconds.
+    #[arg(long, value_name = "SECONDS", default_value_t = run::default_frame_timeout().as_secs_f64())]
+    frame_timeout: f64,
+}
+
+fn main() -> ExitCode {
+    quiet_mesa_device_select();
+    let cli = Cli::parse();
+    let code = match cli.command {
+        Command::Run(args) => run_command(args),
+        Command::GenScenes { paths, force } => gen_scenes(&paths, force),
+        Command::Info => info(),
+        Command::Modes => {
+            list_modes();
+            exit::OK
+        }
+    };
+    ExitCode::from(code)
+}
+
+fn fail(message: impl std::fmt::Display) -> u8 {
+    eprintln!("aabench: {message}");
+    exit::ERROR
+}
+
+fn run_command(args: RunArgs) -> u8 {
+    let plan = match make_plan(&args) {
+        Ok(plan) => plan,
+        Err(message) => return fail(message),
+    };
+    let runtime = match tokio::runtime::Builder::new_multi_thread().enable_all().build() {
+        Ok(runtime) => runtime,
+        Err(error) => return fail(format!("cannot start the async runtime: {error}")),
+    };
+    runtime.block_on(async move {
+        let progress = Progress::new();
+        let cancel = Arc::new(AtomicBool::new(false));
+        let flag = Arc::clone(&cancel);
+        tokio::spawn(async move {
+            if tokio::signal::ctrl_c().await.is_ok() {
+                flag.store(true, Ordering::SeqCst);
+                progress.line("interrupted: finishing the current frame and writing what was measured (Ctrl-C again to quit now)");
+                if tokio::signal::ctrl_c().await.is_ok() {
+                    std::process::exit(i32::from(exit::INTERRUPTED));
+                }
+            }
+        });
+        match run::execute(&plan, progress, cancel).await {
+            Ok(outcome) => {
+                progress.line(&format!("wrote {}", outcome.run_json.display()));
+                match outcome.record.status {
+                    Status::Ok => exit::OK,
+                    Status::Interrupted => exit::INTERRUPTED,
+                    _ => {
+                        let failed = outcome.record.scenes.iter().filter(|s| s.status != Status::Ok).count();
+                        fail(format!("{failed} scene(s) failed; see {}", outcome.run_json.display()))
+                    }
+                }
+            }
+            Err(error) => match error.downcast_ref::<RenderError>() {
+                Some(RenderError::NoAdapter) => fail(RenderError::NoAdapter),
+                _ => fail(format!("{error:#}")),
+            },
+        }
+    })
+}
+
+fn make_plan(args: &RunArgs) -> Result<RunPlan, String> {
+    let modes = match &args.modes {
+        Some(list) => plan::parse_modes(list)?,
+        None => args.tier.default_modes(),
+    };
+    if !(args.frame_timeout > 0.0 && args.frame_timeout.is_finite()) {
+        return Err(format!("--frame-timeout {} must be a positive number of seconds", args.frame_timeout));
+    }
+    let repetitions = args.repetitions.unwrap_or_else(|| args.tier.repetitions());
+    if repetitions == 0 {
+        return Err("--repetitions must be at least 1".into());
+    }
+    let manifests = plan::find_manifests(&args.paths)?;
+    let run_id = plan::new_run_id(&args.out, args.tier);
+    Ok(RunPlan {
+        tier: args.tier,
+        scenes: plan::load_scenes(&manifests),
+        modes,
+        repetitions,
+        warmup: args.warmup,
+        frame_timeout: Duration::from_secs_f64(args.frame_timeout),
+        run_dir: args.out.join(&run_id),
+        run_id,
+    })
+}
+
+fn gen_scenes(paths: &[PathBuf], force: bool) -> u8 {
+    let manifests = match plan::find_manifests(paths) {
+        Ok(manifests) => manifests,
+        Err(message) => return fail(message),
+    };
+    let mut code = exit::OK;
+    for path in manifests {
+        let result = Manifest::load(&path).map_err(anyhow::Error::from).and_then(|manifest| {
+            if manifest.generate.is_none() {
+                return Ok(format!("{}: not generated (no `generate` section)", manifest.name));
+            }
+            let start = std::time::Instant::now();
+            let wrote = scenes::ensure_generated(&manifest, force)?;
+            Ok(if wrote {
+                format!(
+                    "{}: wrote {} in {:.1} s",
+                    manifest.name,
+                    manifest.gltf_path().display(),
+                    start.elapsed().as_secs_f64()
+                )
+            } else {
+                format!("{}: {} is current", manifest.name, manifest.gltf_path().display())
+            })
+        });
+        match result {
+            Ok(line) => println!("{line}"),
+            Err(error) => code = fail(format!("{error:#}")),
+        }
+    }
+    code
+}
+
+fn info() -> u8 {
+    match aabench_renderer::Gpu::new() {
+        Ok(gpu) => {
+            let p = &gpu.platform;
+            println!("adapter      {} ({}, {})", p.adapter, p.backend, p.device_type);
+            println!("driver       {} {}", p.driver, p.driver_info);
+            println!("cpu          {} ({} cores)", p.cpu_model, p.cpu_cores);
+            println!(
+                "threads      LP_NUM_THREADS={}",
+                p.lp_num_threads.as_deref().unwrap_or("(unset: one per core)")
+            );
+            println!("build        {}", p.build_profile);
+            println!("platform key {}", p.key());
+            exit::OK
+        }
+        Err(error) => fail(error),
+    }
+}
+
+fn list_modes() {
+    let group = |name: &str, modes: Vec<Mode>| {
+        println!("{name}:");
+        for mode in modes {
+            println!("  {mode}");
+        }
+    };
+    group("baseline", Mode::baseline_modes());
+    group("adaptive", Mode::adaptive_modes());
+    group("ablation", Mode::ablation_modes());
+    println!("also: reference-1x1 (equals deferred-1x1; a self-check)");
+}
+
+/// Mesa's device-select Vulkan layer prints "error: XDG_RUNTIME_DIR is invalid" on machines
+/// without a session, which reads like a failure of aabench. Disabling the layer (it only
+/// orders GPUs; aabench picks its adapter itself) silences it, unless the user set it.
+#[allow(unsafe_code)]
+fn quiet_mesa_device_select() {
+    if std::env::var_os("NODEVICE_SELECT").is_none() {
+        // SAFETY: called first thing in main, before any other thread exists, so nothing can
+        // read the environment concurrently.
+        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
+    }
+}

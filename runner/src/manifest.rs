@@ -1,0 +1,419 @@
+//! Scene manifests: `scenes/*.json`, schema version 1. Parsing rejects unknown fields, and
+//! every error names the file and the field (`scenes/atrium.json: lights[2].range: must be > 0`).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use aabench_renderer::AdaptiveSettings;
+use aabench_renderer::scene::MAX_LIGHTS;
+use aabench_renderer::scene::generate::Generator;
+use serde::Deserialize;
+
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// A manifest error: the file, the field (a JSON path such as `lights[0].range`), the reason.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ManifestError {
+    pub path: PathBuf,
+    pub field: String,
+    pub message: String,
+}
+
+impl fmt::Display for ManifestError {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        if self.field.is_empty() {
+            write!(f, "{}: {}", self.path.display(), self.message)
+        } else {
+            write!(f, "{}: {}: {}", self.path.display(), self.field, self.message)
+        }
+    }
+}
+
+impl std::error::Error for ManifestError {}
+
+/// Output resolution per tier.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Resolutions {
+    pub quick: [u32; 2],
+    pub nightly: [u32; 2],
+}
+
+/// How to make the glTF file when it is missing or stale.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Generate {
+    pub generator: String,
+    #[serde(default)]
+    pub seed: u64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    pub position: [f64; 3],
+    pub target: [f64; 3],
+    #[serde(default = "default_up")]
+    pub up: [f64; 3],
+    pub fov_y_degrees: f64,
+    #[serde(default = "default_near")]
+    pub near: f64,
+    /// Omitted: just beyond the farthest corner of the scene's bounds.
+    pub far: Option<f64>,
+}
+
+fn default_up() -> [f64; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+fn default_near() -> f64 {
+    0.05
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightSpec {
+    pub position: [f32; 3],
+    #[serde(default = "white")]
+    pub color: [f32; 3],
+    pub intensity: f32,
+    pub range: f32,
+    #[serde(default)]
+    pub casts_shadows: bool,
+}
+
+fn white() -> [f32; 3] {
+    [1.0; 3]
+}
+
+/// The adaptive metric constants; omitted fields take [`AdaptiveSettings::default`].
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AdaptiveSpec {
+    pub c_depth: Option<f32>,
+    pub c_normal: Option<f32>,
+    pub c_shading: Option<f32>,
+    pub t_min: Option<f32>,
+    pub t_edge: Option<f32>,
+}
+
+impl AdaptiveSpec {
+    pub fn settings(&self) -> AdaptiveSettings {
+        let d = AdaptiveSettings::default();
+        AdaptiveSettings {
+            c_depth: self.c_depth.unwrap_or(d.c_depth),
+            c_normal: self.c_normal.unwrap_or(d.c_normal),
+            c_shading: self.c_shading.unwrap_or(d.c_shading),
+            t_min: self.t_min.unwrap_or(d.t_min),
+            t_edge: self.t_edge.unwrap_or(d.t_edge),
+            ..d
+        }
+    }
+}
+
+/// Display settings. The full tonemapping operator arrives with the HDR/VDR colour pipeline;
+/// until then the display pass applies exposure, clamps and encodes sRGB.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TonemapSpec {
+    #[serde(default = "one")]
+    pub exposure: f32,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+impl Default for TonemapSpec {
+    fn default() -> Self {
+        TonemapSpec { exposure: 1.0 }
+    }
+}
+
+/// A parsed and validated manifest. Paths are resolved against the manifest's folder.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    pub schema_version: u32,
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    pub gltf: PathBuf,
+    pub generate: Option<Generate>,
+    /// Omitted: the glTF file's first camera.
+    pub camera: Option<CameraSpec>,
+    pub resolution: Resolutions,
+    #[serde(default)]
+    pub lights: Vec<LightSpec>,
+    #[serde(default = "default_ambient")]
+    pub ambient: [f32; 3],
+    #[serde(default = "default_background")]
+    pub background: [f32; 3],
+    #[serde(default = "default_stall")]
+    pub stall_iterations: u32,
+    #[serde(default)]
+    pub adaptive: AdaptiveSpec,
+    #[serde(default)]
+    pub tonemap: TonemapSpec,
+    /// The file this manifest came from (not a JSON field).
+    #[serde(skip)]
+    pub path: PathBuf,
+}
+
+fn default_ambient() -> [f32; 3] {
+    [0.03; 3]
+}
+
+fn default_background() -> [f32; 3] {
+    [0.45, 0.6, 0.85]
+}
+
+fn default_stall() -> u32 {
+    256
+}
+
+/// The largest output side accepted: 4×4 supersampling must still fit lavapipe's 16384 limit.
+pub const MAX_RESOLUTION: u32 = 4096;
+
+impl Manifest {
+    /// Reads and validates a manifest file.
+    pub fn load(path: &Path) -> Result<Manifest, ManifestError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ManifestError {
+            path: path.to_path_buf(),
+            field: String::new(),
+            message: format!("cannot read: {e}"),
+        })?;
+        Self::parse(path, &text)
+    }
+
+    /// Parses and validates manifest text; `path` names the file in errors and anchors
+    /// relative paths.
+    pub fn parse(path: &Path, text: &str) -> Result<Manifest, ManifestError> {
+        let fail = |field: &str, message: String| ManifestError {
+            path: path.to_path_buf(),
+            field: field.to_string(),
+            message,
+        };
+        let deserializer = &mut serde_json::Deserializer::from_str(text);
+        let mut manifest: Manifest = serde_path_to_error::deserialize(deserializer).map_err(|e| {
+            let field = e.path().to_string();
+            let inner = e.into_inner();
+            let field = if field == "." { String::new() } else { field };
+            // serde_json appends "at line L column C"; keep it: it finds the spot.
+            fail(&field, inner.to_string())
+        })?;
+        manifest.path = path.to_path_buf();
+        manifest.validate().map_err(|(field, message)| fail(&field, message))?;
+        Ok(manifest)
+    }
+
+    /// The glTF file, relative to the manifest's folder.
+    pub fn gltf_path(&self) -> PathBuf {
+        self.path.parent().unwrap_or(Path::new(".")).join(&self.gltf)
+    }
+
+    pub fn generator(&self) -> Option<(Generator, u64)> {
+        let spec = self.generate.as_ref()?;
+        Some((spec.generator.parse().ok()?, spec.seed))
+    }
+
+    fn validate(&self) -> Result<(), (String, String)> {
+        let fail = |field: &str, message: String| Err((field.to_string(), message));
+        if self.schema_version != SCHEMA_VERSION {
+            return fail(
+                "schema_version",
+                format!("is {}, this aabench reads version {SCHEMA_VERSION}", self.schema_version),
+            );
+        }
+        if self.name.is_empty()
+            || !self
+                .name
+                .chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-' || c == '_')
+        {
+            return fail(
+                "name",
+                format!("`{}` must be non-empty lowercase letters, digits, - or _", self.name),
+            );
+        }
+        if let Some(generate) = &self.generate
+            && let Err(message) = generate.generator.parse::<Generator>()
+        {
+            return fail("generate.generator", message);
+        }
+        for (tier, [width, height]) in
+            [("quick", self.resolution.quick), ("nightly", self.resolution.nightly)]
+        {
+            if width == 0 || height == 0 || width > MAX_RESOLUTION || height > MAX_RESOLUTION {
+                return fail(
+                    &format!("resolution.{tier}"),
+                    format!("{width}×{height} must be between 1 and {MAX_RESOLUTION} on each side"),
+                );
+            }
+        }
+        if let Some(camera) = &self.camera {
+            let finite = |v: &[f64; 3]| v.iter().all(|c| c.is_finite());
+            if !finite(&camera.position) || !finite(&camera.target) || !finite(&camera.up) {
+                return fail("camera", "position, target and up must be finite".into());
+            }
+            if camera.position == camera.target {
+                return fail("camera.target", "must differ from camera.position".into());
+            }
+            if !(camera.fov_y_degrees > 0.0 && camera.fov_y_degrees < 180.0) {
+                return fail("camera.fov_y_degrees", format!("{} must be in (0, 180)", camera.fov_y_degrees));
+            }
+            if !(camera.near > 0.0 && camera.near.is_finite()) {
+                return fail("camera.near", format!("{} must be > 0", camera.near));
+            }
+            if let Some(far) = camera.far
+                && !(far > camera.near && far.is_finite())
+            {
+                return fail("camera.far", format!("{far} must be finite and > camera.near"));
+            }
+        }
+        if self.lights.len() > MAX_LIGHTS {
+            return fail(
+                "lights",
+                format!("{} lights, at most {MAX_LIGHTS} are supported", self.lights.len()),
+            );
+        }
+        for (i, light) in self.lights.iter().enumerate() {
+            let field = |name: &str| format!("lights[{i}].{name}");
+            if !light.position.iter().all(|c| c.is_finite()) {
+                return fail(&field("position"), "must be finite".into());
+            }
+            if !light.color.iter().all(|c| c.is_finite() && *c >= 0.0) {
+                return fail(&field("color"), "components must be finite and ≥ 0".into());
+            }
+            if !(light.intensity >= 0.0 && light.intensity.is_finite()) {
+                return fail(&field("intensity"), format!("{} must be finite and ≥ 0", light.intensity));
+            }
+            if !(light.range > 0.0 && light.range.is_finite()) {
+                return fail(&field("range"), format!("{} must be finite and > 0", light.range));
+            }
+        }
+        for (name, value) in [("ambient", self.ambient), ("background", self.background)] {
+            if !value.iter().all(|c| c.is_finite() && *c >= 0.0) {
+                return fail(name, "components must be finite and ≥ 0".into());
+            }
+        }
+        if self.stall_iterations > 1 << 20 {
+            return fail("stall_iterations", format!("{} exceeds {}", self.stall_iterations, 1 << 20));
+        }
+        let adaptive = self.adaptive.settings();
+        for (name, value) in [
+            ("c_depth", adaptive.c_depth),
+            ("c_normal", adaptive.c_normal),
+            ("c_shading", adaptive.c_shading),
+        ] {
+            if !(value >= 0.0 && value.is_finite()) {
+                return fail(&format!("adaptive.{name}"), format!("{value} must be finite and ≥ 0"));
+            }
+        }
+        for (name, value) in [("t_min", adaptive.t_min), ("t_edge", adaptive.t_edge)] {
+            if !(0.0..=1.0).contains(&value) {
+                return fail(&format!("adaptive.{name}"), format!("{value} must be in [0, 1]"));
+            }
+        }
+        if !(self.tonemap.exposure > 0.0 && self.tonemap.exposure.is_finite()) {
+            return fail("tonemap.exposure", format!("{} must be finite and > 0", self.tonemap.exposure));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const VALID: &str = r#"{
+        "schema_version": 1,
+        "name": "edge",
+        "gltf": "cache/edge.glb",
+        "generate": { "generator": "edge", "seed": 3 },
+        "resolution": { "quick": [64, 48], "nightly": [1024, 768] },
+        "lights": [{ "position": [0, 1, 2], "intensity": 5, "range": 10 }]
+    }"#;
+
+    /// Parses `VALID` with `edit` applied to its JSON and expects an error naming the file,
+    /// `field` and something containing `reason`.
+    fn check(edit: impl Fn(&mut serde_json::Value), field: &str, reason: &str) {
+        let mut json: serde_json::Value = serde_json::from_str(VALID).unwrap();
+        edit(&mut json);
+        let path = Path::new("scenes/edge.json");
+        let error = Manifest::parse(path, &json.to_string()).expect_err("should be rejected");
+        let text = error.to_string();
+        assert_eq!(error.field, field, "{text}");
+        assert!(text.starts_with("scenes/edge.json: "), "{text}");
+        assert!(error.message.contains(reason), "{text}");
+    }
+
+    #[test]
+    fn a_valid_manifest_parses_with_defaults() {
+        let manifest = Manifest::parse(Path::new("scenes/edge.json"), VALID).unwrap();
+        assert_eq!(manifest.gltf_path(), Path::new("scenes/cache/edge.glb"));
+        assert_eq!(manifest.generator().map(|(g, seed)| (g.to_string(), seed)), Some(("edge".into(), 3)));
+        assert_eq!(manifest.lights[0].color, [1.0; 3]);
+        assert_eq!(manifest.stall_iterations, 256);
+        assert_eq!(manifest.adaptive.settings(), AdaptiveSettings::default());
+        assert!(manifest.camera.is_none());
+    }
+
+    #[test]
+    fn malformed_manifests_name_the_file_and_the_field() {
+        use serde_json::json;
+        check(|j| j["colour"] = json!(1), "colour", "unknown field `colour`");
+        check(|j| j["lights"][0]["colour"] = json!([1, 1, 1]), "lights[0].colour", "unknown field `colour`");
+        check(|j| j["lights"][0]["range"] = json!("far"), "lights[0].range", "invalid type");
+        check(|j| j["lights"][0]["range"] = json!(0), "lights[0].range", "must be finite and > 0");
+        check(|j| j["lights"][0]["intensity"] = json!(-1), "lights[0].intensity", "≥ 0");
+        check(|j| j["resolution"]["quick"] = json!([0, 48]), "resolution.quick", "between 1 and 4096");
+        check(|j| j["resolution"]["nightly"] = json!([1024]), "resolution.nightly", "invalid length");
+        check(
+            |j| {
+                j.as_object_mut().unwrap().remove("gltf");
+            },
+            "",
+            "missing field `gltf`",
+        );
+        check(|j| j["schema_version"] = json!(2), "schema_version", "reads version 1");
+        check(|j| j["name"] = json!("Edge Scene"), "name", "lowercase");
+        check(
+            |j| j["generate"]["generator"] = json!("sponza"),
+            "generate.generator",
+            "unknown generator `sponza`",
+        );
+        check(
+            |j| j["camera"] = json!({"position": [0, 0, 1], "target": [0, 0, 0], "fov_y_degrees": 200}),
+            "camera.fov_y_degrees",
+            "(0, 180)",
+        );
+        check(
+            |j| j["camera"] = json!({"position": [0, 0, 1], "target": [0, 0, 1], "fov_y_degrees": 60}),
+            "camera.target",
+            "must differ",
+        );
+        check(
+            |j| j["camera"] = json!({"position": [0, 0, 1], "target": [0, 0, 0], "fov_y_degrees": 60, "near": 1, "far": 0.5}),
+            "camera.far",
+            "> camera.near",
+        );
+        check(|j| j["adaptive"] = json!({"t_edge": 2}), "adaptive.t_edge", "[0, 1]");
+        check(|j| j["adaptive"] = json!({"c_depth": -1}), "adaptive.c_depth", "≥ 0");
+        check(|j| j["adaptive"] = json!({"c_dept": 1}), "adaptive.c_dept", "unknown field `c_dept`");
+        check(|j| j["tonemap"] = json!({"exposure": 0}), "tonemap.exposure", "> 0");
+        check(|j| j["stall_iterations"] = json!(-5), "stall_iterations", "invalid value");
+        check(|j| j["ambient"] = json!([0, -1, 0]), "ambient", "≥ 0");
+        let light = json!({ "position": [0, 1, 2], "intensity": 5, "range": 10 });
+        check(|j| j["lights"] = json!(vec![light.clone(); 65]), "lights", "at most 64");
+    }
+
+    #[test]
+    fn syntax_errors_give_the_line_and_column() {
+        let error =
+            Manifest::parse(Path::new("scenes/x.json"), "{\n  \"name\": \"x\",\n  oops\n}").unwrap_err();
+        assert!(error.to_string().contains("line 3 column 3"), "{error}");
+        let error = Manifest::load(Path::new("scenes/does-not-exist.json")).unwrap_err();
+        assert!(error.to_string().starts_with("scenes/does-not-exist.json: cannot read"), "{error}");
+    }
+}

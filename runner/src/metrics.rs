@@ -1,0 +1,170 @@
+//! Image-quality and sample-count metrics, in f64 on the display-encoded 8-bit image scaled to
+//! [0, 1], averaged over pixels and the R, G, B channels.
+
+use serde::{Deserialize, Serialize, Serializer};
+
+/// 20·log10(255): the paper reports PSNR with peak 255 over an MSE taken on [0, 1] values.
+pub const PAPER_PSNR_OFFSET_DB: f64 = 48.130_803_608_679_1;
+
+/// A PSNR in decibels. Identical images have an infinite PSNR; JSON has no infinity, so it is
+/// written as the string `"inf"` (which Python's `float()` reads back as infinity).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum Decibels {
+    Finite(f64),
+    Infinite(InfinityTag),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum InfinityTag {
+    #[serde(rename = "inf")]
+    Inf,
+}
+
+impl Decibels {
+    pub fn from_f64(db: f64) -> Decibels {
+        if db.is_finite() { Decibels::Finite(db) } else { Decibels::Infinite(InfinityTag::Inf) }
+    }
+
+    pub fn value(self) -> f64 {
+        match self {
+            Decibels::Finite(db) => db,
+            Decibels::Infinite(_) => f64::INFINITY,
+        }
+    }
+}
+
+impl Serialize for Decibels {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Decibels::Finite(db) => serializer.serialize_f64(*db),
+            Decibels::Infinite(_) => serializer.serialize_str("inf"),
+        }
+    }
+}
+
+/// Error of an image against another.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Quality {
+    /// The mode compared against.
+    pub against: String,
+    pub mse: f64,
+    /// MSE × 10⁵, the unit of the paper's Table 1.
+    pub mse_e5: f64,
+    /// PSNR with peak 1 over the same MSE.
+    pub psnr_db: Decibels,
+    /// Paper-comparable PSNR: peak 255 over the MSE on [0, 1] values (psnr_db + 48.13 dB).
+    pub psnr_paper_db: Decibels,
+    /// Largest per-channel difference, in 8-bit steps.
+    pub max_abs_diff: u8,
+}
+
+/// Compares two RGBA8 display images of the same size (alpha ignored).
+pub fn quality(image: &[u8], reference: &[u8], against: &str) -> Quality {
+    assert_eq!(image.len(), reference.len(), "images of different sizes");
+    let mut sum = 0.0f64;
+    let mut max_abs_diff = 0u8;
+    for (a, b) in image.chunks_exact(4).zip(reference.chunks_exact(4)) {
+        for c in 0..3 {
+            let d = (f64::from(a[c]) - f64::from(b[c])) / 255.0;
+            sum += d * d;
+            max_abs_diff = max_abs_diff.max(a[c].abs_diff(b[c]));
+        }
+    }
+    let mse = sum / (image.len() / 4 * 3).max(1) as f64;
+    let psnr = -10.0 * mse.log10();
+    Quality {
+        against: against.to_string(),
+        mse,
+        mse_e5: mse * 1e5,
+        psnr_db: Decibels::from_f64(psnr),
+        psnr_paper_db: Decibels::from_f64(psnr + PAPER_PSNR_OFFSET_DB),
+        max_abs_diff,
+    }
+}
+
+/// How many samples an adaptive mode shaded.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SampleStats {
+    /// Samples that make up the image over M²·w·h, in percent: the paper's "Samples %".
+    pub shaded_percent: f64,
+    /// Σ n over pixels.
+    pub shaded: u64,
+    /// M²·w·h.
+    pub total: u64,
+    /// Pixels that took all M² samples. Their S is shaded again at the reference's footprint
+    /// (so they equal the reference), one sample of work that `shaded` does not count.
+    pub full_pixels: u64,
+    /// Every shading evaluation over M²·w·h, in percent: (shaded + full_pixels) / total.
+    pub work_percent: f64,
+    /// histogram[i]: pixels that shaded i + 1 samples, for i + 1 in 1…M².
+    pub histogram: Vec<u64>,
+}
+
+/// Statistics of a sample-count map. Counts outside [1, M²] are a bug upstream: `Err` says so.
+pub fn sample_stats(counts: &[u8], m: u32) -> Result<SampleStats, String> {
+    let window = (m * m) as usize;
+    let mut histogram = vec![0u64; window];
+    for (pixel, &n) in counts.iter().enumerate() {
+        if n == 0 || n as usize > window {
+            return Err(format!("pixel {pixel} has sample count {n}, outside 1..={window}"));
+        }
+        histogram[n as usize - 1] += 1;
+    }
+    let shaded: u64 = counts.iter().map(|&n| u64::from(n)).sum();
+    let full_pixels = histogram[window - 1];
+    let total = (window * counts.len()) as u64;
+    let percent = |count: u64| 100.0 * count as f64 / total.max(1) as f64;
+    Ok(SampleStats {
+        shaded_percent: percent(shaded),
+        shaded,
+        total,
+        full_pixels,
+        work_percent: percent(shaded + full_pixels),
+        histogram,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn identical_images_have_infinite_psnr_written_as_inf() {
+        let image = [10, 20, 30, 255, 40, 50, 60, 255];
+        let q = quality(&image, &image, "reference-2x2");
+        assert_eq!(q.mse, 0.0);
+        assert_eq!(q.psnr_db.value(), f64::INFINITY);
+        let json = serde_json::to_value(&q).unwrap();
+        assert_eq!(json["psnr_db"], "inf");
+        let back: Quality = serde_json::from_value(json).unwrap();
+        assert_eq!(back, q);
+    }
+
+    #[test]
+    fn one_step_everywhere_is_48_db_and_the_paper_offset_is_20_log10_255() {
+        let a = [0u8, 0, 0, 255];
+        let b = [1u8, 1, 1, 0];
+        let q = quality(&a, &b, "x");
+        assert!((q.mse - 1.0 / 65025.0).abs() < 1e-18);
+        assert!((q.psnr_db.value() - 48.1308036).abs() < 1e-6);
+        assert!((PAPER_PSNR_OFFSET_DB - 20.0 * 255f64.log10()).abs() < 1e-12);
+        assert_eq!(q.max_abs_diff, 1);
+    }
+
+    #[test]
+    fn alpha_is_ignored() {
+        let q = quality(&[5, 5, 5, 0], &[5, 5, 5, 255], "x");
+        assert_eq!(q.mse, 0.0);
+    }
+
+    #[test]
+    fn sample_stats_count_and_reject_out_of_range() {
+        let stats = sample_stats(&[1, 1, 4, 2], 2).unwrap();
+        assert_eq!(stats.histogram, vec![2, 1, 0, 1]);
+        assert_eq!((stats.shaded, stats.total, stats.full_pixels), (8, 16, 1));
+        assert_eq!((stats.shaded_percent, stats.work_percent), (50.0, 56.25));
+        assert!(sample_stats(&[0], 2).is_err());
+        assert!(sample_stats(&[5], 2).is_err());
+    }
+}

@@ -1,0 +1,559 @@
+//! Running a plan: per scene, load → prepare every mode → warm up → timed repetitions
+//! interleaved across modes → images and metrics. Timed frames run alone: nothing else is
+//! scheduled while one is on the device, and encoding and metrics wait until the scene's
+//! frames are done (lavapipe uses every core, so overlapping CPU work would corrupt timings).
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, SystemTime};
+
+use aabench_renderer::{FrameImages, FrameTiming, Mode, RenderSettings, Technique};
+use anyhow::Context;
+
+use crate::images;
+use crate::manifest::Manifest;
+use crate::metrics::{self, Quality};
+use crate::plan::{RunPlan, SceneEntry, fallback_name};
+use crate::progress::Progress;
+use crate::record::{
+    AdaptiveCost, ImageFiles, ModeRecord, PassRecord, Platform, RUN_SCHEMA, RunRecord, RunSettings,
+    SceneRecord, Status, fnv1a,
+};
+use crate::scenes;
+use crate::stats::Summary;
+use crate::worker::{Worker, WorkerError};
+
+/// Display differences of this many 8-bit steps reach the top of the difference heatmap.
+const DIFFERENCE_FULL_SCALE: f64 = 32.0;
+
+/// How a run ended.
+#[derive(Debug)]
+pub struct Outcome {
+    pub record: RunRecord,
+    pub run_json: PathBuf,
+}
+
+/// Runs the plan. `cancel` is set by the first Ctrl-C: the current frame finishes, what was
+/// measured is recorded, and the run ends as interrupted.
+pub async fn execute(plan: &RunPlan, progress: Progress, cancel: Arc<AtomicBool>) -> anyhow::Result<Outcome> {
+    let mut worker = Worker::start().await?;
+    std::fs::create_dir_all(&plan.run_dir)
+        .with_context(|| format!("{}: cannot create", plan.run_dir.display()))?;
+    let run_json = plan.run_dir.join("run.json");
+    let mut record = RunRecord {
+        schema: RUN_SCHEMA.into(),
+        run_id: plan.run_id.clone(),
+        started_at: now(),
+        finished_at: None,
+        status: Status::Running,
+        tier: plan.tier,
+        aabench_version: env!("CARGO_PKG_VERSION").into(),
+        platform: Platform::from(&worker.platform),
+        settings: RunSettings {
+            modes: plan.modes.iter().map(ToString::to_string).collect(),
+            repetitions: plan.repetitions,
+            warmup: plan.warmup,
+            frame_timeout_s: plan.frame_timeout.as_secs_f64(),
+            interleaving: "round-robin: each repetition renders every mode once, in plan order".into(),
+        },
+        scenes: Vec::new(),
+    };
+    progress.line(&format!(
+        "aabench {} · {} tier · {} · {}",
+        record.run_id,
+        plan.tier.name(),
+        worker.platform.adapter,
+        worker.platform.driver_info
+    ));
+    write_record(&run_json, &record)?;
+
+    for entry in &plan.scenes {
+        if cancel.load(Ordering::SeqCst) {
+            break;
+        }
+        if worker.is_stuck() {
+            progress.line("restarting the GPU worker after a timeout");
+            worker = Worker::start().await?;
+        }
+        let scene = match entry {
+            Ok(manifest) => run_scene(&mut worker, plan, manifest, &progress, &cancel).await,
+            Err(error) => failed_scene(entry, error.to_string()),
+        };
+        report_scene(&progress, &scene);
+        record.scenes.push(scene);
+        write_record(&run_json, &record)?;
+    }
+
+    record.finished_at = Some(now());
+    record.status = if cancel.load(Ordering::SeqCst) {
+        Status::Interrupted
+    } else if record.scenes.iter().any(|s| s.status != Status::Ok) {
+        Status::Failed
+    } else {
+        Status::Ok
+    };
+    write_record(&run_json, &record)?;
+    Ok(Outcome { record, run_json })
+}
+
+fn now() -> String {
+    humantime::format_rfc3339_seconds(SystemTime::now()).to_string()
+}
+
+fn write_record(path: &Path, record: &RunRecord) -> anyhow::Result<()> {
+    let mut json = serde_json::to_vec_pretty(record)?;
+    json.push(b'\n');
+    aabench_renderer::scene::write::write_atomic(path, &json)
+        .with_context(|| format!("{}: write", path.display()))
+}
+
+fn failed_scene(entry: &SceneEntry, error: String) -> SceneRecord {
+    let (name, manifest) = match entry {
+        Ok(m) => (m.name.clone(), m.path.display().to_string()),
+        Err(e) => (fallback_name(&e.path), e.path.display().to_string()),
+    };
+    SceneRecord {
+        name,
+        manifest,
+        status: Status::Failed,
+        error: Some(error),
+        resolution: None,
+        triangles: None,
+        textures: None,
+        load_s: None,
+        target_bytes: None,
+        stall_iterations: 0,
+        ground_truth: None,
+        modes: Vec::new(),
+    }
+}
+
+/// What one mode measured during the scene's timed loop.
+#[derive(Debug, Default)]
+struct ModeRun {
+    timings: Vec<FrameTiming>,
+    hashes: Vec<String>,
+    images: Option<FrameImages>,
+    error: Option<String>,
+}
+
+async fn run_scene(
+    worker: &mut Worker,
+    plan: &RunPlan,
+    manifest: &Manifest,
+    progress: &Progress,
+    cancel: &AtomicBool,
+) -> SceneRecord {
+    let mut record = failed_scene(&Ok(manifest.clone()), String::new());
+    record.error = None;
+    record.stall_iterations = manifest.stall_iterations;
+    let [width, height] = match plan.tier {
+        crate::plan::Tier::Quick => manifest.resolution.quick,
+        crate::plan::Tier::Nightly => manifest.resolution.nightly,
+    };
+    record.resolution = Some([width, height]);
+
+    progress.status(&format!("[{}] loading {}", manifest.name, manifest.gltf_path().display()));
+    let owned = manifest.clone();
+    let loaded = match tokio::task::spawn_blocking(move || scenes::load(&owned)).await {
+        Ok(Ok(loaded)) => loaded,
+        Ok(Err(error)) => return fail(record, format!("{error:#}")),
+        Err(panic) => return fail(record, format!("loading panicked: {panic}")),
+    };
+    record.load_s = Some(loaded.seconds);
+    record.triangles = Some(loaded.scene.triangle_count());
+    record.textures = Some(loaded.scene.textures.len());
+
+    // Upload and prepare every mode; a mode that cannot be prepared fails alone.
+    let settings = RenderSettings {
+        width,
+        height,
+        stall_iterations: manifest.stall_iterations,
+        adaptive: manifest.adaptive.settings(),
+    };
+    let modes = plan.modes.clone();
+    progress.status(&format!("[{}] uploading and compiling {} modes", manifest.name, modes.len()));
+    let prepared = worker
+        .call(plan.frame_timeout * modes.len() as u32, move |state| {
+            let scenes::LoadedScene { scene, camera, lighting, .. } = loaded;
+            let mut renderer = aabench_renderer::SceneRenderer::new(
+                state.gpu.clone(),
+                &scene,
+                &camera,
+                &lighting,
+                settings,
+            )?;
+            let mut errors = Vec::new();
+            state.modes.clear();
+            for mode in modes {
+                match renderer.prepare(mode) {
+                    Ok(prepared) => {
+                        state.modes.push(Some(prepared));
+                        errors.push(None);
+                    }
+                    Err(error) => {
+                        state.modes.push(None);
+                        errors.push(Some(error.to_string()));
+                    }
+                }
+            }
+            let bytes = renderer.target_bytes();
+            state.renderer = Some(renderer);
+            Ok::<_, aabench_renderer::RenderError>((errors, bytes))
+        })
+        .await;
+    let mut runs: Vec<ModeRun> = match prepared {
+        Ok(Ok((errors, bytes))) => {
+            record.target_bytes = Some(bytes);
+            errors.into_iter().map(|error| ModeRun { error, ..Default::default() }).collect()
+        }
+        Ok(Err(error)) => return fail(record, error.to_string()),
+        Err(error) => return fail(record, error.to_string()),
+    };
+
+    // Warm-up rounds (lavapipe compiles at the first draw), then timed rounds. Each round
+    // renders every mode once: A B C … A B C …, so drift over time hits every mode alike.
+    // Images are read back after the first timed frame (every later frame is checked to give
+    // the same display image), so an interrupted run still has them.
+    let rounds = plan.warmup + plan.repetitions;
+    'rounds: for round in 0..rounds {
+        let timed = round >= plan.warmup;
+        let first_timed = round == plan.warmup;
+        for (index, mode) in plan.modes.iter().enumerate() {
+            if cancel.load(Ordering::SeqCst) {
+                break 'rounds;
+            }
+            if runs[index].error.is_some() {
+                continue;
+            }
+            let label = if timed {
+                format!("rep {}/{}", round - plan.warmup + 1, plan.repetitions)
+            } else {
+                format!("warm-up {}/{}", round + 1, plan.warmup)
+            };
+            progress.status(&format!("[{}] {mode} {label}", manifest.name));
+            let result = worker
+                .call(plan.frame_timeout, move |state| {
+                    let prepared = state.modes[index].as_ref().expect("prepared mode");
+                    let timing = prepared.render()?;
+                    // Read back between frames, never during one.
+                    let images = if first_timed { Some(prepared.read_images()?) } else { None };
+                    let hash = match &images {
+                        Some(images) => Some(fnv1a(&images.display)),
+                        None if timed => Some(fnv1a(&prepared.read_display()?)),
+                        None => None,
+                    };
+                    Ok::<_, aabench_renderer::RenderError>((timing, hash, images))
+                })
+                .await;
+            let run = &mut runs[index];
+            match result {
+                Ok(Ok((timing, hash, images))) => {
+                    if timed {
+                        run.timings.push(timing);
+                        run.hashes.extend(hash);
+                    }
+                    if images.is_some() {
+                        run.images = images;
+                    }
+                }
+                Ok(Err(error)) => run.error = Some(error.to_string()),
+                Err(error @ WorkerError::Timeout(_)) | Err(error @ WorkerError::Gone) => {
+                    run.error = Some(format!("{mode}: {error}"));
+                    for other in runs.iter_mut().filter(|r| r.error.is_none()) {
+                        other.error = Some(format!("not finished: {error}"));
+                    }
+                    break 'rounds;
+                }
+            }
+        }
+    }
+    // Free the scene's device memory before the CPU work below.
+    let _ = worker
+        .call(plan.frame_timeout, |state| {
+            state.modes.clear();
+            state.renderer = None;
+        })
+        .await;
+
+    progress.status(&format!("[{}] writing images and metrics", manifest.name));
+    let interrupted = cancel.load(Ordering::SeqCst);
+    record.modes = finish_modes(plan, manifest, &mut record, runs, interrupted).await;
+    record.status = if record.modes.iter().all(|m| m.status == Status::Ok) {
+        Status::Ok
+    } else if interrupted {
+        Status::Interrupted
+    } else {
+        Status::Failed
+    };
+    record
+}
+
+fn fail(mut record: SceneRecord, error: String) -> SceneRecord {
+    record.status = Status::Failed;
+    record.error = Some(error);
+    record
+}
+
+/// Builds the mode records: timing summaries, then quality metrics and image files, encoded in
+/// parallel now that no frame is running.
+async fn finish_modes(
+    plan: &RunPlan,
+    manifest: &Manifest,
+    scene: &mut SceneRecord,
+    runs: Vec<ModeRun>,
+    interrupted: bool,
+) -> Vec<ModeRecord> {
+    let modes = &plan.modes;
+    // The ground truth: the highest-M reference that rendered, unstalled preferred.
+    let truth = modes
+        .iter()
+        .enumerate()
+        .filter(|(i, m)| m.technique == Technique::Reference && runs[*i].images.is_some())
+        .max_by_key(|(_, m)| (m.m, !m.stalled))
+        .map(|(i, m)| (i, *m));
+    scene.ground_truth = truth.map(|(_, m)| m.to_string());
+
+    let mut records: Vec<ModeRecord> =
+        modes.iter().zip(&runs).map(|(mode, run)| timing_record(*mode, run, interrupted)).collect();
+    let frame_median = |mode: Mode| -> Option<f64> {
+        let i = modes.iter().position(|m| *m == mode)?;
+        records[i].frame_ms.as_ref().map(|s| s.median)
+    };
+    let deferred: Vec<Option<f64>> =
+        modes.iter().map(|m| frame_median(Mode::new(Technique::Deferred, 1, m.stalled))).collect();
+    let costs: Vec<Option<AdaptiveCost>> =
+        modes.iter().zip(&runs).map(|(mode, run)| adaptive_cost(modes, &runs, *mode, run)).collect();
+    for ((record, ratio), cost) in records.iter_mut().zip(deferred).zip(costs) {
+        record.ratio_to_deferred = match (&record.frame_ms, ratio) {
+            (Some(own), Some(base)) if base > 0.0 => Some(own.median / base),
+            _ => None,
+        };
+        record.adaptive = cost;
+    }
+
+    // Images and quality, one blocking task per mode.
+    let images: Arc<Vec<Option<FrameImages>>> = Arc::new(runs.into_iter().map(|r| r.images).collect());
+    let scene_dir = plan.run_dir.join(&manifest.name);
+    if let Err(error) = std::fs::create_dir_all(&scene_dir) {
+        scene.error = Some(format!("{}: {error}", scene_dir.display()));
+    }
+    let mut tasks = Vec::new();
+    for (index, mode) in modes.iter().enumerate() {
+        if images[index].is_none() {
+            tasks.push(None);
+            continue;
+        }
+        let reference = comparison_reference(modes, &images, *mode);
+        let images = Arc::clone(&images);
+        let (mode, truth_index, scene_dir, scene_name) =
+            (*mode, truth.map(|t| t.0), scene_dir.clone(), manifest.name.clone());
+        let truth_name = truth.map(|t| t.1.to_string());
+        tasks.push(Some(tokio::task::spawn_blocking(move || {
+            let own = images[index].as_ref().expect("images of a finished mode");
+            let vs = |other: usize, name: &str| {
+                metrics::quality(
+                    &own.display,
+                    &images[other].as_ref().expect("reference images").display,
+                    name,
+                )
+            };
+            let vs_reference = reference.map(|(i, m)| vs(i, &m.to_string()));
+            let vs_truth =
+                truth_index.filter(|&t| t != index).map(|t| vs(t, truth_name.as_deref().unwrap_or("")));
+            let diff_against = reference.map(|(i, _)| i).or(truth_index.filter(|&t| t != index));
+            write_mode_images(
+                &scene_dir,
+                &scene_name,
+                mode,
+                own,
+                diff_against.map(|i| images[i].as_ref().expect("images")),
+            )
+            .map(|(files, samples)| (files, samples, vs_reference, vs_truth))
+        })));
+    }
+    for (record, task) in records.iter_mut().zip(tasks) {
+        let Some(task) = task else { continue };
+        match task.await {
+            Ok(Ok((files, samples, vs_reference, vs_truth))) => {
+                record.images = files;
+                record.samples = samples;
+                record.vs_reference = vs_reference;
+                record.vs_ground_truth = vs_truth;
+            }
+            Ok(Err(error)) => fail_mode(record, format!("{error:#}")),
+            Err(panic) => fail_mode(record, format!("image task panicked: {panic}")),
+        }
+    }
+    records
+}
+
+fn fail_mode(record: &mut ModeRecord, error: String) {
+    record.status = Status::Failed;
+    record.error = Some(error);
+}
+
+/// The image an adaptive mode is compared with: the reference at the same M, with the same
+/// stall if it ran, else the other (their images are identical).
+fn comparison_reference(modes: &[Mode], images: &[Option<FrameImages>], mode: Mode) -> Option<(usize, Mode)> {
+    if !matches!(mode.technique, Technique::Adaptive(_)) {
+        return None;
+    }
+    [mode.stalled, !mode.stalled].into_iter().find_map(|stalled| {
+        let reference = Mode::new(Technique::Reference, mode.m, stalled);
+        let index = modes.iter().position(|m| *m == reference)?;
+        images[index].as_ref().map(|_| (index, reference))
+    })
+}
+
+fn timing_record(mode: Mode, run: &ModeRun, interrupted: bool) -> ModeRecord {
+    let ms = |seconds: f64| seconds * 1e3;
+    let frame_ms = Summary::new(run.timings.iter().map(|t| ms(t.seconds())).collect());
+    let passes = run.timings.first().map_or_else(Vec::new, |first| {
+        (0..first.passes.len())
+            .filter_map(|p| {
+                let samples = run.timings.iter().map(|t| ms(t.passes[p].seconds)).collect();
+                Summary::new(samples)
+                    .map(|summary| PassRecord { name: first.passes[p].name.to_string(), ms: summary })
+            })
+            .collect()
+    });
+    let status = match (&run.error, run.images.is_some()) {
+        (None, true) => Status::Ok,
+        (None, false) if interrupted => Status::Interrupted,
+        _ => Status::Failed,
+    };
+    let error =
+        run.error.clone().or_else(|| (status == Status::Failed).then(|| "no images were read back".into()));
+    ModeRecord {
+        mode: mode.to_string(),
+        m: mode.m,
+        stalled: mode.stalled,
+        status,
+        error,
+        frame_ms,
+        passes,
+        ratio_to_deferred: None,
+        deterministic: (!run.hashes.is_empty()).then(|| run.hashes.windows(2).all(|w| w[0] == w[1])),
+        display_hash: run.hashes.last().cloned(),
+        images: ImageFiles::default(),
+        samples: None,
+        vs_reference: None,
+        vs_ground_truth: None,
+        adaptive: None,
+    }
+}
+
+fn pass_median(run: &ModeRun, name: &str) -> Option<f64> {
+    let samples: Vec<f64> = run
+        .timings
+        .iter()
+        .filter_map(|t| t.passes.iter().find(|p| p.name == name).map(|p| p.seconds * 1e3))
+        .collect();
+    Summary::new(samples).map(|s| s.median)
+}
+
+fn frame_median(run: &ModeRun) -> Option<f64> {
+    Summary::new(run.timings.iter().map(|t| t.seconds() * 1e3).collect()).map(|s| s.median)
+}
+
+/// Speed-up over the same-M reference with the same stall, and the cost limit (see
+/// [`AdaptiveCost`]).
+fn adaptive_cost(modes: &[Mode], runs: &[ModeRun], mode: Mode, run: &ModeRun) -> Option<AdaptiveCost> {
+    if !matches!(mode.technique, Technique::Adaptive(_)) {
+        return None;
+    }
+    let reference = Mode::new(Technique::Reference, mode.m, mode.stalled);
+    let reference_run = &runs[modes.iter().position(|m| *m == reference)?];
+    let own = frame_median(run)?;
+    let counts = run.images.as_ref()?.sample_counts.as_ref()?;
+    let stats = metrics::sample_stats(counts, mode.m).ok()?;
+    // Shading work beyond S, as a fraction of the reference's.
+    let pixels = counts.len() as f64;
+    let extra_fraction = ((stats.shaded + stats.full_pixels) as f64 - pixels) / stats.total as f64;
+    let limit = pass_median(run, "gbuffer")?
+        + pass_median(run, "shade_first")?
+        + pass_median(run, "evaluate")?
+        + extra_fraction * pass_median(reference_run, "shade")?;
+    Some(AdaptiveCost {
+        reference: reference.to_string(),
+        speedup: frame_median(reference_run)? / own,
+        limit_ms: limit,
+        efficiency: limit / own,
+    })
+}
+
+/// Writes a mode's images; returns their paths (relative to the run folder) and, for adaptive
+/// modes, the sample statistics.
+fn write_mode_images(
+    scene_dir: &Path,
+    scene: &str,
+    mode: Mode,
+    images: &FrameImages,
+    diff_against: Option<&FrameImages>,
+) -> anyhow::Result<(ImageFiles, Option<metrics::SampleStats>)> {
+    let (w, h) = (images.width, images.height);
+    let relative = |suffix: &str| format!("{scene}/{mode}{suffix}");
+    let path = |suffix: &str| scene_dir.join(format!("{mode}{suffix}"));
+    images::write_png(&path(".png"), w, h, &images.display)?;
+    images::write_exr(&path(".exr"), w, h, &images.hdr)?;
+    let mut files =
+        ImageFiles { display: Some(relative(".png")), hdr: Some(relative(".exr")), ..Default::default() };
+    let mut samples = None;
+    if let Some(counts) = &images.sample_counts {
+        samples = Some(metrics::sample_stats(counts, mode.m).map_err(|e| anyhow::anyhow!("{mode}: {e}"))?);
+        images::write_png(&path(".samples.png"), w, h, &images::sample_heatmap(counts, mode.m))?;
+        files.samples = Some(relative(".samples.png"));
+    }
+    if let Some(other) = diff_against {
+        let heatmap = images::difference_heatmap(&images.display, &other.display, DIFFERENCE_FULL_SCALE);
+        images::write_png(&path(".diff.png"), w, h, &heatmap)?;
+        files.difference = Some(relative(".diff.png"));
+    }
+    Ok((files, samples))
+}
+
+/// Prints a scene's results as a small table.
+fn report_scene(progress: &Progress, scene: &SceneRecord) {
+    let resolution = scene.resolution.map_or(String::new(), |[w, h]| format!(" {w}×{h}"));
+    match &scene.error {
+        Some(error) if scene.modes.is_empty() => {
+            progress.line(&format!("[{}] FAILED: {error}", scene.name));
+            return;
+        }
+        _ => progress.line(&format!(
+            "[{}]{resolution} {} triangles, ground truth {}",
+            scene.name,
+            scene.triangles.unwrap_or(0),
+            scene.ground_truth.as_deref().unwrap_or("none")
+        )),
+    }
+    progress.line(&format!(
+        "  {:<28} {:>10} {:>21} {:>8} {:>9} {:>9} {:>10}",
+        "mode", "median ms", "interval ms", "×1x1", "samples%", "PSNR ref", "PSNR truth"
+    ));
+    let db = |q: &Option<Quality>| q.as_ref().map_or("-".into(), |q| format!("{:.2}", q.psnr_db.value()));
+    for mode in &scene.modes {
+        let Some(frame) = &mode.frame_ms else {
+            progress.line(&format!("  {:<28} {}", mode.mode, mode.error.as_deref().unwrap_or("no frames")));
+            continue;
+        };
+        progress.line(&format!(
+            "  {:<28} {:>10.1} {:>21} {:>8} {:>9} {:>9} {:>10}{}",
+            mode.mode,
+            frame.median,
+            format!("[{:.1}, {:.1}]", frame.ci_low, frame.ci_high),
+            mode.ratio_to_deferred.map_or("-".into(), |r| format!("{r:.2}")),
+            mode.samples.as_ref().map_or("-".into(), |s| format!("{:.1}", s.shaded_percent)),
+            db(&mode.vs_reference),
+            db(&mode.vs_ground_truth),
+            mode.error.as_ref().map_or(String::new(), |e| format!("  ({e})")),
+        ));
+    }
+}
+
+/// Frame timeout when none is given: generous, since a warm-up frame includes compilation.
+pub fn default_frame_timeout() -> Duration {
+    Duration::from_secs(120)
+}

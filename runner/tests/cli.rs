@@ -1,0 +1,290 @@
+//! The `aabench` binary as users and CI run it: real processes, real exit codes, real files.
+
+use std::path::PathBuf;
+use std::process::{Command, Output, Stdio};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use serde_json::{Value, json};
+
+/// lavapipe uses every core: one aabench process at a time keeps the tests' timings sane.
+static SERIAL: Mutex<()> = Mutex::new(());
+
+struct Workspace {
+    dir: PathBuf,
+}
+
+impl Workspace {
+    fn new(name: &str) -> Workspace {
+        let dir = std::env::temp_dir().join(format!("aabench-cli-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(dir.join("scenes")).unwrap();
+        Workspace { dir }
+    }
+
+    /// Writes scenes/<name>.json for a generated scene at 64×48, with `edit` applied.
+    fn manifest(&self, name: &str, generator: &str, edit: impl Fn(&mut Value)) -> PathBuf {
+        let mut manifest = json!({
+            "schema_version": 1,
+            "name": name,
+            "gltf": format!("cache/{generator}.glb"),
+            "generate": { "generator": generator, "seed": 1 },
+            "resolution": { "quick": [64, 48], "nightly": [128, 96] },
+            "lights": [{ "position": [0.5, 0.5, 2.0], "intensity": 4.0, "range": 20.0 }],
+            "ambient": [0.05, 0.05, 0.05],
+            "stall_iterations": 16
+        });
+        edit(&mut manifest);
+        let path = self.dir.join("scenes").join(format!("{name}.json"));
+        std::fs::write(&path, serde_json::to_string_pretty(&manifest).unwrap()).unwrap();
+        path
+    }
+
+    fn command(&self, args: &[&str]) -> Command {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_aabench"));
+        command.args(args).current_dir(&self.dir).env("CI", "1");
+        command
+    }
+
+    fn run(&self, args: &[&str]) -> Output {
+        self.command(args).output().expect("aabench runs")
+    }
+
+    /// The run.json of the only run under reports/.
+    fn record(&self) -> Value {
+        let runs: Vec<PathBuf> =
+            std::fs::read_dir(self.dir.join("reports")).unwrap().map(|e| e.unwrap().path()).collect();
+        assert_eq!(runs.len(), 1, "{runs:?}");
+        serde_json::from_slice(&std::fs::read(runs[0].join("run.json")).unwrap()).expect("run.json is JSON")
+    }
+
+    fn run_dir(&self) -> PathBuf {
+        std::fs::read_dir(self.dir.join("reports")).unwrap().next().unwrap().unwrap().path()
+    }
+}
+
+impl Drop for Workspace {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+fn mode<'a>(scene: &'a Value, id: &str) -> &'a Value {
+    scene["modes"].as_array().unwrap().iter().find(|m| m["mode"] == id).unwrap_or_else(|| panic!("no {id}"))
+}
+
+#[test]
+fn a_run_writes_its_record_and_images_and_exits_zero() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("ok");
+    ws.manifest("edge", "edge", |_| {});
+    let modes = "deferred-1x1,reference-2x2,reference-2x2-stalled,adaptive-2x2";
+    let output = ws.run(&["run", "--modes", modes, "--repetitions", "2"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+
+    let record = ws.record();
+    assert_eq!(record["schema"], "aabench.run/1");
+    assert_eq!(record["status"], "ok");
+    assert_eq!(record["tier"], "quick");
+    assert!(record["platform"]["key"].as_str().unwrap().contains("llvmpipe"), "{}", record["platform"]);
+    let scene = &record["scenes"][0];
+    assert_eq!(scene["status"], "ok");
+    assert_eq!(scene["ground_truth"], "reference-2x2");
+    assert_eq!(scene["resolution"], json!([64, 48]));
+    for id in modes.split(',') {
+        let m = mode(scene, id);
+        assert_eq!(m["status"], "ok", "{id}: {}", m["error"]);
+        assert_eq!(m["frame_ms"]["samples"].as_array().unwrap().len(), 2, "{id}");
+        assert!(m["frame_ms"]["median"].as_f64().unwrap() > 0.0);
+        assert_eq!(m["deterministic"], true, "{id}");
+        assert_eq!(m["passes"][0]["name"], "gbuffer", "{id}");
+        let png = image::open(ws.run_dir().join(m["images"]["display"].as_str().unwrap())).unwrap();
+        assert_eq!((png.width(), png.height()), (64, 48));
+        let exr = ws.run_dir().join(m["images"]["hdr"].as_str().unwrap());
+        exr::prelude::read_first_rgba_layer_from_file(&exr, |_, _| (), |_, _, _: (f32, f32, f32, f32)| ())
+            .unwrap();
+    }
+    assert_eq!(
+        mode(scene, "reference-2x2")["display_hash"],
+        mode(scene, "reference-2x2-stalled")["display_hash"]
+    );
+    let deferred = mode(scene, "deferred-1x1");
+    assert!(deferred["vs_ground_truth"]["psnr_db"].as_f64().unwrap() < 40.0, "the edge aliases at 1×1");
+    assert_eq!(deferred["ratio_to_deferred"], 1.0);
+    let adaptive = mode(scene, "adaptive-2x2");
+    assert_eq!(adaptive["vs_reference"]["against"], "reference-2x2");
+    let samples = &adaptive["samples"];
+    assert!((25.0..60.0).contains(&samples["shaded_percent"].as_f64().unwrap()), "{samples}");
+    assert_eq!(samples["histogram"].as_array().unwrap().len(), 4);
+    assert!(adaptive["adaptive"]["speedup"].as_f64().unwrap() > 0.0);
+    assert!(ws.run_dir().join(adaptive["images"]["samples"].as_str().unwrap()).exists());
+    assert!(ws.run_dir().join(adaptive["images"]["difference"].as_str().unwrap()).exists());
+}
+
+#[test]
+fn a_broken_manifest_fails_alone_and_the_run_exits_two() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("broken");
+    ws.manifest("a-edge", "edge", |_| {});
+    ws.manifest("b-broken", "plane", |m| m["lights"][0]["range"] = json!(-3));
+    let output = ws.run(&["run", "--modes", "deferred-1x1"]);
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(stderr(&output).contains("1 scene(s) failed"), "{}", stderr(&output));
+
+    let record = ws.record();
+    assert_eq!(record["status"], "failed");
+    assert_eq!(record["scenes"][0]["status"], "ok");
+    let broken = &record["scenes"][1];
+    assert_eq!(broken["status"], "failed");
+    let error = broken["error"].as_str().unwrap();
+    assert!(error.contains("b-broken.json: lights[0].range: -3 must be finite and > 0"), "{error}");
+}
+
+#[test]
+fn no_vulkan_adapter_exits_two_with_one_line_on_how_to_install_one() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("noadapter");
+    ws.manifest("edge", "edge", |_| {});
+    let missing = ws.dir.join("no-such-icd.json");
+    let output = ws
+        .command(&["run"])
+        .env("VK_ICD_FILENAMES", &missing)
+        .env("VK_DRIVER_FILES", &missing)
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(2));
+    let text = stderr(&output);
+    let lines: Vec<&str> = text.lines().filter(|l| l.starts_with("aabench:")).collect();
+    assert_eq!(lines.len(), 1, "{text}");
+    assert!(
+        lines[0].contains("no Vulkan adapter found") && lines[0].contains("mesa-vulkan-drivers"),
+        "{text}"
+    );
+}
+
+#[test]
+fn bad_arguments_exit_two_before_any_work() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("args");
+    ws.manifest("edge", "edge", |_| {});
+    for (args, reason) in [
+        (vec!["run", "--modes", "reference-9x9"], "M must be in 1..=4"),
+        (vec!["run", "--modes", "fxaa-1x1"], "technique must be"),
+        (vec!["run", "scenes/nope.json"], "no such file or folder"),
+        (vec!["run", "--repetitions", "0"], "at least 1"),
+        (vec!["run", "--frame-timeout", "0"], "positive number of seconds"),
+    ] {
+        let output = ws.run(&args);
+        assert_eq!(output.status.code(), Some(2), "{args:?}");
+        assert!(stderr(&output).contains(reason), "{args:?}: {}", stderr(&output));
+    }
+    assert!(!ws.dir.join("reports").exists(), "nothing should have been written");
+}
+
+#[test]
+fn gen_scenes_writes_once_then_reports_current_files() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("gen");
+    ws.manifest("thin", "thin", |_| {});
+    let first = ws.run(&["gen-scenes"]);
+    assert!(String::from_utf8_lossy(&first.stdout).contains("thin: wrote"), "{first:?}");
+    let glb = ws.dir.join("scenes/cache/thin.glb");
+    let written = std::fs::metadata(&glb).unwrap().modified().unwrap();
+    let second = ws.run(&["gen-scenes"]);
+    assert!(String::from_utf8_lossy(&second.stdout).contains("is current"), "{second:?}");
+    assert_eq!(std::fs::metadata(&glb).unwrap().modified().unwrap(), written);
+    // A stale file (another generator version or seed) is replaced.
+    ws.manifest("thin", "thin", |m| m["generate"]["seed"] = json!(2));
+    let third = ws.run(&["gen-scenes"]);
+    assert!(String::from_utf8_lossy(&third.stdout).contains("thin: wrote"), "{third:?}");
+}
+
+/// Waits until `record` holds for the run's run.json, or panics after `timeout`.
+fn wait_for(ws: &Workspace, timeout: Duration, record: impl Fn(&Value) -> bool) {
+    let start = Instant::now();
+    while start.elapsed() < timeout {
+        let ready = std::fs::read_dir(ws.dir.join("reports"))
+            .ok()
+            .and_then(|mut runs| runs.next())
+            .and_then(|run| std::fs::read(run.ok()?.path().join("run.json")).ok())
+            .and_then(|bytes| serde_json::from_slice::<Value>(&bytes).ok())
+            .is_some_and(|r| record(&r));
+        if ready {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    panic!("run.json never reached the expected state");
+}
+
+#[test]
+fn ctrl_c_stops_after_the_current_frame_and_keeps_what_was_measured() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("interrupt");
+    ws.manifest("edge", "edge", |_| {});
+    let mut child = ws
+        .command(&["run", "--modes", "deferred-1x1,reference-2x2", "--repetitions", "100000"])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for(&ws, Duration::from_secs(60), |r| r["status"] == "running");
+    std::thread::sleep(Duration::from_secs(3));
+    let sent = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(sent.success());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130));
+
+    let record = ws.record();
+    assert_eq!(record["status"], "interrupted");
+    let m = mode(&record["scenes"][0], "reference-2x2");
+    let frames = m["frame_ms"]["samples"].as_array().unwrap().len();
+    assert!((1..100000).contains(&frames), "{frames} frames");
+    assert!(ws.run_dir().join(m["images"]["display"].as_str().unwrap()).exists(), "{m}");
+}
+
+#[test]
+fn a_killed_run_leaves_the_scenes_that_finished() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("killed");
+    ws.manifest("a-plane", "plane", |_| {});
+    ws.manifest("b-edge", "edge", |m| m["resolution"]["quick"] = json!([256, 192]));
+    let mut child = ws
+        .command(&["run", "--modes", "deferred-1x1", "--repetitions", "100000"])
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // The first scene can never finish 100000 frames in time: kill while it runs.
+    wait_for(&ws, Duration::from_secs(60), |r| r["status"] == "running");
+    std::thread::sleep(Duration::from_secs(2));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let record = ws.record();
+    assert_eq!(record["status"], "running", "the record stays as last written");
+    assert!(record["scenes"].as_array().unwrap().is_empty());
+
+    // With a quick first scene and a slow second one, a kill during the second leaves the
+    // first whole.
+    let ws = Workspace::new("killed2");
+    ws.manifest("a-plane", "plane", |_| {});
+    ws.manifest("b-edge", "edge", |m| m["resolution"]["quick"] = json!([1024, 768]));
+    let mut child = ws
+        .command(&["run", "--modes", "deferred-1x1,reference-4x4", "--repetitions", "3"])
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    wait_for(&ws, Duration::from_secs(120), |r| r["scenes"].as_array().is_some_and(|s| s.len() == 1));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let record = ws.record();
+    assert_eq!(record["scenes"].as_array().unwrap().len(), 1, "killed before the slow scene finished");
+    assert_eq!(record["scenes"][0]["name"], "a-plane");
+    assert_eq!(record["scenes"][0]["status"], "ok");
+    assert_eq!(
+        mode(&record["scenes"][0], "reference-4x4")["frame_ms"]["samples"].as_array().unwrap().len(),
+        3
+    );
+}

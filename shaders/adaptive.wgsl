@@ -1,0 +1,283 @@
+// Adaptive supersampling (Holländer, Boubekeur & Eisemann 2013) on the M·w × M·h G-buffer:
+//
+//   shade_first   S: one sample per pixel, at dither rank 0, filtered over the whole pixel
+//   evaluate      n = 1 + round(k) samples per pixel from the geometry and shading metrics
+//   scan_rows,    a prefix sum over the counts lists every (pixel, rank) still to shade,
+//   scan_total,   densely, so the next pass runs one fragment per extra sample with no idle
+//   emit          SIMD lanes
+//   shade_extra   shades the list
+//   gather        averages S with the pixel's extra samples (or, with LOOP_SHADING, shades them
+//                 itself in a loop: the paper's simplest variant, kept for comparison); a pixel
+//                 that takes all M² samples leaves S out and equals the reference
+//
+// The metric is specified by its CPU twin in renderer/src/adaptive.rs; keep the two in step.
+
+#include "lib/common.wgsl"
+#include "lib/scene.wgsl"
+#include "lib/gbuffer.wgsl"
+#include "lib/shading.wgsl"
+
+// Set by passes/adaptive.rs from AdaptiveSettings; no defaults here, so Rust is the one source.
+override M: u32;
+// k = C · M² · metric.
+override C_DEPTH: f32;
+override C_NORMAL: f32;
+override C_SHADING: f32;
+override T_MIN: f32;
+override T_EDGE: f32;
+override USE_GEOMETRY: bool;
+override USE_SHADING: bool;
+override FORCE_ALL: bool;
+override LOOP_SHADING: bool;
+// Size of the compact target that holds the extra samples, one per texel in list order.
+override COMPACT_WIDTH: u32;
+override COMPACT_HEIGHT: u32;
+
+// Bits of a list entry that hold the rank; the pixel index takes the rest.
+const RANK_BITS: u32 = 4u;
+
+// The first rank a pixel of n samples shades after S. A pixel that takes its whole window is
+// shaded exactly like the reference: rank 0 again, at the reference's footprint, instead of
+// reusing S (whose footprint spans the pixel). Any other pixel reuses S, as the paper does.
+fn first_extra_rank(n: u32) -> u32 {
+    return select(1u, 0u, n == M * M);
+}
+
+// Group 2 differs per pass; each entry point names its own bindings below.
+
+// Rank → row-major window cell, from the paper's Fig. 3 matrices (adaptive.rs: sample_order).
+@group(2) @binding(0) var<storage, read> order: array<u32>;
+
+fn window_texel(pixel: vec2<i32>, rank: u32) -> vec2<i32> {
+    let cell = order[rank];
+    return pixel * i32(M) + vec2<i32>(i32(cell % M), i32(cell / M));
+}
+
+// A sample's texture footprint, in G-buffer texels, when n samples share the pixel: the filter
+// width that gives the n samples together the same spread (variance) as the reference's M²
+// one-texel samples, sqrt((1 + M²/n) / 2). It is 1 at n = M², like the reference's own.
+fn footprint(n: u32) -> f32 {
+    return sqrt(0.5 + 0.5 * f32(M * M) / f32(n));
+}
+
+@fragment
+fn shade_first(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
+    return shade(window_texel(vec2<i32>(position.xy), 0u), footprint(1u));
+}
+
+// ---- evaluate: group 2 = { S }
+
+@group(2) @binding(0) var first: texture_2d<f32>;
+
+// Perceptual luma of an S pixel: the square root (a gamma-2 stand-in for sRGB, without pow)
+// of the luminance of the exposed colour clamped to [0, 1].
+fn first_luma(pixel: vec2<i32>) -> f32 {
+    let size = vec2<i32>(textureDimensions(first));
+    let p = clamp(pixel, vec2<i32>(0), size - 1);
+    let linear = clamp(textureLoad(first, p, 0).rgb * frame.display.x, vec3<f32>(0.0), vec3<f32>(1.0));
+    return sqrt(luminance(linear));
+}
+
+// max(k_d, k_n) before the C · M² scaling is applied per metric; see geometry_metric in
+// adaptive.rs for the cases.
+fn geometry_k(pixel: vec2<i32>) -> f32 {
+    let n = M * M;
+    var depths: array<f32, 16>;
+    var normals: array<vec3<f32>, 16>;
+    var covered = 0u;
+    var depth_sum = 0.0;
+    var normal_sum = vec3<f32>(0.0);
+    for (var i = 0u; i < n; i += 1u) {
+        let texel = pixel * i32(M) + vec2<i32>(i32(i % M), i32(i / M));
+        let nm = load_normal_material(texel);
+        let depth = linear_depth(texel);
+        let length_n = length(nm.xyz);
+        let unit = select(vec3<f32>(0.0), nm.xyz / length_n, length_n > 1e-6);
+        depths[i] = depth;
+        normals[i] = unit;
+        covered += u32(i32(nm.w) != BACKGROUND);
+        depth_sum += depth;
+        normal_sum += unit;
+    }
+    if covered == 0u {
+        return 0.0;
+    }
+    if covered < n {
+        // A silhouette against the background.
+        return 3.0e38;
+    }
+    let mean = depth_sum / f32(n);
+    var deviation = 0.0;
+    for (var i = 0u; i < n; i += 1u) {
+        let d = depths[i] - mean;
+        deviation += d * d;
+    }
+    let variance = deviation / f32(n);
+    let sum_length = length(normal_sum);
+    var cone = 1.0;
+    if sum_length >= 1e-3 * f32(n) {
+        let mean_normal = normal_sum / sum_length;
+        var min_cos = 1.0;
+        for (var i = 0u; i < n; i += 1u) {
+            min_cos = min(min_cos, abs(dot(normals[i], mean_normal)));
+        }
+        cone = sqrt(max(1.0 - min_cos, 0.0));
+    }
+    return max(C_DEPTH * variance, C_NORMAL * cone);
+}
+
+fn shading_k(pixel: vec2<i32>) -> f32 {
+    let c = first_luma(pixel);
+    let l = first_luma(pixel + vec2<i32>(-1, 0));
+    let r = first_luma(pixel + vec2<i32>(1, 0));
+    let u = first_luma(pixel + vec2<i32>(0, -1));
+    let d = first_luma(pixel + vec2<i32>(0, 1));
+    let l_max = max(max(max(c, l), max(r, u)), d);
+    let l_min = min(min(min(c, l), min(r, u)), d);
+    let range = l_max - l_min;
+    if range < max(T_MIN, l_max * T_EDGE) {
+        return 0.0;
+    }
+    return C_SHADING * range;
+}
+
+@fragment
+fn evaluate(@builtin(position) position: vec4<f32>) -> @location(0) u32 {
+    let total = M * M;
+    if FORCE_ALL {
+        return total;
+    }
+    let pixel = vec2<i32>(position.xy);
+    var k = 0.0;
+    if USE_GEOMETRY {
+        k = max(k, geometry_k(pixel));
+    }
+    if USE_SHADING {
+        k = max(k, shading_k(pixel));
+    }
+    // 1 + round(k · M²), clamped to the window; NaN (never expected) takes every sample.
+    let max_extra = f32(total - 1u);
+    let scaled = k * f32(total);
+    let extra = select(max_extra, min(floor(scaled + 0.5), max_extra), scaled >= 0.0);
+    return 1u + u32(extra);
+}
+
+// ---- scan_rows, scan_total, emit: the list of extra samples
+
+@group(2) @binding(0) var counts: texture_2d<u32>;
+@group(2) @binding(1) var<storage, read_write> row_offsets: array<u32>;
+@group(2) @binding(2) var<storage, read_write> totals: array<u32>;
+@group(2) @binding(3) var<storage, read_write> pixel_offsets: array<u32>;
+@group(2) @binding(4) var<storage, read_write> entries: array<u32>;
+
+// List entries of each row.
+@compute @workgroup_size(64)
+fn scan_rows(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(counts);
+    let y = id.x;
+    if y >= size.y {
+        return;
+    }
+    var sum = 0u;
+    for (var x = 0u; x < size.x; x += 1u) {
+        let n = textureLoad(counts, vec2<u32>(x, y), 0).r;
+        sum += n - first_extra_rank(n);
+    }
+    row_offsets[y] = sum;
+}
+
+// Exclusive prefix sum over the rows; totals[0] = all extra samples.
+@compute @workgroup_size(1)
+fn scan_total() {
+    let rows = textureDimensions(counts).y;
+    var total = 0u;
+    for (var y = 0u; y < rows; y += 1u) {
+        let sum = row_offsets[y];
+        row_offsets[y] = total;
+        total += sum;
+    }
+    totals[0] = total;
+}
+
+// Writes each pixel's first list index and its (pixel, rank) entries.
+@compute @workgroup_size(64)
+fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(counts);
+    let y = id.x;
+    if y >= size.y {
+        return;
+    }
+    var offset = row_offsets[y];
+    for (var x = 0u; x < size.x; x += 1u) {
+        let pixel = y * size.x + x;
+        let n = textureLoad(counts, vec2<u32>(x, y), 0).r;
+        pixel_offsets[pixel] = offset;
+        for (var rank = first_extra_rank(n); rank < n; rank += 1u) {
+            entries[offset] = (pixel << RANK_BITS) | rank;
+            offset += 1u;
+        }
+    }
+}
+
+// ---- shade_extra: group 2 = { order, counts, entries, totals }
+
+@group(2) @binding(1) var extra_counts: texture_2d<u32>;
+@group(2) @binding(2) var<storage, read> extra_entries: array<u32>;
+@group(2) @binding(3) var<storage, read> extra_totals: array<u32>;
+
+// A rectangle over the rows of the compact target that hold list entries (none when empty).
+@vertex
+fn compact_rows(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
+    let rows = (extra_totals[0] + COMPACT_WIDTH - 1u) / COMPACT_WIDTH;
+    let bottom = 1.0 - 2.0 * f32(rows) / f32(COMPACT_HEIGHT);
+    // Two triangles: (0 1 2) (2 1 3) over the corners left/right × top/bottom.
+    let corner = array<vec2<f32>, 6>(
+        vec2<f32>(-1.0, 1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, bottom),
+        vec2<f32>(-1.0, bottom), vec2<f32>(1.0, 1.0), vec2<f32>(1.0, bottom),
+    )[index];
+    return vec4<f32>(corner, 0.0, 1.0);
+}
+
+@fragment
+fn shade_extra(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
+    let index = u32(position.y) * COMPACT_WIDTH + u32(position.x);
+    if index >= extra_totals[0] {
+        // The tail of the last row.
+        return vec4<f32>(0.0);
+    }
+    let entry = extra_entries[index];
+    let width = textureDimensions(extra_counts).x;
+    let pixel_index = entry >> RANK_BITS;
+    let pixel = vec2<i32>(i32(pixel_index % width), i32(pixel_index / width));
+    let n = textureLoad(extra_counts, pixel, 0).r;
+    return shade(window_texel(pixel, entry & ((1u << RANK_BITS) - 1u)), footprint(n));
+}
+
+// ---- gather: group 2 = { order, S, counts, pixel offsets, extra samples }
+
+@group(2) @binding(1) var gather_first: texture_2d<f32>;
+@group(2) @binding(2) var gather_counts: texture_2d<u32>;
+@group(2) @binding(3) var<storage, read> gather_offsets: array<u32>;
+@group(2) @binding(4) var extra_samples: texture_2d<f32>;
+
+@fragment
+fn gather(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
+    let pixel = vec2<i32>(position.xy);
+    let n = textureLoad(gather_counts, pixel, 0).r;
+    let first_rank = first_extra_rank(n);
+    var sum = select(vec4<f32>(0.0), textureLoad(gather_first, pixel, 0), first_rank == 1u);
+    if LOOP_SHADING {
+        let scale = footprint(n);
+        for (var rank = first_rank; rank < n; rank += 1u) {
+            sum += shade(window_texel(pixel, rank), scale);
+        }
+    } else {
+        let width = textureDimensions(gather_first).x;
+        let base = gather_offsets[u32(pixel.y) * width + u32(pixel.x)];
+        for (var j = 0u; j < n - first_rank; j += 1u) {
+            let index = base + j;
+            sum += textureLoad(extra_samples, vec2<u32>(index % COMPACT_WIDTH, index / COMPACT_WIDTH), 0);
+        }
+    }
+    return sum / f32(n);
+}

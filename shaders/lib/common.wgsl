@@ -1,0 +1,44 @@
+// Shared by every pass: the per-frame uniforms, the fullscreen triangle and colour helpers.
+
+struct Frame {
+    view_proj: mat4x4<f32>,
+    view: mat4x4<f32>,
+    inv_view: mat4x4<f32>,
+    // xyz: the camera's world position.
+    eye: vec4<f32>,
+    // x: tan(fov_y / 2) * aspect, y: tan(fov_y / 2), z: near, w: far.
+    projection: vec4<f32>,
+    // rgb: ambient radiance.
+    ambient: vec4<f32>,
+    // rgb: radiance where no geometry covers a sample.
+    background: vec4<f32>,
+    // x: exposure, a linear scale before display encoding.
+    display: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+
+// One triangle that covers the whole target: (-1, -1), (3, -1), (-1, 3).
+@vertex
+fn fullscreen(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
+    let corner = vec2<f32>(f32((index << 1u) & 2u), f32(index & 2u));
+    return vec4<f32>(corner * 2.0 - 1.0, 0.0, 1.0);
+}
+
+// Rec. 709 luminance of a linear colour.
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}
+
+// The sRGB transfer function (IEC 61966-2-1), linear [0, 1] to encoded [0, 1].
+fn srgb_encode(linear: vec3<f32>) -> vec3<f32> {
+    let low = linear * 12.92;
+    let high = 1.055 * pow(linear, vec3<f32>(1.0 / 2.4)) - 0.055;
+    return select(high, low, linear <= vec3<f32>(0.0031308));
+}
+
+// Linear HDR radiance to the display-encoded colour in [0, 1]: exposure, clamp, sRGB.
+fn display_encode(hdr: vec3<f32>) -> vec3<f32> {
+    return srgb_encode(clamp(hdr * frame.display.x, vec3<f32>(0.0), vec3<f32>(1.0)));
+}
+

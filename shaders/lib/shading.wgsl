@@ -1,0 +1,106 @@
+// Shading one G-buffer sample: metallic-roughness BRDF under the scene's point lights, albedo
+// fetched here, and an optional stall that simulates an expensive shader.
+
+const PI: f32 = 3.14159265358979;
+
+// Dependent integer operations per sample that the compiler can neither fold nor skip. Set per
+// pipeline: `-stalled` modes use the scene's stall count, the others 0.
+override STALL_ITERATIONS: u32 = 0u;
+
+// A chain of STALL_ITERATIONS steps, each needing the one before. Its result is written to the
+// alpha channel of the HDR target, which keeps it live without touching the image.
+fn stall(texel: vec2<i32>) -> f32 {
+    var h = (u32(texel.x) * 0x8da6b343u) ^ (u32(texel.y) * 0xd8163841u);
+    for (var i = 0u; i < STALL_ITERATIONS; i += 1u) {
+        h = (h ^ (h >> 15u)) * 0x2c1b3c6du;
+    }
+    return f32(h >> 8u) * (1.0 / 16777216.0);
+}
+
+// glTF's metallic-roughness model: Lambert diffuse, GGX distribution, Schlick Fresnel, and
+// Hammon's approximation of height-correlated Smith visibility (no square roots; Filament's
+// "fast" variant). `n_l` > 0 is the caller's.
+fn brdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, n_l: f32, albedo: vec3<f32>, metallic: f32, a2: f32, a: f32) -> vec3<f32> {
+    let h = normalize(v + l);
+    let n_v = max(dot(n, v), 1e-4);
+    let n_h = max(dot(n, h), 0.0);
+    let v_h = max(dot(v, h), 0.0);
+    let d_denominator = n_h * n_h * (a2 - 1.0) + 1.0;
+    let distribution = a2 / (PI * d_denominator * d_denominator);
+    let visibility = 0.5 / mix(2.0 * n_l * n_v, n_l + n_v, a);
+    let f0 = mix(vec3<f32>(0.04), albedo, metallic);
+    // (1 − v·h)⁵ by multiplication: pow() is exp2(log2()) on lavapipe.
+    let x = 1.0 - v_h;
+    let x2 = x * x;
+    let fresnel = f0 + (1.0 - f0) * (x2 * x2 * x);
+    let diffuse = (1.0 - fresnel) * ((1.0 - metallic) / PI) * albedo;
+    return (diffuse + fresnel * (distribution * visibility)) * n_l;
+}
+
+// KHR_lights_punctual's inverse-square falloff with a smooth window to zero at `range`, from
+// the squared distance and its inverse.
+fn attenuation(distance2: f32, inverse2: f32, range: f32) -> f32 {
+    let ratio2 = distance2 / (range * range);
+    let window = clamp(1.0 - ratio2 * ratio2, 0.0, 1.0);
+    return window * window * min(inverse2, 1e4);
+}
+
+// Most taps of one anisotropic lookup.
+const MAX_ANISOTROPY: f32 = 16.0;
+
+// Anisotropic filtering in the shader: up to MAX_ANISOTROPY trilinear taps spread along the
+// major axis of the footprint (dx, dy), each tap covering its share of that axis. lavapipe's
+// own sampler anisotropy costs about 100 times a trilinear lookup, taps taken here about their
+// number (README, "Measured facts").
+fn sample_albedo(layer: i32, uv: vec2<f32>, dx: vec2<f32>, dy: vec2<f32>) -> vec4<f32> {
+    let size = vec2<f32>(textureDimensions(scene_textures));
+    let length_x = length(dx * size);
+    let length_y = length(dy * size);
+    let x_is_major = length_x >= length_y;
+    let major = select(dy, dx, x_is_major);
+    let minor = select(dx, dy, x_is_major);
+    let ratio = max(length_x, length_y) / max(min(length_x, length_y), 1e-20);
+    let taps = u32(clamp(ceil(ratio), 1.0, MAX_ANISOTROPY));
+    let step = major / f32(taps);
+    var sum = vec4<f32>(0.0);
+    for (var i = 0u; i < taps; i += 1u) {
+        let offset = (f32(i) + 0.5) / f32(taps) - 0.5;
+        sum += textureSampleGrad(scene_textures, scene_sampler, uv + major * offset, layer, step, minor);
+    }
+    return sum / f32(taps);
+}
+
+// Linear HDR radiance of the sample at `texel`; alpha carries the stall result. `footprint`
+// scales the stored UV derivatives: 1 when every texel of the window is shaded, M/sqrt(n) when
+// n samples share an M×M window.
+fn shade(texel: vec2<i32>, footprint: f32) -> vec4<f32> {
+    let s = load_surface(texel);
+    let stalled = stall(texel);
+    if s.material == BACKGROUND {
+        return vec4<f32>(frame.background.rgb, stalled);
+    }
+    let material = materials[s.material];
+    var albedo = material.base_color.rgb;
+    if material.texture >= 0 {
+        albedo *= sample_albedo(material.texture, s.uv, s.uv_dx * footprint, s.uv_dy * footprint).rgb;
+    }
+    let roughness = clamp(material.roughness, 0.03, 1.0);
+    let a = roughness * roughness;
+    let a2 = a * a;
+    let position = world_position(texel, s.depth);
+    let v = normalize(frame.eye.xyz - position);
+    var radiance = frame.ambient.rgb * albedo;
+    for (var i = 0u; i < LIGHT_COUNT; i += 1u) {
+        let light = lights.entries[i];
+        let to_light = light.position - position;
+        let distance2 = max(dot(to_light, to_light), 1e-12);
+        let inverse = inverseSqrt(distance2);
+        let l = to_light * inverse;
+        let n_l = dot(s.normal, l);
+        if n_l > 0.0 {
+            radiance += brdf(s.normal, v, l, n_l, albedo, material.metallic, a2, a)
+                * light.radiance * attenuation(distance2, inverse * inverse, light.range);
+        }
+    }
+    return vec4<f32>(radiance, stalled);
+}

@@ -11,7 +11,7 @@ use aabench::plan::{self, RunPlan, Tier};
 use aabench::progress::Progress;
 use aabench::record::Status;
 use aabench::{exit, run, scenes};
-use aabench_renderer::{Mode, RenderError};
+use aabench_renderer::{ExtraSamples, Mode, RenderError};
 use clap::{Parser, Subcommand};
 
 #[derive(Debug, Parser)]
@@ -62,9 +62,19 @@ struct RunArgs {
     /// Untimed rounds before timing (lavapipe compiles shaders at the first draw).
     #[arg(long, default_value_t = 1)]
     warmup: u32,
+    /// How adaptive modes shade their extra samples: compact (a dense list, the default) or
+    /// loop (inside each pixel's invocation, the paper's simplest variant).
+    #[arg(long, value_enum, default_value = "compact")]
+    extra_samples: ExtraSamplesArg,
     /// Longest a single frame may take, in seconds.
     #[arg(long, value_name = "SECONDS", default_value_t = run::default_frame_timeout().as_secs_f64())]
     frame_timeout: f64,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum ExtraSamplesArg {
+    Compact,
+    Loop,
 }
 
 fn main() -> ExitCode {
@@ -150,6 +160,10 @@ fn make_plan(args: &RunArgs) -> Result<RunPlan, String> {
         repetitions,
         warmup: args.warmup,
         frame_timeout: Duration::from_secs_f64(args.frame_timeout),
+        extra_samples: match args.extra_samples {
+            ExtraSamplesArg::Compact => ExtraSamples::Compact,
+            ExtraSamplesArg::Loop => ExtraSamples::Loop,
+        },
         run_dir: args.out.join(&run_id),
         run_id,
     })

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use aabench_renderer::Mode;
+use aabench_renderer::{ExtraSamples, Mode};
 use serde::{Deserialize, Serialize};
 
 use crate::manifest::{Manifest, ManifestError};
@@ -78,6 +78,7 @@ pub struct RunPlan {
     pub repetitions: u32,
     pub warmup: u32,
     pub frame_timeout: Duration,
+    pub extra_samples: ExtraSamples,
     /// reports/<run-id>
     pub run_dir: PathBuf,
     pub run_id: String,

@@ -75,6 +75,8 @@ pub struct RunSettings {
     pub frame_timeout_s: f64,
     /// How the frames were ordered: every repetition renders each mode once, in this order.
     pub interleaving: String,
+    /// How adaptive modes shaded their extra samples: `compact` or `loop`.
+    pub extra_samples: String,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

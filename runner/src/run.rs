@@ -8,7 +8,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, SystemTime};
 
-use aabench_renderer::{FrameImages, FrameTiming, Mode, RenderSettings, Technique};
+use aabench_renderer::{AdaptiveSettings, FrameImages, FrameTiming, Mode, RenderSettings, Technique};
 use anyhow::Context;
 
 use crate::images;
@@ -56,6 +56,7 @@ pub async fn execute(plan: &RunPlan, progress: Progress, cancel: Arc<AtomicBool>
             warmup: plan.warmup,
             frame_timeout_s: plan.frame_timeout.as_secs_f64(),
             interleaving: "round-robin: each repetition renders every mode once, in plan order".into(),
+            extra_samples: format!("{:?}", plan.extra_samples).to_lowercase(),
         },
         scenes: Vec::new(),
     };
@@ -170,7 +171,7 @@ async fn run_scene(
         width,
         height,
         stall_iterations: manifest.stall_iterations,
-        adaptive: manifest.adaptive.settings(),
+        adaptive: AdaptiveSettings { extra_samples: plan.extra_samples, ..manifest.adaptive.settings() },
     };
     let modes = plan.modes.clone();
     progress.status(&format!("[{}] uploading and compiling {} modes", manifest.name, modes.len()));

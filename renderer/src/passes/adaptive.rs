@@ -37,7 +37,8 @@ pub(crate) fn build(
     let capacity = u64::from(m * m) * u64::from(width) * u64::from(height);
     let limit = r.gpu.device.limits().max_texture_dimension_2d;
     let compact_width = COMPACT_WIDTH.min(limit);
-    let compact_height = capacity.div_ceil(u64::from(compact_width)).max(1);
+    // Whole 4×4 blocks (see compact_texel in adaptive.wgsl).
+    let compact_height = capacity.div_ceil(4 * u64::from(compact_width)).max(1) * 4;
     if compact_height > u64::from(limit) {
         return Err(RenderError::TooLarge { width: compact_width, height: compact_height as u32, limit });
     }

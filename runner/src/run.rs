@@ -238,11 +238,15 @@ async fn run_scene(
                 .call(plan.frame_timeout, move |state| {
                     let prepared = state.modes[index].as_ref().expect("prepared mode");
                     let timing = prepared.render()?;
-                    // Read back between frames, never during one.
+                    // Read back between frames, never during one. Every timed frame's display
+                    // image and sample counts are fingerprinted; all must agree.
                     let images = if first_timed { Some(prepared.read_images()?) } else { None };
                     let hash = match &images {
-                        Some(images) => Some(fnv1a(&images.display)),
-                        None if timed => Some(fnv1a(&prepared.read_display()?)),
+                        Some(images) => Some(fingerprint(&images.display, images.sample_counts.as_deref())),
+                        None if timed => Some(fingerprint(
+                            &prepared.read_display()?,
+                            prepared.read_sample_counts()?.as_deref(),
+                        )),
                         None => None,
                     };
                     Ok::<_, aabench_renderer::RenderError>((timing, hash, images))
@@ -289,6 +293,14 @@ async fn run_scene(
         Status::Failed
     };
     record
+}
+
+/// FNV-1a of a frame's outputs: the display image, then the sample counts if any.
+fn fingerprint(display: &[u8], sample_counts: Option<&[u8]>) -> String {
+    match sample_counts {
+        Some(counts) => fnv1a(&[display, counts].concat()),
+        None => fnv1a(display),
+    }
 }
 
 fn fail(mut record: SceneRecord, error: String) -> SceneRecord {
@@ -437,7 +449,7 @@ fn timing_record(mode: Mode, run: &ModeRun, interrupted: bool) -> ModeRecord {
         passes,
         ratio_to_deferred: None,
         deterministic: (!run.hashes.is_empty()).then(|| run.hashes.windows(2).all(|w| w[0] == w[1])),
-        display_hash: run.hashes.last().cloned(),
+        output_hash: run.hashes.last().cloned(),
         images: ImageFiles::default(),
         samples: None,
         vs_reference: None,

@@ -108,10 +108,10 @@ fn a_run_writes_its_record_and_images_and_exits_zero() {
         exr::prelude::read_first_rgba_layer_from_file(&exr, |_, _| (), |_, _, _: (f32, f32, f32, f32)| ())
             .unwrap();
     }
-    assert_eq!(
-        mode(scene, "reference-2x2")["display_hash"],
-        mode(scene, "reference-2x2-stalled")["display_hash"]
-    );
+    let hash = |id: &str| mode(scene, id)["output_hash"].as_str().map(str::to_owned);
+    assert_eq!(hash("reference-2x2").map(|h| h.len()), Some(16), "a 64-bit hex fingerprint");
+    assert_eq!(hash("reference-2x2"), hash("reference-2x2-stalled"), "the stall must not change the image");
+    assert_ne!(hash("reference-2x2"), hash("deferred-1x1"));
     let deferred = mode(scene, "deferred-1x1");
     assert!(deferred["vs_ground_truth"]["psnr_db"].as_f64().unwrap() < 40.0, "the edge aliases at 1×1");
     assert_eq!(deferred["ratio_to_deferred"], 1.0);

@@ -132,7 +132,8 @@ pub fn sample_count(
 }
 
 /// k before rounding: the largest of the selected metrics, each scaled by its C and by M².
-/// Infinite on silhouettes against the background.
+/// Infinite on silhouettes against the background, whatever the constants (as on the GPU).
+/// Never NaN: every term is finite or +∞.
 pub fn metric_k(
     window: &[WindowSample],
     luma: &LumaCross,
@@ -144,6 +145,9 @@ pub fn metric_k(
     let mut k: f64 = 0.0;
     if metrics.geometry {
         let (variance, cone) = geometry_metric(window);
+        if variance.is_infinite() {
+            return f64::INFINITY;
+        }
         k = k
             .max(f64::from(settings.c_depth) * scale * variance)
             .max(f64::from(settings.c_normal) * scale * cone);
@@ -154,8 +158,8 @@ pub fn metric_k(
     k
 }
 
-/// 1 + round(k) in [1, total]. A NaN k (which the metrics are built never to produce) takes all
-/// samples: shading too much is slow, shading too little is wrong.
+/// 1 + round(k) in [1, total]. k is never NaN (see [`metric_k`]); if it were, this last guard
+/// would take every sample: shading too much is slow, shading too little is wrong.
 pub fn clamp_count(k: f64, total: u32) -> u32 {
     let max_extra = f64::from(total - 1);
     let extra = if k >= 0.0 {
@@ -337,6 +341,18 @@ mod tests {
         assert_eq!(clamp_count(1e30, 16), 16);
         assert_eq!(clamp_count(f64::INFINITY, 4), 4);
         assert_eq!(clamp_count(f64::NAN, 9), 9);
+    }
+
+    #[test]
+    fn silhouettes_take_every_sample_even_with_zero_constants() {
+        // 0 · ∞ is NaN, which a max() fold would silently drop; the GPU returns "all samples"
+        // before applying any constant, and so must the twin.
+        let mut window = flat(2.0, 2);
+        window[1].covered = false;
+        let settings = AdaptiveSettings { c_depth: 0.0, c_normal: 0.0, ..Default::default() };
+        let geometry = MetricSet { geometry: true, shading: false };
+        assert_eq!(metric_k(&window, &[0.0; 5], 2, &settings, geometry), f64::INFINITY);
+        assert_eq!(sample_count(&window, &[0.0; 5], 2, &settings, BOTH), 4);
     }
 
     #[test]

@@ -30,12 +30,13 @@ pub struct PlatformInfo {
 
 impl PlatformInfo {
     /// A file-name-safe key, e.g.
-    /// `llvmpipe-mesa-22.3.6-llvm-15.0.6-lp-auto-amd-epyc-7b13-release`.
+    /// `llvmpipe-mesa-22.3.6-llvm-15.0.6-lp-auto-amd-epyc-7b13-2-cores-release`. The core count
+    /// is part of it: with `LP_NUM_THREADS` unset, lavapipe uses every core.
     pub fn key(&self) -> String {
         let threads = self.lp_num_threads.as_deref().unwrap_or("auto");
         let raw = format!(
-            "{} {} lp {} {} {}",
-            self.driver, self.driver_info, threads, self.cpu_model, self.build_profile
+            "{} {} lp {} {} {} cores {}",
+            self.driver, self.driver_info, threads, self.cpu_model, self.cpu_cores, self.build_profile
         );
         slug(&raw)
     }
@@ -205,20 +206,6 @@ impl Gpu {
         Ok(packed)
     }
 
-    /// Copies a whole buffer into memory.
-    pub fn read_buffer(&self, source: &wgpu::Buffer) -> Result<Vec<u8>, RenderError> {
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: source.size(),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut encoder = self.encoder("readback");
-        encoder.copy_buffer_to_buffer(source, 0, &staging, 0, source.size());
-        self.queue.submit([encoder.finish()]);
-        self.map_read(&staging)
-    }
-
     fn map_read(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RenderError> {
         let (sender, receiver) = std::sync::mpsc::channel();
         buffer.map_async(wgpu::MapMode::Read, .., move |result| {
@@ -243,8 +230,8 @@ mod tests {
     #[test]
     fn slug_keeps_versions_and_joins_the_rest() {
         assert_eq!(
-            slug("llvmpipe Mesa 22.3.6 (LLVM 15.0.6) lp auto AMD EPYC 7B13 release"),
-            "llvmpipe-mesa-22.3.6-llvm-15.0.6-lp-auto-amd-epyc-7b13-release"
+            slug("llvmpipe Mesa 22.3.6 (LLVM 15.0.6) lp auto AMD EPYC 7B13 2 cores release"),
+            "llvmpipe-mesa-22.3.6-llvm-15.0.6-lp-auto-amd-epyc-7b13-2-cores-release"
         );
     }
 }

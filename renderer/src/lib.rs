@@ -18,6 +18,7 @@ pub mod shaders;
 pub use adaptive::{AdaptiveSettings, ExtraSamples};
 pub use gpu::{Gpu, PlatformInfo};
 pub use mode::{Metrics, Mode, Technique};
+pub use passes::gbuffer::BACKGROUND_MATERIAL;
 pub use render::{
     FrameImages, FrameTiming, GBufferImages, PassTime, PreparedMode, RenderSettings, SceneRenderer,
 };
@@ -38,6 +39,8 @@ pub enum RenderError {
     Scene { path: PathBuf, message: String },
     #[error("a {width}×{height} target exceeds the device's limit of {limit} texels per side")]
     TooLarge { width: u32, height: u32, limit: u32 },
+    #[error("{0}")]
+    Limit(String),
     #[error("{}: {source}", path.display())]
     Io { path: PathBuf, source: std::io::Error },
 }

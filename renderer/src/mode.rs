@@ -69,16 +69,6 @@ impl Mode {
             .flat_map(|stalled| (2..=4).map(move |m| Mode::new(Technique::Adaptive(metrics), m, stalled)))
             .collect()
     }
-
-    /// Total samples per pixel of the supersampled G-buffer.
-    pub fn samples_per_pixel(&self) -> u32 {
-        self.m * self.m
-    }
-
-    /// The same mode without the stall.
-    pub fn unstalled(self) -> Mode {
-        Mode { stalled: false, ..self }
-    }
 }
 
 impl fmt::Display for Mode {

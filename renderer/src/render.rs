@@ -64,7 +64,8 @@ pub struct FrameImages {
 pub struct GBufferImages {
     pub width: u32,
     pub height: u32,
-    /// World-space normal and material index (−1: no geometry), per sample.
+    /// World-space normal and material index ([`crate::BACKGROUND_MATERIAL`]: no geometry),
+    /// per sample.
     pub normal_material: Vec<[f32; 4]>,
     /// Linear view depth per sample, recovered from the depth buffer in f64.
     pub depth: Vec<f64>,
@@ -250,7 +251,7 @@ impl SceneRenderer {
             return Ok(pipelines.clone());
         }
         let module = self.module("gbuffer.wgsl")?;
-        let pipelines = GBufferPipelines::new(&self.gpu.device, &module, &self.scene.layout, &[]);
+        let pipelines = GBufferPipelines::new(&self.gpu.device, &module, &self.scene.layout);
         self.gbuffer_pipelines = Some(pipelines.clone());
         Ok(pipelines)
     }
@@ -442,11 +443,6 @@ impl std::fmt::Debug for dyn Pass {
 }
 
 impl PreparedMode {
-    /// Names of the passes, in order.
-    pub fn pass_names(&self) -> Vec<&'static str> {
-        self.passes.iter().map(|p| p.name()).collect()
-    }
-
     /// Renders one frame, one submit per pass, each timed from submit to completion.
     pub fn render(&self) -> Result<FrameTiming, RenderError> {
         let mut timing = FrameTiming { passes: Vec::with_capacity(self.passes.len()) };

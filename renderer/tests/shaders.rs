@@ -49,20 +49,34 @@ fn every_file_in_the_shaders_folder_is_embedded_and_used() {
     }
 }
 
-#[test]
-fn the_light_table_size_matches_the_rust_side() {
-    let module = parse("shade.wgsl");
+/// The value of a WGSL `const` of a composed pass shader.
+fn constant(file: &str, name: &str) -> naga::Literal {
+    let module = parse(file);
     let (_, constant) = module
         .constants
         .iter()
-        .find(|(_, c)| c.name.as_deref() == Some("MAX_LIGHTS"))
-        .expect("MAX_LIGHTS in lib/scene.wgsl");
+        .find(|(_, c)| c.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("{name} in {file}"));
     match module.global_expressions[constant.init] {
-        naga::Expression::Literal(naga::Literal::U32(value)) => {
-            assert_eq!(value as usize, aabench_renderer::scene::MAX_LIGHTS)
-        }
-        ref other => panic!("MAX_LIGHTS is not a u32 literal: {other:?}"),
+        naga::Expression::Literal(literal) => literal,
+        ref other => panic!("{name} is not a literal: {other:?}"),
     }
+}
+
+#[test]
+fn constants_shared_with_rust_agree() {
+    assert_eq!(
+        constant("shade.wgsl", "MAX_LIGHTS"),
+        naga::Literal::U32(aabench_renderer::scene::MAX_LIGHTS as u32)
+    );
+    assert_eq!(
+        constant("shade.wgsl", "BACKGROUND"),
+        naga::Literal::I32(aabench_renderer::BACKGROUND_MATERIAL)
+    );
+    // A list entry packs a rank below M² ≤ 16 and the index of a pixel of up to 4096×4096.
+    let naga::Literal::U32(rank_bits) = constant("adaptive.wgsl", "RANK_BITS") else { panic!("u32") };
+    assert!(1u64 << rank_bits >= 16, "{rank_bits} bits cannot hold 16 ranks");
+    assert!(32 - rank_bits >= 24, "{} bits cannot index 4096×4096 pixels", 32 - rank_bits);
 }
 
 #[test]

@@ -262,13 +262,14 @@ impl Manifest {
             if !(camera.fov_y_degrees > 0.0 && camera.fov_y_degrees < 180.0) {
                 return fail("camera.fov_y_degrees", format!("{} must be in (0, 180)", camera.fov_y_degrees));
             }
-            if !(camera.near > 0.0 && camera.near.is_finite()) {
-                return fail("camera.near", format!("{} must be > 0", camera.near));
+            // The GPU receives them as f32.
+            if !(camera.near >= 1e-6 && camera.near <= 1e9) {
+                return fail("camera.near", format!("{} must be in [1e-6, 1e9]", camera.near));
             }
             if let Some(far) = camera.far
-                && !(far > camera.near && far.is_finite())
+                && !(far > camera.near && far <= 1e12)
             {
-                return fail("camera.far", format!("{far} must be finite and > camera.near"));
+                return fail("camera.far", format!("{far} must be > camera.near and at most 1e12"));
             }
         }
         if self.lights.len() > MAX_LIGHTS {
@@ -397,6 +398,14 @@ mod tests {
             |j| j["camera"] = json!({"position": [0, 0, 1], "target": [0, 0, 0], "fov_y_degrees": 60, "near": 1, "far": 0.5}),
             "camera.far",
             "> camera.near",
+        );
+        check(
+            |j| {
+                j["camera"] =
+                    json!({"position": [0, 0, 1], "target": [0, 0, 0], "fov_y_degrees": 60, "near": 1e-50})
+            },
+            "camera.near",
+            "[1e-6, 1e9]",
         );
         check(|j| j["adaptive"] = json!({"t_edge": 2}), "adaptive.t_edge", "[0, 1]");
         check(|j| j["adaptive"] = json!({"c_depth": -1}), "adaptive.c_depth", "≥ 0");

@@ -158,13 +158,6 @@ pub struct AdaptiveCost {
     pub efficiency: f64,
 }
 
-impl RunRecord {
-    /// Every mode record of every scene, with its scene's name.
-    pub fn modes(&self) -> impl Iterator<Item = (&SceneRecord, &ModeRecord)> {
-        self.scenes.iter().flat_map(|s| s.modes.iter().map(move |m| (s, m)))
-    }
-}
-
 /// FNV-1a, 64-bit: a stable fingerprint of image bytes.
 pub fn fnv1a(bytes: &[u8]) -> String {
     let mut hash: u64 = 0xcbf2_9ce4_8422_2325;

@@ -22,7 +22,7 @@ use crate::record::{
 };
 use crate::scenes;
 use crate::stats::Summary;
-use crate::worker::{Worker, WorkerError};
+use crate::worker::Worker;
 
 /// Display differences of this many 8-bit steps reach the top of the difference heatmap.
 const DIFFERENCE_FULL_SCALE: f64 = 32.0;
@@ -73,11 +73,12 @@ pub async fn execute(plan: &RunPlan, progress: Progress, cancel: Arc<AtomicBool>
         if cancel.load(Ordering::SeqCst) {
             break;
         }
-        if worker.is_stuck() {
-            progress.line("restarting the GPU worker after a timeout");
-            worker = Worker::start().await?;
-        }
         let scene = match entry {
+            // After a timeout the stuck frame may still be using every core: later timings
+            // would be wrong, so the remaining scenes are recorded as not run.
+            Ok(_) if worker.is_stuck() => {
+                failed_scene(entry, "not run: an earlier frame timed out or the GPU worker panicked".into())
+            }
             Ok(manifest) => run_scene(&mut worker, plan, manifest, &progress, &cancel).await,
             Err(error) => failed_scene(entry, error.to_string()),
         };
@@ -110,15 +111,22 @@ fn write_record(path: &Path, record: &RunRecord) -> anyhow::Result<()> {
 }
 
 fn failed_scene(entry: &SceneEntry, error: String) -> SceneRecord {
-    let (name, manifest) = match entry {
-        Ok(m) => (m.name.clone(), m.path.display().to_string()),
-        Err(e) => (fallback_name(&e.path), e.path.display().to_string()),
+    let mut record = match entry {
+        Ok(m) => empty_scene(m.name.clone(), &m.path),
+        Err(e) => empty_scene(fallback_name(&e.path), &e.path),
     };
+    record.status = Status::Failed;
+    record.error = Some(error);
+    record
+}
+
+/// A scene record before anything was measured.
+fn empty_scene(name: String, manifest: &Path) -> SceneRecord {
     SceneRecord {
         name,
-        manifest,
-        status: Status::Failed,
-        error: Some(error),
+        manifest: manifest.display().to_string(),
+        status: Status::Running,
+        error: None,
         resolution: None,
         triangles: None,
         textures: None,
@@ -146,8 +154,7 @@ async fn run_scene(
     progress: &Progress,
     cancel: &AtomicBool,
 ) -> SceneRecord {
-    let mut record = failed_scene(&Ok(manifest.clone()), String::new());
-    record.error = None;
+    let mut record = empty_scene(manifest.name.clone(), &manifest.path);
     record.stall_iterations = manifest.stall_iterations;
     let [width, height] = match plan.tier {
         crate::plan::Tier::Quick => manifest.resolution.quick,
@@ -176,7 +183,7 @@ async fn run_scene(
     let modes = plan.modes.clone();
     progress.status(&format!("[{}] uploading and compiling {} modes", manifest.name, modes.len()));
     let prepared = worker
-        .call(plan.frame_timeout * modes.len() as u32, move |state| {
+        .call(plan.frame_timeout.saturating_mul(modes.len() as u32), move |state| {
             let scenes::LoadedScene { scene, camera, lighting, .. } = loaded;
             let mut renderer = aabench_renderer::SceneRenderer::new(
                 state.gpu.clone(),
@@ -264,7 +271,7 @@ async fn run_scene(
                     }
                 }
                 Ok(Err(error)) => run.error = Some(error.to_string()),
-                Err(error @ WorkerError::Timeout(_)) | Err(error @ WorkerError::Gone) => {
+                Err(error) => {
                     run.error = Some(format!("{mode}: {error}"));
                     for other in runs.iter_mut().filter(|r| r.error.is_none()) {
                         other.error = Some(format!("not finished: {error}"));
@@ -285,6 +292,9 @@ async fn run_scene(
     progress.status(&format!("[{}] writing images and metrics", manifest.name));
     let interrupted = cancel.load(Ordering::SeqCst);
     record.modes = finish_modes(plan, manifest, &mut record, runs, interrupted).await;
+    if worker.is_stuck() && record.error.is_none() {
+        record.error = Some("the GPU worker stopped; see the failed mode".into());
+    }
     record.status = if record.modes.iter().all(|m| m.status == Status::Ok) {
         Status::Ok
     } else if interrupted {
@@ -328,8 +338,11 @@ async fn finish_modes(
         .map(|(i, m)| (i, *m));
     scene.ground_truth = truth.map(|(_, m)| m.to_string());
 
-    let mut records: Vec<ModeRecord> =
-        modes.iter().zip(&runs).map(|(mode, run)| timing_record(*mode, run, interrupted)).collect();
+    let mut records: Vec<ModeRecord> = modes
+        .iter()
+        .zip(&runs)
+        .map(|(mode, run)| timing_record(*mode, run, plan.repetitions, interrupted))
+        .collect();
     let frame_median = |mode: Mode| -> Option<f64> {
         let i = modes.iter().position(|m| *m == mode)?;
         records[i].frame_ms.as_ref().map(|s| s.median)
@@ -420,7 +433,7 @@ fn comparison_reference(modes: &[Mode], images: &[Option<FrameImages>], mode: Mo
     })
 }
 
-fn timing_record(mode: Mode, run: &ModeRun, interrupted: bool) -> ModeRecord {
+fn timing_record(mode: Mode, run: &ModeRun, repetitions: u32, interrupted: bool) -> ModeRecord {
     let ms = |seconds: f64| seconds * 1e3;
     let frame_ms = Summary::new(run.timings.iter().map(|t| ms(t.seconds())).collect());
     let passes = run.timings.first().map_or_else(Vec::new, |first| {
@@ -432,13 +445,18 @@ fn timing_record(mode: Mode, run: &ModeRun, interrupted: bool) -> ModeRecord {
             })
             .collect()
     });
-    let status = match (&run.error, run.images.is_some()) {
-        (None, true) => Status::Ok,
-        (None, false) if interrupted => Status::Interrupted,
-        _ => Status::Failed,
+    let deterministic = (!run.hashes.is_empty()).then(|| run.hashes.windows(2).all(|w| w[0] == w[1]));
+    let complete = run.timings.len() == repetitions as usize;
+    let (status, error) = match (&run.error, run.images.is_some()) {
+        (Some(error), _) => (Status::Failed, Some(error.clone())),
+        // Same inputs must give the same bits: a difference is a bug, not noise.
+        (None, true) if deterministic == Some(false) => {
+            (Status::Failed, Some("not deterministic: repetitions produced different images".into()))
+        }
+        (None, true) if complete => (Status::Ok, None),
+        (None, _) if interrupted => (Status::Interrupted, None),
+        (None, _) => (Status::Failed, Some("no images were read back".into())),
     };
-    let error =
-        run.error.clone().or_else(|| (status == Status::Failed).then(|| "no images were read back".into()));
     ModeRecord {
         mode: mode.to_string(),
         m: mode.m,
@@ -448,7 +466,7 @@ fn timing_record(mode: Mode, run: &ModeRun, interrupted: bool) -> ModeRecord {
         frame_ms,
         passes,
         ratio_to_deferred: None,
-        deterministic: (!run.hashes.is_empty()).then(|| run.hashes.windows(2).all(|w| w[0] == w[1])),
+        deterministic,
         output_hash: run.hashes.last().cloned(),
         images: ImageFiles::default(),
         samples: None,

@@ -231,8 +231,19 @@ fn ctrl_c_stops_after_the_current_frame_and_keeps_what_was_measured() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    wait_for(&ws, Duration::from_secs(60), |r| r["status"] == "running");
-    std::thread::sleep(Duration::from_secs(3));
+    // Read the progress lines (an unread pipe would fill and block the child) and go on once
+    // timed frames are running.
+    let stderr = child.stderr.take().unwrap();
+    let (timed, lines) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        use std::io::BufRead;
+        for line in std::io::BufReader::new(stderr).lines().map_while(Result::ok) {
+            if line.contains("rep 3/") {
+                let _ = timed.send(());
+            }
+        }
+    });
+    lines.recv_timeout(Duration::from_secs(120)).expect("timed frames never started");
     let sent = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
     assert!(sent.success());
     let status = child.wait().unwrap();

@@ -71,8 +71,8 @@ fn sample_albedo(layer: i32, uv: vec2<f32>, dx: vec2<f32>, dy: vec2<f32>) -> vec
 }
 
 // Linear HDR radiance of the sample at `texel`; alpha carries the stall result. `footprint`
-// scales the stored UV derivatives: 1 when every texel of the window is shaded, M/sqrt(n) when
-// n samples share an M×M window.
+// scales the stored UV derivatives: 1 for the reference, sqrt((1 + M²/n) / 2) when n adaptive
+// samples share an M×M window (adaptive.wgsl: footprint).
 fn shade(texel: vec2<i32>, footprint: f32) -> vec4<f32> {
     let s = load_surface(texel);
     let stalled = stall(texel);

@@ -11,8 +11,6 @@ use crate::render::{HDR_FORMAT, SceneRenderer, view};
 
 /// Per-pixel sample counts, 1…16.
 const COUNT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Uint;
-/// Width of the compact target that holds one extra sample per texel.
-const COMPACT_WIDTH: u32 = 2048;
 
 pub(crate) struct AdaptivePasses {
     pub passes: Vec<Box<dyn Pass>>,
@@ -33,20 +31,11 @@ pub(crate) fn build(
     let settings = r.settings.adaptive;
     let loop_shading = settings.extra_samples == ExtraSamples::Loop;
 
-    // The list holds at most M² samples per pixel (a full window shades rank 0 again).
-    let capacity = u64::from(m * m) * u64::from(width) * u64::from(height);
-    let limit = r.gpu.device.limits().max_texture_dimension_2d;
-    let compact_width = COMPACT_WIDTH.min(limit);
-    // Whole 4×4 blocks (see compact_texel in adaptive.wgsl).
-    let compact_height = capacity.div_ceil(4 * u64::from(compact_width)).max(1) * 4;
-    if compact_height > u64::from(limit) {
-        return Err(RenderError::TooLarge { width: compact_width, height: compact_height as u32, limit });
-    }
-    let compact_height = compact_height as u32;
-
-    let mut constants = r.shading_constants(mode.stalled);
-    constants.extend([
-        ("M", f64::from(m)),
+    // Each entry point gets the constants it reads, so pipelines that do not depend on the
+    // metric (S, the scans, the extra samples) are shared by every metric variant.
+    let shading = r.shading_constants(mode.stalled);
+    let window = [("M", f64::from(m))];
+    let metric = [
         ("C_DEPTH", f64::from(settings.c_depth)),
         ("C_NORMAL", f64::from(settings.c_normal)),
         ("C_SHADING", f64::from(settings.c_shading)),
@@ -55,10 +44,7 @@ pub(crate) fn build(
         ("USE_GEOMETRY", flag(metrics != Metrics::Shading)),
         ("USE_SHADING", flag(metrics != Metrics::Geometry)),
         ("FORCE_ALL", flag(settings.force_all_samples)),
-        ("LOOP_SHADING", flag(loop_shading)),
-        ("COMPACT_WIDTH", f64::from(compact_width)),
-        ("COMPACT_HEIGHT", f64::from(compact_height)),
-    ]);
+    ];
 
     let device = r.gpu.device.clone();
     let order = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -68,12 +54,6 @@ pub(crate) fn build(
     });
     let first = r.target("adaptive.first", width, height, HDR_FORMAT);
     let counts = r.target("adaptive.counts", width, height, COUNT_FORMAT);
-    let extra = r.target("adaptive.extra", compact_width, compact_height, HDR_FORMAT);
-    let row_offsets = r.buffer("adaptive.row_offsets", 4 * u64::from(height));
-    let totals = r.buffer("adaptive.totals", 4);
-    let pixel_offsets = r.buffer("adaptive.pixel_offsets", 4 * u64::from(width) * u64::from(height));
-    let entries = r.buffer("adaptive.entries", 4 * capacity);
-
     let scene = (r.scene.layout.clone(), r.scene.group.clone());
     let gb = (r.gbuffer_layout.clone(), gbuffer.group.clone());
     let mut passes: Vec<Box<dyn Pass>> = Vec::new();
@@ -84,7 +64,7 @@ pub(crate) fn build(
     let pipeline = r.fullscreen_pipeline(
         "adaptive.wgsl",
         "shade_first",
-        &constants,
+        &[&shading[..], &window].concat(),
         [Some(&scene.0), Some(&gb.0), Some(&layout)],
         HDR_FORMAT,
     )?;
@@ -97,80 +77,25 @@ pub(crate) fn build(
     let pipeline = r.fullscreen_pipeline(
         "adaptive.wgsl",
         "evaluate",
-        &constants,
+        &[&window[..], &metric].concat(),
         [Some(&scene.0), Some(&gb.0), Some(&layout)],
         COUNT_FORMAT,
     )?;
     passes.push(Box::new(screen("evaluate", pipeline, &scene.1, &gb.1, group, &counts, 3)));
 
     let counts_view = view(&counts);
-    if !loop_shading {
-        // The list of extra samples.
-        let layout = bind_group_layout(
-            &device,
-            "compact",
-            &[
-                Slot::UintTexture,
-                Slot::StorageReadWrite,
-                Slot::StorageReadWrite,
-                Slot::StorageReadWrite,
-                Slot::StorageReadWrite,
-            ],
-        );
-        let group = bind_group(
-            &device,
-            "compact",
-            &layout,
-            &[
-                wgpu::BindingResource::TextureView(&counts_view),
-                row_offsets.as_entire_binding(),
-                totals.as_entire_binding(),
-                pixel_offsets.as_entire_binding(),
-                entries.as_entire_binding(),
-            ],
-        );
-        let row_groups = height.div_ceil(64);
-        let mut steps = Vec::new();
-        for (entry, workgroups) in [("scan_rows", row_groups), ("scan_total", 1), ("emit", row_groups)] {
-            let pipeline =
-                r.compute_pipeline("adaptive.wgsl", entry, &constants, [None, None, Some(&layout)])?;
-            steps.push(ComputeStep {
-                pipeline,
-                groups: vec![(2, group.clone())],
-                workgroups: [workgroups, 1, 1],
-            });
-        }
-        passes.push(Box::new(Compute { name: "compact", steps }));
+    let list = if loop_shading {
+        None
+    } else {
+        Some(compact_list(r, &device, m, &shading, &window, &order, &counts_view, &scene, &gb, &mut passes)?)
+    };
 
-        // One fragment per listed sample.
-        let layout = bind_group_layout(
-            &device,
-            "shade_extra",
-            &[Slot::StorageRead, Slot::UintTexture, Slot::StorageRead, Slot::StorageRead],
-        );
-        let group = bind_group(
-            &device,
-            "shade_extra",
-            &layout,
-            &[
-                order.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&counts_view),
-                entries.as_entire_binding(),
-                totals.as_entire_binding(),
-            ],
-        );
-        let pipeline = r.screen_pipeline(
-            "adaptive.wgsl",
-            "compact_rows",
-            "shade_extra",
-            &constants,
-            [Some(&scene.0), Some(&gb.0), Some(&layout)],
-            HDR_FORMAT,
-        )?;
-        passes.push(Box::new(screen("shade_extra", pipeline, &scene.1, &gb.1, group, &extra, 6)));
-    }
-
-    // The average of S and the extra samples.
+    // The average of S and the extra samples. The loop variant shades them here and reads no
+    // list, but the bindings stay: a placeholder stands in for the list's buffers and target.
+    let (pixel_offsets, extra, compact_width) = match &list {
+        Some(list) => (list.pixel_offsets.clone(), list.extra.clone(), list.width),
+        None => (r.buffer("adaptive.placeholder", 4), r.target("adaptive.placeholder", 1, 1, HDR_FORMAT), 4),
+    };
     let layout = bind_group_layout(
         &device,
         "gather",
@@ -189,16 +114,131 @@ pub(crate) fn build(
             wgpu::BindingResource::TextureView(&extra_view),
         ],
     );
+    let gather_constants = [
+        &shading[..],
+        &window,
+        &[("LOOP_SHADING", flag(loop_shading)), ("COMPACT_WIDTH", f64::from(compact_width))],
+    ]
+    .concat();
     let pipeline = r.fullscreen_pipeline(
         "adaptive.wgsl",
         "gather",
-        &constants,
+        &gather_constants,
         [Some(&scene.0), Some(&gb.0), Some(&layout)],
         HDR_FORMAT,
     )?;
     passes.push(Box::new(screen("gather", pipeline, &scene.1, &gb.1, group, hdr, 3)));
 
     Ok(AdaptivePasses { passes, sample_counts: counts, first })
+}
+
+/// The list of samples to shade after S, and its compact target.
+struct CompactList {
+    pixel_offsets: wgpu::Buffer,
+    extra: wgpu::Texture,
+    width: u32,
+}
+
+/// Adds the `compact` (prefix sums) and `shade_extra` passes.
+#[allow(clippy::too_many_arguments)]
+fn compact_list(
+    r: &mut SceneRenderer,
+    device: &wgpu::Device,
+    m: u32,
+    shading: &[(&'static str, f64)],
+    window: &[(&'static str, f64)],
+    order: &wgpu::Buffer,
+    counts_view: &wgpu::TextureView,
+    scene: &(wgpu::BindGroupLayout, wgpu::BindGroup),
+    gb: &(wgpu::BindGroupLayout, wgpu::BindGroup),
+    passes: &mut Vec<Box<dyn Pass>>,
+) -> Result<CompactList, RenderError> {
+    let (width, height) = (r.settings.width, r.settings.height);
+    let limits = r.gpu.device.limits();
+    // At most M² entries per pixel (a full window shades rank 0 again), in 4×4 blocks of a
+    // target as wide as the device allows.
+    let capacity = u64::from(m * m) * u64::from(width) * u64::from(height);
+    let compact_width = limits.max_texture_dimension_2d / 4 * 4;
+    let compact_height = capacity.div_ceil(4 * u64::from(compact_width)).max(1) * 4;
+    let entries_bytes = 4 * capacity;
+    let max_binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+    if compact_height > u64::from(limits.max_texture_dimension_2d) || entries_bytes > max_binding {
+        return Err(RenderError::Limit(format!(
+            "adaptive-{m}x{m} at {width}×{height} lists up to {capacity} samples ({entries_bytes} bytes), \
+             more than this device holds in one buffer ({max_binding} bytes) or target; lower the resolution"
+        )));
+    }
+    let compact_height = compact_height as u32;
+    let compact =
+        [("COMPACT_WIDTH", f64::from(compact_width)), ("COMPACT_HEIGHT", f64::from(compact_height))];
+    let extra = r.target("adaptive.extra", compact_width, compact_height, HDR_FORMAT);
+    let row_offsets = r.buffer("adaptive.row_offsets", 4 * u64::from(height));
+    let totals = r.buffer("adaptive.totals", 4);
+    let pixel_offsets = r.buffer("adaptive.pixel_offsets", 4 * u64::from(width) * u64::from(height));
+    let entries = r.buffer("adaptive.entries", entries_bytes);
+
+    let layout = bind_group_layout(
+        device,
+        "compact",
+        &[
+            Slot::UintTexture,
+            Slot::StorageReadWrite,
+            Slot::StorageReadWrite,
+            Slot::StorageReadWrite,
+            Slot::StorageReadWrite,
+        ],
+    );
+    let group = bind_group(
+        device,
+        "compact",
+        &layout,
+        &[
+            wgpu::BindingResource::TextureView(counts_view),
+            row_offsets.as_entire_binding(),
+            totals.as_entire_binding(),
+            pixel_offsets.as_entire_binding(),
+            entries.as_entire_binding(),
+        ],
+    );
+    let row_groups = height.div_ceil(64);
+    let mut steps = Vec::new();
+    for (entry, workgroups) in [("scan_rows", row_groups), ("scan_total", 1), ("emit", row_groups)] {
+        let pipeline = r.compute_pipeline("adaptive.wgsl", entry, window, [None, None, Some(&layout)])?;
+        steps.push(ComputeStep {
+            pipeline,
+            groups: vec![(2, group.clone())],
+            workgroups: [workgroups, 1, 1],
+        });
+    }
+    passes.push(Box::new(Compute { name: "compact", steps }));
+
+    // One fragment per listed sample.
+    let layout = bind_group_layout(
+        device,
+        "shade_extra",
+        &[Slot::StorageRead, Slot::UintTexture, Slot::StorageRead, Slot::StorageRead],
+    );
+    let group = bind_group(
+        device,
+        "shade_extra",
+        &layout,
+        &[
+            order.as_entire_binding(),
+            wgpu::BindingResource::TextureView(counts_view),
+            entries.as_entire_binding(),
+            totals.as_entire_binding(),
+        ],
+    );
+    let pipeline = r.screen_pipeline(
+        "adaptive.wgsl",
+        "compact_rows",
+        "shade_extra",
+        &[shading, window, &compact].concat(),
+        [Some(&scene.0), Some(&gb.0), Some(&layout)],
+        HDR_FORMAT,
+    )?;
+    passes.push(Box::new(screen("shade_extra", pipeline, &scene.1, &gb.1, group, &extra, 6)));
+    Ok(CompactList { pixel_offsets, extra, width: compact_width })
 }
 
 fn flag(value: bool) -> f64 {

@@ -15,8 +15,8 @@ pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth3
 /// Material indices must be exact in f16 (the normal target's w).
 pub const MAX_MATERIALS: usize = 2048;
 
-/// Material index written where no geometry covers a sample (matches `BACKGROUND` in WGSL).
-const BACKGROUND_MATERIAL: f64 = -1.0;
+/// Material index written where no geometry covers a sample (`BACKGROUND` in WGSL).
+pub const BACKGROUND_MATERIAL: i32 = -1;
 
 /// One G-buffer pipeline per draw class: opaque geometry keeps early depth testing, masked
 /// geometry discards; single-sided geometry has its back faces culled.
@@ -30,7 +30,6 @@ impl GBufferPipelines {
         device: &wgpu::Device,
         module: &wgpu::ShaderModule,
         scene_layout: &wgpu::BindGroupLayout,
-        constants: &[(&str, f64)],
     ) -> GBufferPipelines {
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("gbuffer"),
@@ -41,7 +40,7 @@ impl GBufferPipelines {
             .into_iter()
             .map(|class| {
                 let entry = if class.masked { "gbuffer_masked" } else { "gbuffer_opaque" };
-                let program = Program { module, entry, constants };
+                let program = Program { module, entry, constants: &[] };
                 (class, create(device, &layout, &program, class))
             })
             .collect();
@@ -154,7 +153,7 @@ impl Pass for GBufferPass {
         };
         let t = &self.targets;
         let (uv, normal, uv_grad, depth) = (view(&t.uv), view(&t.normal), view(&t.uv_grad), view(&t.depth));
-        let background = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: BACKGROUND_MATERIAL };
+        let background = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: f64::from(BACKGROUND_MATERIAL) };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("gbuffer"),
             color_attachments: &[

@@ -158,10 +158,10 @@ pub struct AdaptiveCost {
     pub efficiency: f64,
 }
 
-/// FNV-1a, 64-bit: a stable fingerprint of image bytes.
-pub fn fnv1a(bytes: &[u8]) -> String {
+/// FNV-1a, 64-bit, over the parts in order: a stable fingerprint of image bytes.
+pub fn fnv1a(parts: &[&[u8]]) -> String {
     let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
-    for &byte in bytes {
+    for &byte in parts.iter().copied().flatten() {
         hash ^= u64::from(byte);
         hash = hash.wrapping_mul(0x0100_0000_01b3);
     }

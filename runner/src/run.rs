@@ -307,10 +307,7 @@ async fn run_scene(
 
 /// FNV-1a of a frame's outputs: the display image, then the sample counts if any.
 fn fingerprint(display: &[u8], sample_counts: Option<&[u8]>) -> String {
-    match sample_counts {
-        Some(counts) => fnv1a(&[display, counts].concat()),
-        None => fnv1a(display),
-    }
+    fnv1a(&[display, sample_counts.unwrap_or_default()])
 }
 
 fn fail(mut record: SceneRecord, error: String) -> SceneRecord {

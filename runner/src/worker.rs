@@ -3,7 +3,7 @@
 //! threads lets the runner put a timeout on every frame and stay responsive to Ctrl-C.
 
 use std::panic::AssertUnwindSafe;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 
 use aabench_renderer::{Gpu, PlatformInfo, PreparedMode, RenderError, SceneRenderer};
@@ -36,8 +36,6 @@ pub struct Worker {
     pub platform: PlatformInfo,
     /// Set after a timeout or a panic: the thread may still be busy, or its state broken.
     stuck: bool,
-    /// The message of the last job that panicked.
-    panic: Arc<Mutex<Option<String>>>,
 }
 
 impl Worker {
@@ -45,8 +43,6 @@ impl Worker {
     pub async fn start() -> Result<Worker, RenderError> {
         let (jobs, queue) = std::sync::mpsc::channel::<Job>();
         let (ready, opened) = oneshot::channel();
-        let panic = Arc::new(Mutex::new(None));
-        let panic_sink = Arc::clone(&panic);
         std::thread::Builder::new()
             .name("aabench-gpu".into())
             .spawn(move || {
@@ -60,22 +56,14 @@ impl Worker {
                 let _ = ready.send(Ok(gpu.platform.clone()));
                 let mut state = State { gpu, renderer: None, modes: Vec::new() };
                 while let Ok(job) = queue.recv() {
-                    // A panicking job drops its reply; the caller then reads the message here.
-                    if let Err(payload) = std::panic::catch_unwind(AssertUnwindSafe(|| job(&mut state))) {
-                        let message = payload
-                            .downcast_ref::<&str>()
-                            .map(|s| s.to_string())
-                            .or_else(|| payload.downcast_ref::<String>().cloned())
-                            .unwrap_or_else(|| "(no message)".into());
-                        *panic_sink.lock().expect("panic slot") = Some(message);
-                    }
+                    job(&mut state);
                 }
             })
             .map_err(|e| RenderError::Device(format!("cannot start the GPU thread: {e}")))?;
         let platform = opened
             .await
             .map_err(|_| RenderError::Device("the GPU thread stopped while opening the device".into()))??;
-        Ok(Worker { jobs, platform, stuck: false, panic })
+        Ok(Worker { jobs, platform, stuck: false })
     }
 
     /// True once a job timed out or panicked: timings taken now would not be trustworthy.
@@ -93,21 +81,58 @@ impl Worker {
             return Err(WorkerError::Gone);
         }
         let (reply, result) = oneshot::channel();
+        // A panic is caught here and sent as the reply, so the caller always learns why.
         let job: Job = Box::new(move |state| {
-            let _ = reply.send(job(state));
+            let _ =
+                reply.send(std::panic::catch_unwind(AssertUnwindSafe(|| job(state))).map_err(panic_message));
         });
         self.jobs.send(job).map_err(|_| WorkerError::Gone)?;
         match tokio::time::timeout(timeout, result).await {
-            Ok(Ok(value)) => Ok(value),
+            Ok(Ok(Ok(value))) => Ok(value),
+            Ok(Ok(Err(message))) => {
+                self.stuck = true;
+                Err(WorkerError::Panicked(message))
+            }
             Ok(Err(_)) => {
                 self.stuck = true;
-                let message = self.panic.lock().expect("panic slot").take();
-                Err(message.map_or(WorkerError::Gone, WorkerError::Panicked))
+                Err(WorkerError::Gone)
             }
             Err(_) => {
                 self.stuck = true;
                 Err(WorkerError::Timeout(timeout))
             }
         }
+    }
+}
+
+fn panic_message(payload: Box<dyn std::any::Any + Send>) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "(no message)".into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[tokio::test]
+    async fn a_panicking_job_reports_its_message_and_retires_the_worker() {
+        let mut worker = Worker::start().await.expect("a Vulkan adapter (lavapipe)");
+        assert_eq!(worker.call(Duration::from_secs(60), |_| 7).await, Ok(7));
+        let error = worker.call(Duration::from_secs(60), |_| -> u32 { panic!("boom") }).await;
+        assert_eq!(error, Err(WorkerError::Panicked("boom".into())));
+        assert!(worker.is_stuck());
+        assert_eq!(worker.call(Duration::from_secs(60), |_| 7).await, Err(WorkerError::Gone));
+    }
+
+    #[tokio::test]
+    async fn a_job_past_its_timeout_retires_the_worker() {
+        let mut worker = Worker::start().await.expect("a Vulkan adapter (lavapipe)");
+        let slow = |_: &mut State| std::thread::sleep(Duration::from_millis(500));
+        let timeout = Duration::from_millis(50);
+        assert_eq!(worker.call(timeout, slow).await, Err(WorkerError::Timeout(timeout)));
+        assert!(worker.is_stuck());
     }
 }

@@ -12,6 +12,11 @@ use crate::render::{HDR_FORMAT, SceneRenderer, view};
 /// Per-pixel sample counts, 1…16.
 const COUNT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Uint;
 
+/// Vertex entry points and their vertex counts: one triangle over the whole target, or a
+/// rectangle over the rows of the compact target that hold list entries.
+const FULLSCREEN: (&str, u32) = ("fullscreen", 3);
+const COMPACT_ROWS: (&str, u32) = ("compact_rows", 6);
+
 pub(crate) struct AdaptivePasses {
     pub passes: Vec<Box<dyn Pass>>,
     pub sample_counts: wgpu::Texture,
@@ -30,11 +35,34 @@ pub(crate) fn build(
     let (width, height) = (r.settings.width, r.settings.height);
     let settings = r.settings.adaptive;
     let loop_shading = settings.extra_samples == ExtraSamples::Loop;
+    let device = r.gpu.device.clone();
+    let first = r.target("adaptive.first", width, height, HDR_FORMAT);
+    let counts = r.target("adaptive.counts", width, height, COUNT_FORMAT);
+    let shared = Shared {
+        scene: (r.scene.layout.clone(), r.scene.group.clone()),
+        gbuffer: (r.gbuffer_layout.clone(), gbuffer.group.clone()),
+        order: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("sample order"),
+            contents: bytemuck::cast_slice(&sample_order(m)),
+            usage: wgpu::BufferUsages::STORAGE,
+        }),
+        counts: view(&counts),
+        shading: r.shading_constants(mode.stalled),
+        window: [("M", f64::from(m))],
+    };
+    let mut passes: Vec<Box<dyn Pass>> = Vec::new();
 
-    // Each entry point gets the constants it reads, so pipelines that do not depend on the
-    // metric (S, the scans, the extra samples) are shared by every metric variant.
-    let shading = r.shading_constants(mode.stalled);
-    let window = [("M", f64::from(m))];
+    // S: one sample per pixel.
+    let layout = bind_group_layout(&device, "shade_first", &[Slot::StorageRead]);
+    let group = bind_group(&device, "shade_first", &layout, &[shared.order.as_entire_binding()]);
+    let constants = [&shared.shading[..], &shared.window].concat();
+    passes.push(Box::new(shared.pass(r, "shade_first", FULLSCREEN, &constants, (&layout, group), &first)?));
+
+    // The sample count per pixel. Only this pass depends on the metric, so the others are
+    // shared by every metric variant (each entry point gets just the constants it reads).
+    let layout = bind_group_layout(&device, "evaluate", &[Slot::Texture]);
+    let first_view = view(&first);
+    let group = bind_group(&device, "evaluate", &layout, &[wgpu::BindingResource::TextureView(&first_view)]);
     let metric = [
         ("C_DEPTH", f64::from(settings.c_depth)),
         ("C_NORMAL", f64::from(settings.c_normal)),
@@ -45,55 +73,14 @@ pub(crate) fn build(
         ("USE_SHADING", flag(metrics != Metrics::Geometry)),
         ("FORCE_ALL", flag(settings.force_all_samples)),
     ];
+    let constants = [&shared.window[..], &metric].concat();
+    passes.push(Box::new(shared.pass(r, "evaluate", FULLSCREEN, &constants, (&layout, group), &counts)?));
 
-    let device = r.gpu.device.clone();
-    let order = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("sample order"),
-        contents: bytemuck::cast_slice(&sample_order(m)),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    let first = r.target("adaptive.first", width, height, HDR_FORMAT);
-    let counts = r.target("adaptive.counts", width, height, COUNT_FORMAT);
-    let scene = (r.scene.layout.clone(), r.scene.group.clone());
-    let gb = (r.gbuffer_layout.clone(), gbuffer.group.clone());
-    let mut passes: Vec<Box<dyn Pass>> = Vec::new();
-
-    // S: one sample per pixel.
-    let layout = bind_group_layout(&device, "shade_first", &[Slot::StorageRead]);
-    let group = bind_group(&device, "shade_first", &layout, &[order.as_entire_binding()]);
-    let pipeline = r.fullscreen_pipeline(
-        "adaptive.wgsl",
-        "shade_first",
-        &[&shading[..], &window].concat(),
-        [Some(&scene.0), Some(&gb.0), Some(&layout)],
-        HDR_FORMAT,
-    )?;
-    passes.push(Box::new(screen("shade_first", pipeline, &scene.1, &gb.1, group, &first, 3)));
-
-    // The sample count per pixel.
-    let layout = bind_group_layout(&device, "evaluate", &[Slot::Texture]);
-    let first_view = view(&first);
-    let group = bind_group(&device, "evaluate", &layout, &[wgpu::BindingResource::TextureView(&first_view)]);
-    let pipeline = r.fullscreen_pipeline(
-        "adaptive.wgsl",
-        "evaluate",
-        &[&window[..], &metric].concat(),
-        [Some(&scene.0), Some(&gb.0), Some(&layout)],
-        COUNT_FORMAT,
-    )?;
-    passes.push(Box::new(screen("evaluate", pipeline, &scene.1, &gb.1, group, &counts, 3)));
-
-    let counts_view = view(&counts);
-    let list = if loop_shading {
-        None
-    } else {
-        Some(compact_list(r, &device, m, &shading, &window, &order, &counts_view, &scene, &gb, &mut passes)?)
-    };
-
-    // The average of S and the extra samples. The loop variant shades them here and reads no
-    // list, but the bindings stay: a placeholder stands in for the list's buffers and target.
-    let (pixel_offsets, extra, compact_width) = match &list {
-        Some(list) => (list.pixel_offsets.clone(), list.extra.clone(), list.width),
+    // The average of S and the extra samples. The loop variant shades them in the gather and
+    // reads no list, but the bindings stay: a placeholder stands in for the list.
+    let list = if loop_shading { None } else { Some(compact_list(r, &shared, m, &mut passes)?) };
+    let (pixel_offsets, extra, compact_width) = match list {
+        Some(list) => (list.pixel_offsets, list.extra, list.width),
         None => (r.buffer("adaptive.placeholder", 4), r.target("adaptive.placeholder", 1, 1, HDR_FORMAT), 4),
     };
     let layout = bind_group_layout(
@@ -107,29 +94,54 @@ pub(crate) fn build(
         "gather",
         &layout,
         &[
-            order.as_entire_binding(),
+            shared.order.as_entire_binding(),
             wgpu::BindingResource::TextureView(&first_view),
-            wgpu::BindingResource::TextureView(&counts_view),
+            wgpu::BindingResource::TextureView(&shared.counts),
             pixel_offsets.as_entire_binding(),
             wgpu::BindingResource::TextureView(&extra_view),
         ],
     );
-    let gather_constants = [
-        &shading[..],
-        &window,
-        &[("LOOP_SHADING", flag(loop_shading)), ("COMPACT_WIDTH", f64::from(compact_width))],
-    ]
-    .concat();
-    let pipeline = r.fullscreen_pipeline(
-        "adaptive.wgsl",
-        "gather",
-        &gather_constants,
-        [Some(&scene.0), Some(&gb.0), Some(&layout)],
-        HDR_FORMAT,
-    )?;
-    passes.push(Box::new(screen("gather", pipeline, &scene.1, &gb.1, group, hdr, 3)));
+    let list_constants = [("LOOP_SHADING", flag(loop_shading)), ("COMPACT_WIDTH", f64::from(compact_width))];
+    let constants = [&shared.shading[..], &shared.window, &list_constants].concat();
+    passes.push(Box::new(shared.pass(r, "gather", FULLSCREEN, &constants, (&layout, group), hdr)?));
 
     Ok(AdaptivePasses { passes, sample_counts: counts, first })
+}
+
+/// What the adaptive passes share: the scene and G-buffer groups (0 and 1), the sample order,
+/// the count map, and the shading and window constants.
+struct Shared {
+    scene: (wgpu::BindGroupLayout, wgpu::BindGroup),
+    gbuffer: (wgpu::BindGroupLayout, wgpu::BindGroup),
+    order: wgpu::Buffer,
+    counts: wgpu::TextureView,
+    shading: Vec<(&'static str, f64)>,
+    window: [(&'static str, f64); 1],
+}
+
+impl Shared {
+    /// The fragment pass named after its entry point `entry` in adaptive.wgsl, run over
+    /// `target` with groups 0 and 1 and its own `inputs` as group 2.
+    fn pass(
+        &self,
+        r: &mut SceneRenderer,
+        entry: &'static str,
+        (vertex, vertices): (&str, u32),
+        constants: &[(&str, f64)],
+        inputs: (&wgpu::BindGroupLayout, wgpu::BindGroup),
+        target: &wgpu::Texture,
+    ) -> Result<Screen, RenderError> {
+        let groups = [Some(&self.scene.0), Some(&self.gbuffer.0), Some(inputs.0)];
+        let pipeline =
+            r.screen_pipeline("adaptive.wgsl", vertex, entry, constants, groups, target.format())?;
+        Ok(Screen {
+            name: entry,
+            pipeline,
+            groups: vec![(0, self.scene.1.clone()), (1, self.gbuffer.1.clone()), (2, inputs.1)],
+            target: view(target),
+            vertices,
+        })
+    }
 }
 
 /// The list of samples to shade after S, and its compact target.
@@ -140,21 +152,15 @@ struct CompactList {
 }
 
 /// Adds the `compact` (prefix sums) and `shade_extra` passes.
-#[allow(clippy::too_many_arguments)]
 fn compact_list(
     r: &mut SceneRenderer,
-    device: &wgpu::Device,
+    shared: &Shared,
     m: u32,
-    shading: &[(&'static str, f64)],
-    window: &[(&'static str, f64)],
-    order: &wgpu::Buffer,
-    counts_view: &wgpu::TextureView,
-    scene: &(wgpu::BindGroupLayout, wgpu::BindGroup),
-    gb: &(wgpu::BindGroupLayout, wgpu::BindGroup),
     passes: &mut Vec<Box<dyn Pass>>,
 ) -> Result<CompactList, RenderError> {
     let (width, height) = (r.settings.width, r.settings.height);
-    let limits = r.gpu.device.limits();
+    let device = r.gpu.device.clone();
+    let limits = device.limits();
     // At most M² entries per pixel (a full window shades rank 0 again), in 4×4 blocks of a
     // target as wide as the device allows.
     let capacity = u64::from(m * m) * u64::from(width) * u64::from(height);
@@ -169,8 +175,6 @@ fn compact_list(
         )));
     }
     let compact_height = compact_height as u32;
-    let compact =
-        [("COMPACT_WIDTH", f64::from(compact_width)), ("COMPACT_HEIGHT", f64::from(compact_height))];
     let extra = r.target("adaptive.extra", compact_width, compact_height, HDR_FORMAT);
     let row_offsets = r.buffer("adaptive.row_offsets", 4 * u64::from(height));
     let totals = r.buffer("adaptive.totals", 4);
@@ -178,7 +182,7 @@ fn compact_list(
     let entries = r.buffer("adaptive.entries", entries_bytes);
 
     let layout = bind_group_layout(
-        device,
+        &device,
         "compact",
         &[
             Slot::UintTexture,
@@ -189,11 +193,11 @@ fn compact_list(
         ],
     );
     let group = bind_group(
-        device,
+        &device,
         "compact",
         &layout,
         &[
-            wgpu::BindingResource::TextureView(counts_view),
+            wgpu::BindingResource::TextureView(&shared.counts),
             row_offsets.as_entire_binding(),
             totals.as_entire_binding(),
             pixel_offsets.as_entire_binding(),
@@ -203,7 +207,8 @@ fn compact_list(
     let row_groups = height.div_ceil(64);
     let mut steps = Vec::new();
     for (entry, workgroups) in [("scan_rows", row_groups), ("scan_total", 1), ("emit", row_groups)] {
-        let pipeline = r.compute_pipeline("adaptive.wgsl", entry, window, [None, None, Some(&layout)])?;
+        let pipeline =
+            r.compute_pipeline("adaptive.wgsl", entry, &shared.window, [None, None, Some(&layout)])?;
         steps.push(ComputeStep {
             pipeline,
             groups: vec![(2, group.clone())],
@@ -214,51 +219,34 @@ fn compact_list(
 
     // One fragment per listed sample.
     let layout = bind_group_layout(
-        device,
+        &device,
         "shade_extra",
         &[Slot::StorageRead, Slot::UintTexture, Slot::StorageRead, Slot::StorageRead],
     );
     let group = bind_group(
-        device,
+        &device,
         "shade_extra",
         &layout,
         &[
-            order.as_entire_binding(),
-            wgpu::BindingResource::TextureView(counts_view),
+            shared.order.as_entire_binding(),
+            wgpu::BindingResource::TextureView(&shared.counts),
             entries.as_entire_binding(),
             totals.as_entire_binding(),
         ],
     );
-    let pipeline = r.screen_pipeline(
-        "adaptive.wgsl",
-        "compact_rows",
+    let size = [("COMPACT_WIDTH", f64::from(compact_width)), ("COMPACT_HEIGHT", f64::from(compact_height))];
+    let constants = [&shared.shading[..], &shared.window, &size].concat();
+    passes.push(Box::new(shared.pass(
+        r,
         "shade_extra",
-        &[shading, window, &compact].concat(),
-        [Some(&scene.0), Some(&gb.0), Some(&layout)],
-        HDR_FORMAT,
-    )?;
-    passes.push(Box::new(screen("shade_extra", pipeline, &scene.1, &gb.1, group, &extra, 6)));
+        COMPACT_ROWS,
+        &constants,
+        (&layout, group),
+        &extra,
+    )?));
     Ok(CompactList { pixel_offsets, extra, width: compact_width })
 }
 
 fn flag(value: bool) -> f64 {
     if value { 1.0 } else { 0.0 }
-}
-
-fn screen(
-    name: &'static str,
-    pipeline: wgpu::RenderPipeline,
-    scene: &wgpu::BindGroup,
-    gbuffer: &wgpu::BindGroup,
-    inputs: wgpu::BindGroup,
-    target: &wgpu::Texture,
-    vertices: u32,
-) -> Screen {
-    Screen {
-        name,
-        pipeline,
-        groups: vec![(0, scene.clone()), (1, gbuffer.clone()), (2, inputs)],
-        target: view(target),
-        vertices,
-    }
 }

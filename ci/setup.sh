@@ -1,8 +1,30 @@
 #!/usr/bin/env bash
 # Installs what aabench needs on a fresh Debian/Ubuntu machine: lavapipe (Mesa's CPU Vulkan
-# driver) when no lavapipe driver manifest is present. Rust comes from rustup, as on the CI
-# machines. Safe to run again: it installs only what is missing.
+# driver) when no lavapipe driver manifest is present. With --browser it also installs Debian's
+# Chromium, which the report test opens the HTML report in; that install is best effort (the
+# test says it skipped the browser check when Chromium is missing). Rust comes from rustup, as
+# on the CI machines. Safe to run again: it installs only what is missing.
 set -euo pipefail
+
+browser=false
+for arg in "$@"; do
+    case "$arg" in
+        --browser) browser=true ;;
+        *) echo "ci/setup.sh: unknown argument $arg" >&2; exit 2 ;;
+    esac
+done
+
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+
+# A fresh machine may have empty package lists: update only when an install needs it.
+install() {
+    $sudo apt-get install -y --no-install-recommends "$@" >/dev/null 2>&1 || {
+        $sudo apt-get update -qq
+        $sudo apt-get install -y --no-install-recommends "$@"
+    }
+}
 
 have_lavapipe() {
     compgen -G "/usr/share/vulkan/icd.d/lvp_icd*.json" >/dev/null ||
@@ -11,15 +33,13 @@ have_lavapipe() {
 
 if ! have_lavapipe; then
     echo "ci/setup.sh: installing lavapipe (mesa-vulkan-drivers)" >&2
-    sudo=""
-    if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
-    export DEBIAN_FRONTEND=noninteractive
-    # A fresh machine may have empty package lists: update only when the install needs it.
-    $sudo apt-get install -y --no-install-recommends mesa-vulkan-drivers >/dev/null 2>&1 || {
-        $sudo apt-get update -qq
-        $sudo apt-get install -y --no-install-recommends mesa-vulkan-drivers
-    }
+    install mesa-vulkan-drivers
     have_lavapipe || { echo "ci/setup.sh: lavapipe is still missing after the install" >&2; exit 1; }
+fi
+
+if $browser && ! command -v chromium >/dev/null 2>&1; then
+    echo "ci/setup.sh: installing chromium for the report's browser test" >&2
+    install chromium || echo "ci/setup.sh: chromium could not be installed; the browser check will be skipped" >&2
 fi
 
 if ! command -v cargo >/dev/null 2>&1; then

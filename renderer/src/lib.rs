@@ -20,7 +20,7 @@ pub use gpu::{Gpu, PlatformInfo};
 pub use mode::{Metrics, Mode, Technique};
 pub use passes::gbuffer::BACKGROUND_MATERIAL;
 pub use render::{
-    FrameImages, FrameTiming, GBufferImages, PassTime, PreparedMode, RenderSettings, SceneRenderer,
+    FrameImages, FrameTiming, GBufferImages, PassTime, PreparedMode, RenderSettings, SceneRenderer, Truth,
 };
 
 use std::path::PathBuf;

@@ -7,7 +7,7 @@ use crate::gpu::Gpu;
 use crate::mode::{Mode, Technique};
 use crate::passes::gbuffer::{self, GBuffer, GBufferPass, GBufferPipelines};
 use crate::passes::{self, Pass, Program, Screen, Slot};
-use crate::scene::{Camera, FrameUniforms, GpuScene, Lighting, Scene};
+use crate::scene::{Camera, FrameUniforms, GpuScene, Lighting, Scene, Tile};
 use crate::{AdaptiveSettings, RenderError, shaders};
 
 /// Linear HDR radiance.
@@ -59,6 +59,16 @@ pub struct FrameImages {
     pub sample_counts: Option<Vec<u8>>,
 }
 
+/// The ground truth of a scene: the brute-force reference at `m` × `m` samples per pixel,
+/// unstalled, rendered tile by tile (see [`SceneRenderer::render_truth`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Truth {
+    /// The display image and HDR image, as a mode's; no sample counts.
+    pub images: FrameImages,
+    pub m: u32,
+    pub tiles: usize,
+}
+
 /// A G-buffer read back for checks: what the adaptive metric sees.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GBufferImages {
@@ -87,8 +97,9 @@ pub struct SceneRenderer {
     targets: HashMap<(&'static str, u32, u32), wgpu::Texture>,
     buffers: HashMap<(&'static str, u64), wgpu::Buffer>,
     gbuffers: HashMap<u32, GBuffer>,
-    /// The camera's near and far planes, for reading depth back.
-    clip: (f64, f64),
+    /// Kept to rewrite the frame uniforms for ground-truth tiles.
+    camera: Camera,
+    lighting: Lighting,
 }
 
 impl SceneRenderer {
@@ -122,7 +133,8 @@ impl SceneRenderer {
             targets: HashMap::new(),
             buffers: HashMap::new(),
             gbuffers: HashMap::new(),
-            clip: (camera.near, camera.far),
+            camera: *camera,
+            lighting: lighting.clone(),
         })
     }
 
@@ -169,7 +181,7 @@ impl SceneRenderer {
             sample_counts,
             gbuffer,
             first,
-            clip: self.clip,
+            clip: (self.camera.near, self.camera.far),
         })
     }
 
@@ -193,20 +205,7 @@ impl SceneRenderer {
         let device = &self.gpu.device;
         self.targets
             .entry((name, width, height))
-            .or_insert_with(|| {
-                device.create_texture(&wgpu::TextureDescriptor {
-                    label: Some(name),
-                    size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                        | wgpu::TextureUsages::TEXTURE_BINDING
-                        | wgpu::TextureUsages::COPY_SRC,
-                    view_formats: &[],
-                })
-            })
+            .or_insert_with(|| create_target(device, name, width, height, format))
             .clone()
     }
 
@@ -221,19 +220,34 @@ impl SceneRenderer {
             .sum()
     }
 
+    /// The G-buffer of the M×M modes, shared by all of them.
     fn gbuffer(&mut self, m: u32) -> Result<GBuffer, RenderError> {
         if let Some(gbuffer) = self.gbuffers.get(&m) {
             return Ok(gbuffer.clone());
         }
-        let (width, height) = (m * self.settings.width, m * self.settings.height);
+        let gbuffer = self.gbuffer_targets(m * self.settings.width, m * self.settings.height, true)?;
+        self.gbuffers.insert(m, gbuffer.clone());
+        Ok(gbuffer)
+    }
+
+    /// G-buffer targets of one size: shared through [`Self::target`], or made for one use
+    /// (ground-truth tiles) and freed when dropped.
+    fn gbuffer_targets(&mut self, width: u32, height: u32, shared: bool) -> Result<GBuffer, RenderError> {
         let limit = self.gpu.device.limits().max_texture_dimension_2d;
         if width > limit || height > limit {
             return Err(RenderError::TooLarge { width, height, limit });
         }
-        let uv = self.target("gbuffer.uv", width, height, gbuffer::UV_FORMAT);
-        let normal = self.target("gbuffer.normal", width, height, gbuffer::NORMAL_FORMAT);
-        let uv_grad = self.target("gbuffer.uv_grad", width, height, gbuffer::UV_GRAD_FORMAT);
-        let depth = self.target("gbuffer.depth", width, height, gbuffer::DEPTH_FORMAT);
+        let mut make = |name, format| {
+            if shared {
+                self.target(name, width, height, format)
+            } else {
+                create_target(&self.gpu.device, name, width, height, format)
+            }
+        };
+        let uv = make("gbuffer.uv", gbuffer::UV_FORMAT);
+        let normal = make("gbuffer.normal", gbuffer::NORMAL_FORMAT);
+        let uv_grad = make("gbuffer.uv_grad", gbuffer::UV_GRAD_FORMAT);
+        let depth = make("gbuffer.depth", gbuffer::DEPTH_FORMAT);
         let views = [&uv, &normal, &uv_grad, &depth].map(view);
         let group = passes::bind_group(
             &self.gpu.device,
@@ -241,9 +255,72 @@ impl SceneRenderer {
             &self.gbuffer_layout,
             &views.each_ref().map(wgpu::BindingResource::TextureView),
         );
-        let gbuffer = GBuffer { uv, normal, uv_grad, depth, group };
-        self.gbuffers.insert(m, gbuffer.clone());
-        Ok(gbuffer)
+        Ok(GBuffer { uv, normal, uv_grad, depth, group })
+    }
+
+    /// Renders the ground truth: the brute-force reference at `m` × `m` samples per pixel,
+    /// unstalled and untimed, with reference-MxM's shaders and texture-footprint rule (UV
+    /// derivatives per G-buffer sample), so a single tile at m = M gives reference-MxM's image
+    /// bit for bit. Tiles keep each one's targets within `tile_bytes`: at 8×8 a 1024×768
+    /// frame needs 1.8 GB of targets at once. The frame uniforms are restored afterwards.
+    pub fn render_truth(&mut self, m: u32, tile_bytes: u64) -> Result<Truth, RenderError> {
+        let (width, height) = (self.settings.width, self.settings.height);
+        let limit = self.gpu.device.limits().max_texture_dimension_2d;
+        let tiles = truth_tiles(width, height, m, limit, tile_bytes)?;
+        let pixels = width as usize * height as usize;
+        let mut images = FrameImages {
+            width,
+            height,
+            display: vec![0; 4 * pixels],
+            hdr: vec![0.0; 4 * pixels],
+            sample_counts: None,
+        };
+        let result = tiles.iter().try_for_each(|tile| self.render_truth_tile(m, *tile, &mut images));
+        self.write_frame_uniforms(Tile::whole(width, height));
+        result?;
+        Ok(Truth { images, m, tiles: tiles.len() })
+    }
+
+    /// Renders one tile of the truth and copies its images into place in `out`.
+    fn render_truth_tile(&mut self, m: u32, tile: Tile, out: &mut FrameImages) -> Result<(), RenderError> {
+        self.write_frame_uniforms(tile);
+        let gbuffer = self.gbuffer_targets(m * tile.width, m * tile.height, false)?;
+        let device = &self.gpu.device;
+        let supersampled =
+            create_target(device, "truth.supersampled", gbuffer.width(), gbuffer.height(), HDR_FORMAT);
+        let hdr = create_target(device, "truth.hdr", tile.width, tile.height, HDR_FORMAT);
+        let display = create_target(device, "truth.display", tile.width, tile.height, DISPLAY_FORMAT);
+        let passes: [Box<dyn Pass>; 4] = [
+            Box::new(GBufferPass {
+                pipelines: self.gbuffer_pipelines()?,
+                scene: self.scene.clone(),
+                targets: gbuffer.clone(),
+            }),
+            Box::new(self.shade_all(&gbuffer, false, &supersampled)?),
+            Box::new(self.resolve(m, &supersampled, &hdr)?),
+            Box::new(self.display(&hdr, &display)?),
+        ];
+        let mut encoder = self.gpu.encoder("truth");
+        for pass in &passes {
+            pass.encode(&mut encoder);
+        }
+        self.gpu.submit_timed(encoder)?;
+        let tile_display = self.gpu.read_texture(&display)?;
+        let tile_hdr: Vec<f32> = half_texels(&self.gpu.read_texture(&hdr)?).into_iter().flatten().collect();
+        let row = 4 * tile.width as usize;
+        for y in 0..tile.height as usize {
+            let at = 4 * ((tile.y as usize + y) * out.width as usize + tile.x as usize);
+            out.display[at..at + row].copy_from_slice(&tile_display[y * row..(y + 1) * row]);
+            out.hdr[at..at + row].copy_from_slice(&tile_hdr[y * row..(y + 1) * row]);
+        }
+        Ok(())
+    }
+
+    /// Points the frame uniforms at `tile` of the output (the whole frame for every mode).
+    fn write_frame_uniforms(&self, tile: Tile) {
+        let (width, height) = (self.settings.width, self.settings.height);
+        let uniforms = FrameUniforms::for_tile(&self.camera, &self.lighting, width, height, tile);
+        self.gpu.queue.write_buffer(&self.scene.frame, 0, bytemuck::bytes_of(&uniforms));
     }
 
     fn gbuffer_pipelines(&mut self) -> Result<GBufferPipelines, RenderError> {
@@ -411,6 +488,60 @@ impl SceneRenderer {
     }
 }
 
+/// A 2D render target that passes draw into, sample and copy out of.
+fn create_target(
+    device: &wgpu::Device,
+    name: &str,
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(name),
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
+}
+
+/// Target bytes per G-buffer sample of a truth tile: the G-buffer (UV 8, normal 8, UV
+/// derivatives 8, depth 4) and the supersampled HDR image (8).
+const TRUTH_BYTES_PER_SAMPLE: u64 = 36;
+
+/// Splits a `width` × `height` frame into tiles whose m·w × m·h targets fit `max_side` and
+/// together take at most `budget` bytes (at least one row of pixels per tile): full-width
+/// bands where the width fits, a grid otherwise, sizes as even as the division allows.
+fn truth_tiles(
+    width: u32,
+    height: u32,
+    m: u32,
+    max_side: u32,
+    budget: u64,
+) -> Result<Vec<Tile>, RenderError> {
+    let max_tile_side = max_side / m.max(1);
+    if max_tile_side == 0 {
+        return Err(RenderError::TooLarge { width: m, height: m, limit: max_side });
+    }
+    let tile_width = width.min(max_tile_side);
+    let bytes_per_row = u64::from(m * m) * TRUTH_BYTES_PER_SAMPLE * u64::from(tile_width);
+    let rows = (budget / bytes_per_row).clamp(1, u64::from(height.min(max_tile_side))) as u32;
+    let (columns, bands) = (width.div_ceil(tile_width), height.div_ceil(rows));
+    let (tile_width, rows) = (width.div_ceil(columns), height.div_ceil(bands));
+    let mut tiles = Vec::new();
+    for y in (0..height).step_by(rows as usize) {
+        for x in (0..width).step_by(tile_width as usize) {
+            tiles.push(Tile { x, y, width: tile_width.min(width - x), height: rows.min(height - y) });
+        }
+    }
+    Ok(tiles)
+}
+
 /// Pipeline layouts list groups up to the last one used; unused ones in between stay empty.
 fn trim<'a>(groups: &[Option<&'a wgpu::BindGroupLayout>; 3]) -> Vec<Option<&'a wgpu::BindGroupLayout>> {
     let used = groups.iter().rposition(Option::is_some).map_or(0, |i| i + 1);
@@ -513,4 +644,40 @@ fn half_texels(bytes: &[u8]) -> Vec<[f32; 4]> {
         .chunks_exact(8)
         .map(|t| std::array::from_fn(|c| half::f16::from_le_bytes([t[2 * c], t[2 * c + 1]]).to_f32()))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every pixel in exactly one tile, every tile within the limits.
+    fn check(width: u32, height: u32, m: u32, max_side: u32, budget: u64) -> Vec<Tile> {
+        let tiles = truth_tiles(width, height, m, max_side, budget).unwrap();
+        let mut covered = vec![0u8; (width * height) as usize];
+        for tile in &tiles {
+            assert!(tile.width > 0 && tile.height > 0, "{tile:?}");
+            assert!(m * tile.width <= max_side && m * tile.height <= max_side, "{tile:?}");
+            for y in tile.y..tile.y + tile.height {
+                for x in tile.x..tile.x + tile.width {
+                    covered[(y * width + x) as usize] += 1;
+                }
+            }
+        }
+        assert!(covered.iter().all(|&c| c == 1), "{width}×{height}: {tiles:?}");
+        tiles
+    }
+
+    #[test]
+    fn truth_tiles_cover_the_frame_once_within_the_limits() {
+        // 1024×768 at 8×8 in 512 MiB: four full-width bands of 192 rows.
+        let tiles = check(1024, 768, 8, 16384, 512 << 20);
+        assert_eq!(tiles.len(), 4);
+        assert!(tiles.iter().all(|t| t.width == 1024 && t.height == 192));
+        // A budget of one row per tile, odd sizes, a width past the texture limit.
+        assert_eq!(check(317, 211, 8, 16384, 1).len(), 211);
+        let wide = check(4096, 8, 8, 16384, u64::MAX);
+        assert_eq!(wide.len(), 2, "{wide:?}");
+        assert_eq!(check(1, 1, 8, 16384, 512 << 20).len(), 1);
+        assert!(truth_tiles(4, 4, 8, 4, u64::MAX).is_err(), "one pixel at 8×8 exceeds a 4-texel limit");
+    }
 }

@@ -130,3 +130,52 @@ fn stalled_modes_render_the_same_image() {
         assert_eq!(plain.display, stalled.display, "{mode}: the stall changed the image");
     }
 }
+
+#[test]
+fn the_truth_in_one_tile_is_the_reference_and_its_tiles_do_not_show() {
+    let (mut renderer, _gpu) = renderer(Generator::Atrium, &lit(), settings(96, 64));
+    let reference = render(&mut renderer, "reference-4x4");
+    let whole = renderer.render_truth(4, u64::MAX).unwrap();
+    assert_eq!(whole.tiles, 1);
+    assert_eq!(whole.images.display, reference.display, "one tile must be reference-4x4 bit for bit");
+    assert_eq!(whole.images.hdr, reference.hdr);
+
+    // Four bands, each with its own projection. A band's vertices reach the rasterizer's
+    // sub-sample grid through other float rounding than the whole frame's, so samples within
+    // a rounding error of an edge may flip. The atrium at 96×64 has about 46 triangles per
+    // pixel, so a few pixels change, by at most one sample's share; seams would change whole
+    // rows at the band borders.
+    let band_bytes = 16 * 16 * 36 * 96;
+    let tiled = renderer.render_truth(4, band_bytes).unwrap();
+    assert_eq!(tiled.tiles, 4);
+    let differing: Vec<usize> = (0..96 * 64)
+        .filter(|&p| tiled.images.display[4 * p..4 * p + 3] != reference.display[4 * p..4 * p + 3])
+        .collect();
+    let at_borders = differing.iter().filter(|&&p| [15, 16, 31, 32, 47, 48].contains(&(p / 96))).count();
+    assert!(differing.len() < 96 * 64 / 50, "{} pixels differ", differing.len());
+    assert!(at_borders <= 4, "{at_borders} differing pixels on band borders: a seam");
+    assert!(max_step(&tiled.images, &reference) <= 255 / 16 + 4, "more than one sample's share");
+
+    // The frame uniforms are restored: modes rendered afterwards are unchanged.
+    assert_eq!(render(&mut renderer, "reference-4x4").display, reference.display);
+}
+
+#[test]
+fn the_8x8_truth_is_nearer_to_reference_4x4_than_reference_2x2_is() {
+    let (mut renderer, _gpu) = renderer(Generator::Thin, &lit(), settings(96, 64));
+    let truth = renderer.render_truth(8, 16 << 20).unwrap();
+    assert_eq!((truth.m, truth.images.width, truth.images.height), (8, 96, 64));
+    let mse = |image: &aabench_renderer::FrameImages| {
+        let sum: f64 = image
+            .display
+            .iter()
+            .zip(&truth.images.display)
+            .map(|(a, b)| (f64::from(*a) - f64::from(*b)).powi(2))
+            .sum();
+        sum / image.display.len() as f64
+    };
+    let (m2, m4) =
+        (mse(&render(&mut renderer, "reference-2x2")), mse(&render(&mut renderer, "reference-4x4")));
+    assert!(m4 > 0.0, "the truth has more samples than reference-4x4, so it differs");
+    assert!(m4 < m2 * 0.6, "reference-4x4 ({m4}) should be much nearer the truth than reference-2x2 ({m2})");
+}

@@ -1,6 +1,6 @@
 //! The `aabench` command line.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -10,7 +10,7 @@ use aabench::manifest::Manifest;
 use aabench::plan::{self, RunPlan, Tier};
 use aabench::progress::Progress;
 use aabench::record::Status;
-use aabench::{exit, run, scenes};
+use aabench::{baseline, compare, exit, run, scenes};
 use aabench_renderer::{ExtraSamples, Mode};
 use clap::{Parser, Subcommand};
 
@@ -36,6 +36,58 @@ enum Command {
         /// Regenerate even files that are current.
         #[arg(long)]
         force: bool,
+    },
+    /// Write the ok scenes of one or more runs (separate processes of one build, pooled) as
+    /// baselines: <baseline>/<platform-key>/<tier>/<scene>.json.
+    Bless {
+        /// The runs: their folders or run.json files.
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// The baselines' root folder.
+        #[arg(long, default_value = "baselines")]
+        baseline: PathBuf,
+        /// Replace baselines of another platform key, tier or schema, and files that are no
+        /// baseline.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Decide per scene × mode × metric whether a run regressed against its baselines; write
+    /// summary.md, junit.xml and verdict.json. Exit 0: nothing regressed, 1: something did,
+    /// 2: an error.
+    Compare {
+        /// The run: its folder or its run.json.
+        run: PathBuf,
+        /// The baselines' root folder.
+        #[arg(long, default_value = "baselines")]
+        baseline: PathBuf,
+        /// Folder for summary.md, junit.xml and verdict.json [default: the run's folder].
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Which checks may fail: all, or quality only (time verdicts reported, not failed).
+        #[arg(long, value_enum, default_value = "all")]
+        fail_on: compare::FailOn,
+    },
+    /// Write a static, self-contained index.html beside each run: per scene the modes, error
+    /// against run time, images and crops, the gate's verdict, and metrics over past runs.
+    Report {
+        /// Runs: their folders or run.json files.
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// Folder of earlier runs (run.json files, or folders holding one) to plot metrics over.
+        #[arg(long)]
+        history: Option<PathBuf>,
+        /// The verdict to show [default: verdict.json in the run's folder, if there is one].
+        #[arg(long)]
+        verdict: Option<PathBuf>,
+    },
+    /// Join the shard runs of one suite (`run --shard I/N`) into one run with their images.
+    Merge {
+        /// The shard runs: their folders or run.json files.
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// The new run's folder.
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Print the Vulkan adapter and the platform key that results are filed under.
     Info,
@@ -66,6 +118,13 @@ struct RunArgs {
     /// loop (inside each pixel's invocation, the paper's simplest variant).
     #[arg(long, value_enum, default_value = "compact")]
     extra_samples: ExtraSamplesArg,
+    /// Render only this slice of the scenes: `I/N` takes scenes I, I+N, I+2N, … (in manifest
+    /// order). `aabench merge` joins the N shard runs into one.
+    #[arg(long, value_name = "I/N")]
+    shard: Option<String>,
+    /// Folder that caches ground truths [default: cache/truth/ beside each manifest].
+    #[arg(long, value_name = "DIR")]
+    truth_cache: Option<PathBuf>,
     /// Longest a single frame may take, in seconds.
     #[arg(long, value_name = "SECONDS", default_value_t = run::default_frame_timeout().as_secs_f64())]
     frame_timeout: f64,
@@ -83,6 +142,10 @@ fn main() -> ExitCode {
     let code = match cli.command {
         Command::Run(args) => run_command(args),
         Command::GenScenes { paths, force } => gen_scenes(&paths, force),
+        Command::Bless { runs, baseline, force } => bless(&runs, &baseline, force),
+        Command::Compare { run, baseline, out, fail_on } => compare(&run, &baseline, out.as_deref(), fail_on),
+        Command::Report { runs, history, verdict } => report(&runs, history.as_deref(), verdict.as_deref()),
+        Command::Merge { runs, out } => merge(&runs, &out),
         Command::Info => info(),
         Command::Modes => {
             list_modes();
@@ -156,11 +219,12 @@ fn make_plan(args: &RunArgs) -> Result<RunPlan, String> {
     if repetitions == 0 {
         return Err("--repetitions must be at least 1".into());
     }
+    let shard = args.shard.as_deref().map(plan::parse_shard).transpose()?;
     let manifests = plan::find_manifests(&args.paths)?;
-    let run_id = plan::new_run_id(&args.out, args.tier);
+    let run_id = plan::new_run_id(&args.out, args.tier, shard);
     Ok(RunPlan {
         tier: args.tier,
-        scenes: plan::load_scenes(&manifests),
+        scenes: plan::select_shard(plan::load_scenes(&manifests), shard),
         modes,
         repetitions,
         warmup: args.warmup,
@@ -169,6 +233,8 @@ fn make_plan(args: &RunArgs) -> Result<RunPlan, String> {
             ExtraSamplesArg::Compact => ExtraSamples::Compact,
             ExtraSamplesArg::Loop => ExtraSamples::Loop,
         },
+        truth_cache: args.truth_cache.clone(),
+        shard,
         run_dir: args.out.join(&run_id),
         run_id,
     })
@@ -204,6 +270,103 @@ fn gen_scenes(paths: &[PathBuf], force: bool) -> u8 {
         }
     }
     code
+}
+
+fn bless(runs: &[PathBuf], root: &Path, force: bool) -> u8 {
+    let records: Result<Vec<_>, String> =
+        runs.iter().map(|run| aabench::record::load_run(run).map(|(record, _)| record)).collect();
+    let records = match records {
+        Ok(records) => records,
+        Err(message) => return fail(message),
+    };
+    let now = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();
+    match baseline::bless(&records, root, force, &now) {
+        Ok(blessed) => {
+            for path in &blessed.written {
+                println!("blessed {}", path.display());
+            }
+            for (scene, reason) in &blessed.skipped {
+                eprintln!("aabench: {scene}: not blessed: {reason}");
+            }
+            if blessed.skipped.is_empty() { exit::OK } else { exit::ERROR }
+        }
+        Err(message) => fail(message),
+    }
+}
+
+fn compare(run: &Path, root: &Path, out: Option<&Path>, fail_on: compare::FailOn) -> u8 {
+    let (record, run_dir) = match aabench::record::load_run(run) {
+        Ok(run) => run,
+        Err(message) => return fail(message),
+    };
+    let baselines = match baseline::BaselineSet::load(root, &record) {
+        Ok(baselines) => baselines,
+        Err(message) => return fail(message),
+    };
+    let verdict = compare::compare(&record, &baselines, fail_on);
+    let out = out.map_or(run_dir, Path::to_path_buf);
+    match compare::outputs::write_all(&verdict, &out) {
+        Ok(files) => {
+            print!("{}", compare::outputs::summary(&verdict));
+            for file in files {
+                eprintln!("wrote {}", file.display());
+            }
+            if verdict.regressed { exit::REGRESSION } else { exit::OK }
+        }
+        Err(message) => fail(message),
+    }
+}
+
+fn report(runs: &[PathBuf], history: Option<&Path>, verdict: Option<&Path>) -> u8 {
+    if verdict.is_some() && runs.len() > 1 {
+        return fail("--verdict belongs to one run; give one run, or let each use its own verdict.json");
+    }
+    let history = match history.map(aabench::report::load_history).transpose() {
+        Ok(Some((runs, skipped))) => {
+            for warning in skipped {
+                eprintln!("aabench: {warning}");
+            }
+            runs
+        }
+        Ok(None) => Vec::new(),
+        Err(message) => return fail(message),
+    };
+    for run in runs {
+        let (record, dir) = match aabench::record::load_run(run) {
+            Ok(run) => run,
+            Err(message) => return fail(message),
+        };
+        let verdict_file = verdict.map_or_else(|| dir.join("verdict.json"), Path::to_path_buf);
+        let verdict: Option<compare::Verdict> = if verdict.is_some() || verdict_file.exists() {
+            match aabench::json::read_versioned(&verdict_file, compare::VERDICT_SCHEMA) {
+                Ok(verdict) => Some(verdict),
+                Err(message) => return fail(message),
+            }
+        } else {
+            None
+        };
+        match aabench::report::write(&dir, &record, verdict.as_ref(), &history) {
+            Ok(path) => println!("wrote {}", path.display()),
+            Err(message) => return fail(message),
+        }
+    }
+    exit::OK
+}
+
+fn merge(runs: &[PathBuf], out: &Path) -> u8 {
+    let shards: Result<Vec<_>, String> = runs.iter().map(|run| aabench::record::load_run(run)).collect();
+    match shards.and_then(|shards| aabench::merge::merge(&shards, out)) {
+        Ok(merged) => {
+            println!(
+                "merged {} scenes from {} shards into {}",
+                merged.scenes.len(),
+                runs.len(),
+                out.join("run.json").display()
+            );
+            exit::OK
+        }
+        Err(message) => fail(message),
+    }
 }
 
 fn info() -> u8 {

@@ -9,6 +9,8 @@ use aabench_renderer::scene::MAX_LIGHTS;
 use aabench_renderer::scene::generate::Generator;
 use serde::Deserialize;
 
+use crate::gate::Tolerances;
+
 pub const SCHEMA_VERSION: u32 = 1;
 
 /// A manifest error: the file, the field (a JSON path such as `lights[0].range`), the reason.
@@ -155,6 +157,9 @@ pub struct Manifest {
     pub adaptive: AdaptiveSpec,
     #[serde(default)]
     pub tonemap: TonemapSpec,
+    /// Tolerances of the regression gate; omitted fields take [`Tolerances::default`].
+    #[serde(default)]
+    pub gate: Tolerances,
     /// The file this manifest came from (not a JSON field).
     #[serde(skip)]
     pub path: PathBuf,
@@ -319,7 +324,7 @@ impl Manifest {
         if !(self.tonemap.exposure > 0.0 && self.tonemap.exposure.is_finite()) {
             return fail("tonemap.exposure", format!("{} must be finite and > 0", self.tonemap.exposure));
         }
-        Ok(())
+        self.gate.validate()
     }
 }
 
@@ -358,6 +363,11 @@ mod tests {
         assert_eq!(manifest.stall_iterations, 256);
         assert_eq!(manifest.adaptive.settings(), AdaptiveSettings::default());
         assert!(manifest.camera.is_none());
+        assert_eq!(manifest.gate, Tolerances::default());
+        let mut json: serde_json::Value = serde_json::from_str(VALID).unwrap();
+        json["gate"] = serde_json::json!({ "time_ratio": 0.2 });
+        let custom = Manifest::parse(Path::new("scenes/edge.json"), &json.to_string()).unwrap();
+        assert_eq!(custom.gate, Tolerances { time_ratio: 0.2, ..Tolerances::default() });
     }
 
     #[test]
@@ -411,6 +421,9 @@ mod tests {
         check(|j| j["adaptive"] = json!({"c_depth": -1}), "adaptive.c_depth", "≥ 0");
         check(|j| j["adaptive"] = json!({"c_dept": 1}), "adaptive.c_dept", "unknown field `c_dept`");
         check(|j| j["tonemap"] = json!({"exposure": 0}), "tonemap.exposure", "> 0");
+        check(|j| j["gate"] = json!({"psnr_db": -0.1}), "gate.psnr_db", "≥ 0");
+        check(|j| j["gate"] = json!({"time_ratio": 0}), "gate.time_ratio", "> 0");
+        check(|j| j["gate"] = json!({"psnr": 1}), "gate.psnr", "unknown field `psnr`");
         check(|j| j["stall_iterations"] = json!(-5), "stall_iterations", "invalid value");
         check(|j| j["ambient"] = json!([0, -1, 0]), "ambient", "≥ 0");
         let light = json!({ "position": [0, 1, 2], "intensity": 5, "range": 10 });

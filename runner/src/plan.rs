@@ -8,11 +8,12 @@ use aabench_renderer::{ExtraSamples, Mode};
 use serde::{Deserialize, Serialize};
 
 use crate::manifest::{Manifest, ManifestError};
+use crate::record::Shard;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Tier {
-    /// Small resolution, few repetitions: the CI gate.
+    /// Small resolution, many repetitions: the CI gate.
     Quick,
     /// 1024×768 (the paper's), more repetitions: nightly reports.
     Nightly,
@@ -26,10 +27,12 @@ impl Tier {
         }
     }
 
-    /// Timed repetitions of every mode, after warm-up.
+    /// Timed repetitions of every mode, after warm-up. The quick tier is the CI gate's: on
+    /// these machines one frame's time varies by about 10% from the next, so 25 repetitions
+    /// are what lets the gate catch a 25% slowdown with no false alarms (README, "The gate").
     pub fn repetitions(self) -> u32 {
         match self {
-            Tier::Quick => 3,
+            Tier::Quick => 25,
             Tier::Nightly => 7,
         }
     }
@@ -79,9 +82,47 @@ pub struct RunPlan {
     pub warmup: u32,
     pub frame_timeout: Duration,
     pub extra_samples: ExtraSamples,
+    /// Where ground truths are cached; `None`: `cache/truth/` beside each manifest.
+    pub truth_cache: Option<PathBuf>,
+    /// The slice of the scenes this run renders, if not all.
+    pub shard: Option<Shard>,
     /// reports/<run-id>
     pub run_dir: PathBuf,
     pub run_id: String,
+}
+
+impl RunPlan {
+    /// The folder that caches `manifest`'s ground truths.
+    pub fn truth_cache_dir(&self, manifest: &Manifest) -> PathBuf {
+        self.truth_cache
+            .clone()
+            .unwrap_or_else(|| manifest.path.parent().unwrap_or(Path::new(".")).join("cache").join("truth"))
+    }
+}
+
+/// Parses `--shard I/N` (cargo-nextest's `--partition count:I/N` convention): 1 ≤ I ≤ N.
+pub fn parse_shard(text: &str) -> Result<Shard, String> {
+    let bad = || format!("--shard {text}: expected I/N with 1 ≤ I ≤ N, e.g. 2/4");
+    let (index, count) = text.split_once('/').ok_or_else(bad)?;
+    let (index, count) =
+        (index.trim().parse::<u32>().map_err(|_| bad())?, count.trim().parse::<u32>().map_err(|_| bad())?);
+    if index == 0 || index > count {
+        return Err(bad());
+    }
+    Ok(Shard { index, count })
+}
+
+/// The scenes of one shard: scene k (0-based, in manifest order, failed manifests included)
+/// belongs to shard k mod N + 1. A scene's modes stay together: they are compared with each
+/// other in the run (ratios to deferred-1x1, adaptive against reference) and share its truth.
+pub fn select_shard<T>(scenes: Vec<T>, shard: Option<Shard>) -> Vec<T> {
+    let Some(Shard { index, count }) = shard else { return scenes };
+    scenes
+        .into_iter()
+        .enumerate()
+        .filter(|(k, _)| *k as u32 % count == index - 1)
+        .map(|(_, scene)| scene)
+        .collect()
 }
 
 /// Finds the manifests named by `paths`: files as given, folders by their `*.json` files in
@@ -91,12 +132,7 @@ pub fn find_manifests(paths: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
     let mut found = Vec::new();
     for path in paths {
         if path.is_dir() {
-            let mut files: Vec<PathBuf> = std::fs::read_dir(&path)
-                .map_err(|e| format!("{}: {e}", path.display()))?
-                .filter_map(|entry| entry.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|ext| ext == "json"))
-                .collect();
-            files.sort();
+            let files = crate::json::files_in(&path)?;
             if files.is_empty() {
                 return Err(format!("{}: no *.json manifests in this folder", path.display()));
             }
@@ -131,11 +167,13 @@ pub fn load_scenes(paths: &[PathBuf]) -> Vec<SceneEntry> {
     scenes
 }
 
-/// A run id that sorts by time: `20261122T101503Z-quick`, with a suffix when taken.
-pub fn new_run_id(out: &Path, tier: Tier) -> String {
+/// A run id that sorts by time: `20261122T101503Z-quick` (`…-quick-shard2of4` for a shard),
+/// with a suffix when taken.
+pub fn new_run_id(out: &Path, tier: Tier, shard: Option<Shard>) -> String {
     let stamp =
         humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string().replace(['-', ':'], "");
-    let base = format!("{stamp}-{}", tier.name());
+    let shard = shard.map_or(String::new(), |s| format!("-shard{}of{}", s.index, s.count));
+    let base = format!("{stamp}-{}{shard}", tier.name());
     let mut id = base.clone();
     let mut n = 2;
     while out.join(&id).exists() {
@@ -161,6 +199,21 @@ mod tests {
         assert_eq!(modes[8].to_string(), "adaptive-2x2-geometry");
         assert!(parse_modes("reference-9x9").unwrap_err().contains("M must be"));
         assert!(parse_modes(" , ").is_err());
+    }
+
+    #[test]
+    fn shards_split_scenes_round_robin_and_cover_them_once() {
+        assert_eq!(parse_shard("2/4"), Ok(Shard { index: 2, count: 4 }));
+        for bad in ["0/4", "5/4", "2", "a/b", "1/0"] {
+            assert!(parse_shard(bad).is_err(), "{bad}");
+        }
+        let scenes: Vec<u32> = (0..7).collect();
+        assert_eq!(select_shard(scenes.clone(), Some(Shard { index: 2, count: 3 })), vec![1, 4]);
+        let mut union: Vec<u32> =
+            (1..=3).flat_map(|index| select_shard(scenes.clone(), Some(Shard { index, count: 3 }))).collect();
+        union.sort();
+        assert_eq!(union, scenes);
+        assert_eq!(select_shard(scenes.clone(), None), scenes);
     }
 
     #[test]

@@ -4,11 +4,17 @@
 use aabench_renderer::PlatformInfo;
 use serde::{Deserialize, Serialize};
 
+use crate::gate::Tolerances;
+use crate::inputs::SceneInputs;
 use crate::metrics::{Quality, SampleStats};
 use crate::plan::Tier;
 use crate::stats::Summary;
+use crate::truth::TruthRecord;
 
-pub const RUN_SCHEMA: &str = "aabench.run/1";
+/// Version 2: the ground truth is an 8×8 render of its own (`truth`), scenes record their
+/// input hashes and gate tolerances, `ratio_to_deferred` is against plain deferred-1x1, and
+/// runs may be shards.
+pub const RUN_SCHEMA: &str = "aabench.run/2";
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -32,7 +38,20 @@ pub struct RunRecord {
     pub aabench_version: String,
     pub platform: Platform,
     pub settings: RunSettings,
+    /// Set when the run rendered one slice of the scenes (`--shard I/N`).
+    pub shard: Option<Shard>,
+    /// The shard runs that `aabench merge` joined into this one.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub merged_from: Vec<String>,
     pub scenes: Vec<SceneRecord>,
+}
+
+/// One slice of a run: scene k of the plan (in manifest order) belongs to shard k mod N + 1.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    /// 1-based.
+    pub index: u32,
+    pub count: u32,
 }
 
 /// The machine: results with the same `key` are comparable in absolute time.
@@ -93,9 +112,45 @@ pub struct SceneRecord {
     /// Bytes of render targets once every mode was prepared.
     pub target_bytes: Option<u64>,
     pub stall_iterations: u32,
-    /// The mode whose image is the ground truth: the highest-M reference in the run.
-    pub ground_truth: Option<String>,
+    /// Content hashes of the manifest and glTF files (absent when they could not be read).
+    pub inputs: Option<SceneInputs>,
+    /// The tolerances `compare` applies to this scene (the manifest's `gate` section).
+    pub gate: Tolerances,
+    /// The ground truth every mode's `vs_ground_truth` is measured against.
+    pub truth: Option<TruthRecord>,
     pub modes: Vec<ModeRecord>,
+}
+
+impl SceneRecord {
+    pub fn mode(&self, id: &str) -> Option<&ModeRecord> {
+        self.modes.iter().find(|m| m.mode == id)
+    }
+
+    /// Round-by-round ratios of `mode`'s frame time to `anchor`'s. Every round renders each
+    /// mode once, so round i of both ran moments apart and share the machine's state.
+    pub fn paired_ratios(&self, mode: &str, anchor: &str) -> Option<Vec<f64>> {
+        let own = &self.mode(mode)?.frame_ms.as_ref()?.samples;
+        let base = &self.mode(anchor)?.frame_ms.as_ref()?.samples;
+        let ratios: Vec<f64> = own.iter().zip(base).map(|(a, b)| a / b).collect();
+        (!ratios.is_empty()).then_some(ratios)
+    }
+
+    /// Per round, the log of the geometric mean frame time of `anchors` other than `mode`
+    /// itself (a mode is not measured against itself): an anchor that averages the machine's
+    /// momentary speed over several modes of the round. Rounds where any of them has no sample
+    /// are left out; `None` if no anchor mode or no round remains.
+    pub fn round_anchor(&self, anchors: &[&str], mode: &str) -> Option<Vec<f64>> {
+        let samples: Vec<&Vec<f64>> = anchors
+            .iter()
+            .filter(|id| **id != mode)
+            .map(|id| self.mode(id)?.frame_ms.as_ref().map(|f| &f.samples))
+            .collect::<Option<_>>()?;
+        let rounds = samples.iter().map(|s| s.len()).min()?;
+        let means: Vec<f64> = (0..rounds)
+            .map(|i| samples.iter().map(|s| s[i].ln()).sum::<f64>() / samples.len() as f64)
+            .collect();
+        (!means.is_empty()).then_some(means)
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -109,7 +164,7 @@ pub struct ModeRecord {
     pub frame_ms: Option<Summary>,
     /// Per pass, in submission order.
     pub passes: Vec<PassRecord>,
-    /// Frame median over deferred-1x1's (same stall): travels between machines.
+    /// Frame median over plain deferred-1x1's in the same run: travels between machines.
     pub ratio_to_deferred: Option<f64>,
     /// True when every timed repetition produced the same display image and sample counts.
     pub deterministic: Option<bool>,
@@ -121,7 +176,7 @@ pub struct ModeRecord {
     pub samples: Option<SampleStats>,
     /// Against the reference at the same M (adaptive modes).
     pub vs_reference: Option<Quality>,
-    /// Against the ground truth (every mode but the ground truth itself).
+    /// Against the ground truth (`truth-8x8`).
     pub vs_ground_truth: Option<Quality>,
     pub adaptive: Option<AdaptiveCost>,
 }
@@ -139,7 +194,8 @@ pub struct ImageFiles {
     pub hdr: Option<String>,
     /// Heatmap of samples per pixel (adaptive modes).
     pub samples: Option<String>,
-    /// Heatmap of |image − reference| (reference: same-M reference, else the ground truth).
+    /// Heatmap of |image − reference| (reference: the same-M reference for adaptive modes,
+    /// else the ground truth).
     pub difference: Option<String>,
 }
 
@@ -156,6 +212,16 @@ pub struct AdaptiveCost {
     pub limit_ms: f64,
     /// limit_ms over this mode's frame median: 1 means at the limit.
     pub efficiency: f64,
+}
+
+/// Reads a run: its folder or its run.json. Returns the record and the run folder (image
+/// paths in the record are relative to it). Errors name the file.
+pub fn load_run(path: &std::path::Path) -> Result<(RunRecord, std::path::PathBuf), String> {
+    let is_file = path.extension().is_some_and(|ext| ext == "json") && !path.is_dir();
+    let file = if is_file { path.to_path_buf() } else { path.join("run.json") };
+    let record = crate::json::read_versioned(&file, RUN_SCHEMA)?;
+    let dir = file.parent().map_or_else(|| std::path::PathBuf::from("."), std::path::Path::to_path_buf);
+    Ok((record, dir))
 }
 
 /// FNV-1a, 64-bit, over the parts in order: a stable fingerprint of image bytes.

@@ -6,12 +6,13 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, SystemTime};
+use std::time::{Duration, Instant, SystemTime};
 
 use aabench_renderer::{AdaptiveSettings, FrameImages, FrameTiming, Mode, RenderSettings, Technique};
 use anyhow::Context;
 
 use crate::images;
+use crate::inputs::SceneInputs;
 use crate::manifest::Manifest;
 use crate::metrics::{self, Quality};
 use crate::plan::{RunPlan, SceneEntry, fallback_name};
@@ -22,6 +23,7 @@ use crate::record::{
 };
 use crate::scenes;
 use crate::stats::Summary;
+use crate::truth::{self, TRUTH_ID, TRUTH_M, TruthRecord};
 use crate::worker::Worker;
 
 /// Display differences of this many 8-bit steps reach the top of the difference heatmap.
@@ -58,6 +60,8 @@ pub async fn execute(plan: &RunPlan, progress: Progress, cancel: Arc<AtomicBool>
             interleaving: "round-robin: each repetition renders every mode once, in plan order".into(),
             extra_samples: format!("{:?}", plan.extra_samples).to_lowercase(),
         },
+        shard: plan.shard,
+        merged_from: Vec::new(),
         scenes: Vec::new(),
     };
     progress.line(&format!(
@@ -104,16 +108,13 @@ fn now() -> String {
 }
 
 fn write_record(path: &Path, record: &RunRecord) -> anyhow::Result<()> {
-    let mut json = serde_json::to_vec_pretty(record)?;
-    json.push(b'\n');
-    aabench_renderer::scene::write::write_atomic(path, &json)
-        .with_context(|| format!("{}: write", path.display()))
+    crate::json::write_atomic(path, record).map_err(anyhow::Error::msg)
 }
 
 fn failed_scene(entry: &SceneEntry, error: String) -> SceneRecord {
     let mut record = match entry {
-        Ok(m) => empty_scene(m.name.clone(), &m.path),
-        Err(e) => empty_scene(fallback_name(&e.path), &e.path),
+        Ok(m) => empty_scene(m),
+        Err(e) => SceneRecord { name: fallback_name(&e.path), ..empty_scene_at(&e.path) },
     };
     record.status = Status::Failed;
     record.error = Some(error);
@@ -121,9 +122,19 @@ fn failed_scene(entry: &SceneEntry, error: String) -> SceneRecord {
 }
 
 /// A scene record before anything was measured.
-fn empty_scene(name: String, manifest: &Path) -> SceneRecord {
+fn empty_scene(manifest: &Manifest) -> SceneRecord {
     SceneRecord {
-        name,
+        name: manifest.name.clone(),
+        stall_iterations: manifest.stall_iterations,
+        gate: manifest.gate,
+        ..empty_scene_at(&manifest.path)
+    }
+}
+
+/// A scene record of a manifest that may not have parsed.
+fn empty_scene_at(manifest: &Path) -> SceneRecord {
+    SceneRecord {
+        name: String::new(),
         manifest: manifest.display().to_string(),
         status: Status::Running,
         error: None,
@@ -133,7 +144,9 @@ fn empty_scene(name: String, manifest: &Path) -> SceneRecord {
         load_s: None,
         target_bytes: None,
         stall_iterations: 0,
-        ground_truth: None,
+        inputs: None,
+        gate: Default::default(),
+        truth: None,
         modes: Vec::new(),
     }
 }
@@ -154,17 +167,21 @@ async fn run_scene(
     progress: &Progress,
     cancel: &AtomicBool,
 ) -> SceneRecord {
-    let mut record = empty_scene(manifest.name.clone(), &manifest.path);
-    record.stall_iterations = manifest.stall_iterations;
+    let mut record = empty_scene(manifest);
     let [width, height] = match plan.tier {
         crate::plan::Tier::Quick => manifest.resolution.quick,
         crate::plan::Tier::Nightly => manifest.resolution.nightly,
     };
     record.resolution = Some([width, height]);
+    let scene_dir = plan.run_dir.join(&manifest.name);
+    if let Err(error) = std::fs::create_dir_all(&scene_dir) {
+        return fail(record, format!("{}: {error}", scene_dir.display()));
+    }
 
     progress.status(&format!("[{}] loading {}", manifest.name, manifest.gltf_path().display()));
     let owned = manifest.clone();
-    let loaded = match tokio::task::spawn_blocking(move || scenes::load(&owned)).await {
+    let load = move || -> anyhow::Result<_> { Ok((scenes::load(&owned)?, SceneInputs::of(&owned)?)) };
+    let (loaded, inputs) = match tokio::task::spawn_blocking(load).await {
         Ok(Ok(loaded)) => loaded,
         Ok(Err(error)) => return fail(record, format!("{error:#}")),
         Err(panic) => return fail(record, format!("loading panicked: {panic}")),
@@ -172,28 +189,49 @@ async fn run_scene(
     record.load_s = Some(loaded.seconds);
     record.triangles = Some(loaded.scene.triangle_count());
     record.textures = Some(loaded.scene.textures.len());
+    record.inputs = Some(inputs.clone());
 
-    // Upload and prepare every mode; a mode that cannot be prepared fails alone.
     let settings = RenderSettings {
         width,
         height,
         stall_iterations: manifest.stall_iterations,
         adaptive: AdaptiveSettings { extra_samples: plan.extra_samples, ..manifest.adaptive.settings() },
     };
-    let modes = plan.modes.clone();
-    progress.status(&format!("[{}] uploading and compiling {} modes", manifest.name, modes.len()));
-    let prepared = worker
-        .call(plan.frame_timeout.saturating_mul(modes.len() as u32), move |state| {
+    progress.status(&format!("[{}] uploading", manifest.name));
+    let uploaded = worker
+        .call(plan.frame_timeout, move |state| {
             let scenes::LoadedScene { scene, camera, lighting, .. } = loaded;
-            let mut renderer = aabench_renderer::SceneRenderer::new(
+            state.modes.clear();
+            state.renderer = None;
+            let renderer = aabench_renderer::SceneRenderer::new(
                 state.gpu.clone(),
                 &scene,
                 &camera,
                 &lighting,
                 settings,
             )?;
+            state.renderer = Some(renderer);
+            Ok::<_, aabench_renderer::RenderError>(())
+        })
+        .await;
+    match uploaded {
+        Ok(Ok(())) => {}
+        Ok(Err(error)) => return fail(record, error.to_string()),
+        Err(error) => return fail(record, error.to_string()),
+    }
+
+    // The truth renders before any mode is prepared, so its peak memory is its own.
+    let (truth_record, truth_image) =
+        ground_truth(worker, plan, manifest, &inputs, [width, height], progress).await;
+    record.truth = Some(truth_record);
+
+    // Prepare every mode; a mode that cannot be prepared fails alone.
+    let modes = plan.modes.clone();
+    progress.status(&format!("[{}] compiling {} modes", manifest.name, modes.len()));
+    let prepared = worker
+        .call(plan.frame_timeout.saturating_mul(modes.len() as u32), move |state| {
+            let renderer = state.renderer.as_mut().expect("an uploaded scene");
             let mut errors = Vec::new();
-            state.modes.clear();
             for mode in modes {
                 match renderer.prepare(mode) {
                     Ok(prepared) => {
@@ -206,17 +244,14 @@ async fn run_scene(
                     }
                 }
             }
-            let bytes = renderer.target_bytes();
-            state.renderer = Some(renderer);
-            Ok::<_, aabench_renderer::RenderError>((errors, bytes))
+            (errors, renderer.target_bytes())
         })
         .await;
     let mut runs: Vec<ModeRun> = match prepared {
-        Ok(Ok((errors, bytes))) => {
+        Ok((errors, bytes)) => {
             record.target_bytes = Some(bytes);
             errors.into_iter().map(|error| ModeRun { error, ..Default::default() }).collect()
         }
-        Ok(Err(error)) => return fail(record, error.to_string()),
         Err(error) => return fail(record, error.to_string()),
     };
 
@@ -291,11 +326,14 @@ async fn run_scene(
 
     progress.status(&format!("[{}] writing images and metrics", manifest.name));
     let interrupted = cancel.load(Ordering::SeqCst);
-    record.modes = finish_modes(plan, manifest, &mut record, runs, interrupted).await;
-    if worker.is_stuck() && record.error.is_none() {
+    record.modes = finish_modes(plan, &scene_dir, manifest, runs, truth_image, interrupted).await;
+    let truth_error = record.truth.as_ref().and_then(|t| t.error.clone());
+    if let Some(error) = truth_error {
+        record.error = Some(format!("ground truth: {error}"));
+    } else if worker.is_stuck() {
         record.error = Some("the GPU worker stopped; see the failed mode".into());
     }
-    record.status = if record.modes.iter().all(|m| m.status == Status::Ok) {
+    record.status = if record.error.is_none() && record.modes.iter().all(|m| m.status == Status::Ok) {
         Status::Ok
     } else if interrupted {
         Status::Interrupted
@@ -303,6 +341,77 @@ async fn run_scene(
         Status::Failed
     };
     record
+}
+
+/// The scene's ground truth, from the cache or rendered now (untimed; before any mode is
+/// prepared, so the peak memory measured is the truth's own), and written into the run folder.
+/// Returns the record and the display image, or the record with its error.
+async fn ground_truth(
+    worker: &mut Worker,
+    plan: &RunPlan,
+    manifest: &Manifest,
+    inputs: &SceneInputs,
+    resolution: [u32; 2],
+    progress: &Progress,
+) -> (TruthRecord, Option<Vec<u8>>) {
+    let mut record = TruthRecord {
+        id: TRUTH_ID.into(),
+        samples_per_pixel: TRUTH_M * TRUTH_M,
+        key: String::new(),
+        cached: false,
+        render_s: None,
+        tiles: None,
+        peak_rss_bytes: None,
+        image: None,
+        error: None,
+    };
+    let fail = |mut record: TruthRecord, error: String| {
+        record.error = Some(error);
+        (record, None)
+    };
+    match truth::cache_key(inputs, resolution, &worker.platform) {
+        Ok(key) => record.key = key,
+        Err(error) => return fail(record, format!("{error:#}")),
+    }
+    let cache = truth::cache_file(&plan.truth_cache_dir(manifest), &manifest.name, resolution, &record.key);
+    let display = match truth::load_cached(&cache, resolution) {
+        Some(display) => {
+            record.cached = true;
+            display
+        }
+        None => {
+            progress.status(&format!("[{}] rendering the ground truth ({TRUTH_ID}, untimed)", manifest.name));
+            let measured = truth::peak_memory::reset();
+            let start = Instant::now();
+            let rendered = worker
+                .call(plan.frame_timeout.saturating_mul(16), |state| {
+                    state
+                        .renderer
+                        .as_mut()
+                        .expect("an uploaded scene")
+                        .render_truth(TRUTH_M, truth::TILE_BYTES)
+                })
+                .await;
+            let truth = match rendered {
+                Ok(Ok(truth)) => truth,
+                Ok(Err(error)) => return fail(record, error.to_string()),
+                Err(error) => return fail(record, error.to_string()),
+            };
+            record.render_s = Some(start.elapsed().as_secs_f64());
+            record.tiles = Some(truth.tiles);
+            record.peak_rss_bytes = if measured { truth::peak_memory::read() } else { None };
+            if let Err(error) = truth::store(&cache, resolution, &truth.images.display) {
+                progress.line(&format!("[{}] warning: ground truth not cached: {error:#}", manifest.name));
+            }
+            truth.images.display
+        }
+    };
+    let relative = format!("{}/{TRUTH_ID}.png", manifest.name);
+    match images::write_png(&plan.run_dir.join(&relative), resolution[0], resolution[1], &display) {
+        Ok(()) => record.image = Some(relative),
+        Err(error) => return fail(record, format!("{error:#}")),
+    }
+    (record, Some(display))
 }
 
 /// FNV-1a of a frame's outputs: the display image, then the sample counts if any.
@@ -320,20 +429,13 @@ fn fail(mut record: SceneRecord, error: String) -> SceneRecord {
 /// parallel now that no frame is running.
 async fn finish_modes(
     plan: &RunPlan,
+    scene_dir: &Path,
     manifest: &Manifest,
-    scene: &mut SceneRecord,
     runs: Vec<ModeRun>,
+    truth: Option<Vec<u8>>,
     interrupted: bool,
 ) -> Vec<ModeRecord> {
     let modes = &plan.modes;
-    // The ground truth: the highest-M reference that rendered, unstalled preferred.
-    let truth = modes
-        .iter()
-        .enumerate()
-        .filter(|(i, m)| m.technique == Technique::Reference && runs[*i].images.is_some())
-        .max_by_key(|(_, m)| (m.m, !m.stalled))
-        .map(|(i, m)| (i, *m));
-    scene.ground_truth = truth.map(|(_, m)| m.to_string());
 
     let mut records: Vec<ModeRecord> = modes
         .iter()
@@ -344,12 +446,11 @@ async fn finish_modes(
         let i = modes.iter().position(|m| *m == mode)?;
         records[i].frame_ms.as_ref().map(|s| s.median)
     };
-    let deferred: Vec<Option<f64>> =
-        modes.iter().map(|m| frame_median(Mode::new(Technique::Deferred, 1, m.stalled))).collect();
+    let deferred = frame_median(Mode::new(Technique::Deferred, 1, false));
     let costs: Vec<Option<AdaptiveCost>> =
         modes.iter().zip(&runs).map(|(mode, run)| adaptive_cost(modes, &runs, *mode, run)).collect();
-    for ((record, ratio), cost) in records.iter_mut().zip(deferred).zip(costs) {
-        record.ratio_to_deferred = match (&record.frame_ms, ratio) {
+    for (record, cost) in records.iter_mut().zip(costs) {
+        record.ratio_to_deferred = match (&record.frame_ms, deferred) {
             (Some(own), Some(base)) if base > 0.0 => Some(own.median / base),
             _ => None,
         };
@@ -358,10 +459,7 @@ async fn finish_modes(
 
     // Images and quality, one blocking task per mode.
     let images: Arc<Vec<Option<FrameImages>>> = Arc::new(runs.into_iter().map(|r| r.images).collect());
-    let scene_dir = plan.run_dir.join(&manifest.name);
-    if let Err(error) = std::fs::create_dir_all(&scene_dir) {
-        scene.error = Some(format!("{}: {error}", scene_dir.display()));
-    }
+    let truth = truth.map(Arc::new);
     let mut tasks = Vec::new();
     for (index, mode) in modes.iter().enumerate() {
         if images[index].is_none() {
@@ -370,9 +468,8 @@ async fn finish_modes(
         }
         let reference = comparison_reference(modes, &images, *mode);
         let images = Arc::clone(&images);
-        let (mode, truth_index, scene_dir, scene_name) =
-            (*mode, truth.map(|t| t.0), scene_dir.clone(), manifest.name.clone());
-        let truth_name = truth.map(|t| t.1.to_string());
+        let (mode, truth, scene_dir, scene_name) =
+            (*mode, truth.clone(), scene_dir.to_path_buf(), manifest.name.clone());
         tasks.push(Some(tokio::task::spawn_blocking(move || {
             let own = images[index].as_ref().expect("images of a finished mode");
             let vs = |other: usize, name: &str| {
@@ -383,17 +480,13 @@ async fn finish_modes(
                 )
             };
             let vs_reference = reference.map(|(i, m)| vs(i, &m.to_string()));
-            let vs_truth =
-                truth_index.filter(|&t| t != index).map(|t| vs(t, truth_name.as_deref().unwrap_or("")));
-            let diff_against = reference.map(|(i, _)| i).or(truth_index.filter(|&t| t != index));
-            write_mode_images(
-                &scene_dir,
-                &scene_name,
-                mode,
-                own,
-                diff_against.map(|i| images[i].as_ref().expect("images")),
-            )
-            .map(|(files, samples)| (files, samples, vs_reference, vs_truth))
+            let vs_truth = truth.as_deref().map(|truth| metrics::quality(&own.display, truth, TRUTH_ID));
+            let diff_against = match reference {
+                Some((i, _)) => Some(&images[i].as_ref().expect("reference images").display),
+                None => truth.as_deref(),
+            };
+            write_mode_images(&scene_dir, &scene_name, mode, own, diff_against.map(Vec::as_slice))
+                .map(|(files, samples)| (files, samples, vs_reference, vs_truth))
         })));
     }
     for (record, task) in records.iter_mut().zip(tasks) {
@@ -519,7 +612,7 @@ fn write_mode_images(
     scene: &str,
     mode: Mode,
     images: &FrameImages,
-    diff_against: Option<&FrameImages>,
+    diff_against: Option<&[u8]>,
 ) -> anyhow::Result<(ImageFiles, Option<metrics::SampleStats>)> {
     let (w, h) = (images.width, images.height);
     let relative = |suffix: &str| format!("{scene}/{mode}{suffix}");
@@ -535,7 +628,7 @@ fn write_mode_images(
         files.samples = Some(relative(".samples.png"));
     }
     if let Some(other) = diff_against {
-        let heatmap = images::difference_heatmap(&images.display, &other.display, DIFFERENCE_FULL_SCALE);
+        let heatmap = images::difference_heatmap(&images.display, other, DIFFERENCE_FULL_SCALE);
         images::write_png(&path(".diff.png"), w, h, &heatmap)?;
         files.difference = Some(relative(".diff.png"));
     }
@@ -554,7 +647,7 @@ fn report_scene(progress: &Progress, scene: &SceneRecord) {
             "[{}]{resolution} {} triangles, ground truth {}",
             scene.name,
             scene.triangles.unwrap_or(0),
-            scene.ground_truth.as_deref().unwrap_or("none")
+            scene.truth.as_ref().map_or("none".into(), truth_summary)
         )),
     }
     progress.line(&format!(
@@ -578,6 +671,16 @@ fn report_scene(progress: &Progress, scene: &SceneRecord) {
             db(&mode.vs_ground_truth),
             mode.error.as_ref().map_or(String::new(), |e| format!("  ({e})")),
         ));
+    }
+}
+
+/// How the truth was obtained, for the printed summary.
+fn truth_summary(truth: &TruthRecord) -> String {
+    match (&truth.error, truth.cached, truth.render_s) {
+        (Some(error), _, _) => format!("FAILED: {error}"),
+        (None, true, _) => format!("{} (cached)", truth.id),
+        (None, false, Some(seconds)) => format!("{} (rendered in {seconds:.1} s)", truth.id),
+        (None, false, None) => truth.id.clone(),
     }
 }
 

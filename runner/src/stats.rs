@@ -1,5 +1,6 @@
-//! Summaries of repeated timings: median with a distribution-free confidence interval from
-//! order statistics (no normality assumed: frame times on a shared CPU are skewed).
+//! Statistics of repeated timings, all distribution-free (frame times on a shared CPU are
+//! skewed and have outliers): the median with an order-statistic confidence interval, and the
+//! shift between two samples with the Mann–Whitney (Moses) interval.
 
 use serde::{Deserialize, Serialize};
 
@@ -66,9 +67,118 @@ fn binomial_half_cdf(n: usize, j: usize) -> f64 {
     sum
 }
 
+/// The shift of one sample against another: the Hodges–Lehmann estimate (the median of all
+/// pairwise differences `current − baseline`) with the distribution-free Moses interval
+/// [D₍ₖ₎, D₍ₙₘ₊₁₋ₖ₎] from the Mann–Whitney U distribution. On log times it estimates the
+/// log of the ratio "current / baseline": robust like the median, nearly as efficient as the
+/// mean on normal noise (95%), which on these machines' noise is worth about a third fewer
+/// repetitions than a difference of medians.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shift {
+    pub estimate: f64,
+    pub low: f64,
+    pub high: f64,
+    /// The interval's coverage: `level` asked for, or less when the samples are too few.
+    pub level: f64,
+}
+
+impl Shift {
+    /// `None` when either sample is empty.
+    pub fn between(current: &[f64], baseline: &[f64], level: f64) -> Option<Shift> {
+        let (n, m) = (current.len(), baseline.len());
+        if n == 0 || m == 0 {
+            return None;
+        }
+        let mut differences: Vec<f64> =
+            current.iter().flat_map(|x| baseline.iter().map(move |y| x - y)).collect();
+        differences.sort_by(f64::total_cmp);
+        let nm = differences.len();
+        let estimate = if nm % 2 == 1 {
+            differences[nm / 2]
+        } else {
+            (differences[nm / 2 - 1] + differences[nm / 2]) / 2.0
+        };
+        // k: the largest rank with P(U ≤ k − 1) ≤ (1 − level) / 2; the coverage is then
+        // 1 − 2·P(U ≤ k − 1). Too few samples for `level`: k = 1, with its true coverage.
+        let cdf = mann_whitney_cdf(n, m);
+        let tail = (1.0 - level) / 2.0;
+        let k = (1..=nm.div_ceil(2)).take_while(|&k| cdf[k - 1] <= tail).last().unwrap_or(1);
+        Some(Shift {
+            estimate,
+            low: differences[k - 1],
+            high: differences[nm - k],
+            level: 1.0 - 2.0 * cdf[k - 1],
+        })
+    }
+}
+
+/// P(U ≤ u) for u = 0…n·m, U the Mann–Whitney statistic of samples of sizes n and m under the
+/// null hypothesis. The counts are the coefficients of the Gaussian binomial
+/// [n+m choose n]_q = ∏ᵢ₌₁ⁿ (1 − q^(m+i)) / (1 − q^i), built factor by factor; after each one
+/// the polynomial is [m+i choose i]_q, whose coefficients are positive.
+fn mann_whitney_cdf(n: usize, m: usize) -> Vec<f64> {
+    let degree = n * m;
+    let mut counts = vec![0.0f64; degree + 1];
+    counts[0] = 1.0;
+    for i in 1..=n {
+        let up = m + i;
+        for u in (up..=degree).rev() {
+            counts[u] -= counts[u - up];
+        }
+        for u in i..=degree {
+            counts[u] += counts[u - i];
+        }
+    }
+    let total: f64 = counts.iter().sum();
+    let mut cumulative = 0.0;
+    counts
+        .iter()
+        .map(|count| {
+            cumulative += count;
+            (cumulative / total).min(1.0)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_mann_whitney_distribution_matches_small_cases() {
+        // n = m = 3: C(6, 3) = 20 orderings, one with U = 0, one with U = 1, two with U = 2.
+        let cdf = mann_whitney_cdf(3, 3);
+        assert_eq!(cdf.len(), 10);
+        assert!((cdf[0] - 1.0 / 20.0).abs() < 1e-15);
+        assert!((cdf[1] - 2.0 / 20.0).abs() < 1e-15);
+        assert!((cdf[2] - 4.0 / 20.0).abs() < 1e-15);
+        assert_eq!(cdf[9], 1.0);
+        // Symmetric: P(U ≤ u) = 1 − P(U ≤ nm − u − 1).
+        let cdf = mann_whitney_cdf(25, 30);
+        for u in 0..cdf.len() - 1 {
+            assert!((cdf[u] - (1.0 - cdf[cdf.len() - 2 - u])).abs() < 1e-9, "{u}");
+        }
+        // Tabulated critical value: n = m = 10, two-sided 5% → U ≤ 23.
+        let cdf = mann_whitney_cdf(10, 10);
+        assert!(cdf[23] <= 0.025 && cdf[24] > 0.025, "{} {}", cdf[23], cdf[24]);
+    }
+
+    #[test]
+    fn the_shift_of_a_shifted_sample_is_found_with_an_interval_around_it() {
+        let base: Vec<f64> = (0..20).map(|i| f64::from(i % 7) * 0.01).collect();
+        let moved: Vec<f64> = base.iter().map(|x| x + 0.25).collect();
+        let shift = Shift::between(&moved, &base, 0.95).unwrap();
+        assert!((shift.estimate - 0.25).abs() < 1e-12);
+        assert!(shift.low < 0.25 && shift.high > 0.25 && shift.low > 0.18, "{shift:?}");
+        assert!(shift.level >= 0.95);
+        let same = Shift::between(&base, &base, 0.95).unwrap();
+        assert!(same.low <= 0.0 && same.high >= 0.0 && same.estimate == 0.0);
+        // Three against three cannot reach 95%: the full range, at 90%.
+        let few = Shift::between(&[1.0, 2.0, 3.0], &[0.0, 0.5, 1.0], 0.95).unwrap();
+        assert_eq!((few.low, few.high), (0.0, 3.0));
+        assert!((few.level - 0.9).abs() < 1e-12);
+        assert!(Shift::between(&[], &[1.0], 0.95).is_none());
+    }
 
     #[test]
     fn median_of_odd_and_even_counts() {

@@ -1,81 +1,13 @@
 //! The `aabench` binary as users and CI run it: real processes, real exit codes, real files.
 
-use std::path::PathBuf;
-use std::process::{Command, Output, Stdio};
-use std::sync::Mutex;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
 
-/// lavapipe uses every core: one aabench process at a time keeps the tests' timings sane.
-static SERIAL: Mutex<()> = Mutex::new(());
+mod support;
 
-struct Workspace {
-    dir: PathBuf,
-}
-
-impl Workspace {
-    fn new(name: &str) -> Workspace {
-        let dir = std::env::temp_dir().join(format!("aabench-cli-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(dir.join("scenes")).unwrap();
-        Workspace { dir }
-    }
-
-    /// Writes scenes/<name>.json for a generated scene at 64×48, with `edit` applied.
-    fn manifest(&self, name: &str, generator: &str, edit: impl Fn(&mut Value)) -> PathBuf {
-        let mut manifest = json!({
-            "schema_version": 1,
-            "name": name,
-            "gltf": format!("cache/{generator}.glb"),
-            "generate": { "generator": generator, "seed": 1 },
-            "resolution": { "quick": [64, 48], "nightly": [128, 96] },
-            "lights": [{ "position": [0.5, 0.5, 2.0], "intensity": 4.0, "range": 20.0 }],
-            "ambient": [0.05, 0.05, 0.05],
-            "stall_iterations": 16
-        });
-        edit(&mut manifest);
-        let path = self.dir.join("scenes").join(format!("{name}.json"));
-        std::fs::write(&path, serde_json::to_string_pretty(&manifest).unwrap()).unwrap();
-        path
-    }
-
-    fn command(&self, args: &[&str]) -> Command {
-        let mut command = Command::new(env!("CARGO_BIN_EXE_aabench"));
-        command.args(args).current_dir(&self.dir).env("CI", "1");
-        command
-    }
-
-    fn run(&self, args: &[&str]) -> Output {
-        self.command(args).output().expect("aabench runs")
-    }
-
-    /// The run.json of the only run under reports/.
-    fn record(&self) -> Value {
-        let runs: Vec<PathBuf> =
-            std::fs::read_dir(self.dir.join("reports")).unwrap().map(|e| e.unwrap().path()).collect();
-        assert_eq!(runs.len(), 1, "{runs:?}");
-        serde_json::from_slice(&std::fs::read(runs[0].join("run.json")).unwrap()).expect("run.json is JSON")
-    }
-
-    fn run_dir(&self) -> PathBuf {
-        std::fs::read_dir(self.dir.join("reports")).unwrap().next().unwrap().unwrap().path()
-    }
-}
-
-impl Drop for Workspace {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
-fn mode<'a>(scene: &'a Value, id: &str) -> &'a Value {
-    scene["modes"].as_array().unwrap().iter().find(|m| m["mode"] == id).unwrap_or_else(|| panic!("no {id}"))
-}
+use support::*;
 
 #[test]
 fn a_run_writes_its_record_and_images_and_exits_zero() {
@@ -87,13 +19,18 @@ fn a_run_writes_its_record_and_images_and_exits_zero() {
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
 
     let record = ws.record();
-    assert_eq!(record["schema"], "aabench.run/1");
+    assert_eq!(record["schema"], "aabench.run/2");
     assert_eq!(record["status"], "ok");
     assert_eq!(record["tier"], "quick");
     assert!(record["platform"]["key"].as_str().unwrap().contains("llvmpipe"), "{}", record["platform"]);
     let scene = &record["scenes"][0];
     assert_eq!(scene["status"], "ok");
-    assert_eq!(scene["ground_truth"], "reference-2x2");
+    let truth = &scene["truth"];
+    assert_eq!((truth["id"].as_str(), truth["samples_per_pixel"].as_u64()), (Some("truth-8x8"), Some(64)));
+    assert_eq!((truth["cached"].as_bool(), truth["error"].is_null()), (Some(false), true), "{truth}");
+    assert!(ws.run_dir().join(truth["image"].as_str().unwrap()).exists());
+    let cached: Vec<_> = std::fs::read_dir(ws.dir.join("scenes/cache/truth")).unwrap().collect();
+    assert_eq!(cached.len(), 1, "the truth is cached beside the manifest");
     assert_eq!(scene["resolution"], json!([64, 48]));
     for id in modes.split(',') {
         let m = mode(scene, id);
@@ -115,6 +52,11 @@ fn a_run_writes_its_record_and_images_and_exits_zero() {
     let deferred = mode(scene, "deferred-1x1");
     assert!(deferred["vs_ground_truth"]["psnr_db"].as_f64().unwrap() < 40.0, "the edge aliases at 1×1");
     assert_eq!(deferred["ratio_to_deferred"], 1.0);
+    let reference = mode(scene, "reference-2x2")["vs_ground_truth"]["psnr_db"].as_f64().unwrap();
+    assert!(
+        reference > deferred["vs_ground_truth"]["psnr_db"].as_f64().unwrap(),
+        "2×2 is nearer the 8×8 truth"
+    );
     let adaptive = mode(scene, "adaptive-2x2");
     assert_eq!(adaptive["vs_reference"]["against"], "reference-2x2");
     let samples = &adaptive["samples"];
@@ -177,6 +119,7 @@ fn bad_arguments_exit_two_before_any_work() {
         (vec!["run", "scenes/nope.json"], "no such file or folder"),
         (vec!["run", "--repetitions", "0"], "at least 1"),
         (vec!["run", "--frame-timeout", "0"], "positive number of seconds"),
+        (vec!["run", "--shard", "3/2"], "--shard 3/2: expected I/N"),
     ] {
         let output = ws.run(&args);
         assert_eq!(output.status.code(), Some(2), "{args:?}");

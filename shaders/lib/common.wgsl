@@ -14,6 +14,9 @@ struct Frame {
     background: vec4<f32>,
     // x: exposure, a linear scale before display encoding.
     display: vec4<f32>,
+    // The rendered tile of the frame: its NDC maps to the frame's as ndc * tile.xy + tile.zw
+    // ((1, 1, 0, 0) for the whole frame; the ground truth renders tile by tile).
+    tile: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;

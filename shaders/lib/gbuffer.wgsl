@@ -51,7 +51,8 @@ fn load_surface(texel: vec2<i32>) -> Surface {
 // World position of the sample at `texel` seen at view depth `depth`.
 fn world_position(texel: vec2<i32>, depth: f32) -> vec3<f32> {
     let size = vec2<f32>(textureDimensions(gb_uv));
-    let ndc = (vec2<f32>(texel) + 0.5) / size * vec2<f32>(2.0, -2.0) + vec2<f32>(-1.0, 1.0);
+    let tile_ndc = (vec2<f32>(texel) + 0.5) / size * vec2<f32>(2.0, -2.0) + vec2<f32>(-1.0, 1.0);
+    let ndc = tile_ndc * frame.tile.xy + frame.tile.zw;
     let view = vec3<f32>(ndc * frame.projection.xy, -1.0) * depth;
     return (frame.inv_view * vec4<f32>(view, 1.0)).xyz;
 }

@@ -3,7 +3,7 @@
 //! Matrices are built in f64 and rounded once to f32, so debug and release builds feed the GPU
 //! the same bits (LAVAPIPE.md: a constant-folded `tan` once differed by an ulp between them).
 
-use glam::{DMat4, DVec3, DVec4};
+use glam::{DMat4, DVec2, DVec3, DVec4};
 
 use super::Lighting;
 
@@ -72,13 +72,69 @@ pub struct FrameUniforms {
     pub background: [f32; 4],
     /// x: exposure.
     pub display: [f32; 4],
+    /// The rendered part of the frame: a tile's NDC maps to the whole frame's as
+    /// `ndc · tile.xy + tile.zw` (1, 1, 0, 0 for the whole frame; see [`Tile`]).
+    pub tile: [f32; 4],
+}
+
+/// A rectangle of the output image in pixels, rendered on its own: the ground truth renders
+/// its many samples per pixel tile by tile.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Tile {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Tile {
+    /// The whole `width` × `height` frame.
+    pub fn whole(width: u32, height: u32) -> Tile {
+        Tile { x: 0, y: 0, width, height }
+    }
+
+    /// (scale, offset) per axis that map the tile's NDC to the frame's: NDC x runs from −1 at
+    /// the left edge, y from +1 at the top.
+    fn ndc_window(&self, frame_width: u32, frame_height: u32) -> (DVec2, DVec2) {
+        let (w, h) = (f64::from(frame_width), f64::from(frame_height));
+        let (x0, x1) = (f64::from(self.x), f64::from(self.x + self.width));
+        let (y0, y1) = (f64::from(self.y), f64::from(self.y + self.height));
+        let scale = DVec2::new((x1 - x0) / w, (y1 - y0) / h);
+        let offset = DVec2::new((x0 + x1) / w - 1.0, 1.0 - (y0 + y1) / h);
+        (scale, offset)
+    }
+
+    /// Clip space of the whole frame to the tile's: x' = (x − offset·w) / scale, same for y.
+    fn clip_to_tile(scale: DVec2, offset: DVec2) -> DMat4 {
+        DMat4::from_cols(
+            DVec4::new(1.0 / scale.x, 0.0, 0.0, 0.0),
+            DVec4::new(0.0, 1.0 / scale.y, 0.0, 0.0),
+            DVec4::Z,
+            DVec4::new(-offset.x / scale.x, -offset.y / scale.y, 0.0, 1.0),
+        )
+    }
 }
 
 impl FrameUniforms {
+    /// The uniforms of a whole `width` × `height` frame.
     pub fn new(camera: &Camera, lighting: &Lighting, width: u32, height: u32) -> FrameUniforms {
+        Self::for_tile(camera, lighting, width, height, Tile::whole(width, height))
+    }
+
+    /// The uniforms that render only `tile` of a `width` × `height` frame, into a target of
+    /// the tile's size. For the whole frame the tile transform is the identity, so the bits
+    /// are those of [`Self::new`].
+    pub fn for_tile(
+        camera: &Camera,
+        lighting: &Lighting,
+        width: u32,
+        height: u32,
+        tile: Tile,
+    ) -> FrameUniforms {
         let aspect = f64::from(width) / f64::from(height);
         let view = camera.view();
-        let view_proj = camera.projection(aspect) * view;
+        let (scale, offset) = tile.ndc_window(width, height);
+        let view_proj = Tile::clip_to_tile(scale, offset) * camera.projection(aspect) * view;
         let tan_y = (camera.fov_y * 0.5).tan();
         let cast = |m: DMat4| m.as_mat4().to_cols_array_2d();
         FrameUniforms {
@@ -90,6 +146,7 @@ impl FrameUniforms {
             ambient: lighting.ambient.extend(0.0).to_array(),
             background: lighting.background.extend(0.0).to_array(),
             display: [lighting.exposure, 0.0, 0.0, 0.0],
+            tile: [scale.x as f32, scale.y as f32, offset.x as f32, offset.y as f32],
         }
     }
 }
@@ -108,6 +165,41 @@ mod tests {
         assert!((clip(-0.5) - 1.0).abs() < 1e-12);
         assert!(clip(-80.0).abs() < 1e-12);
         assert!(clip(-10.0) > clip(-20.0));
+    }
+
+    #[test]
+    fn a_tile_sees_its_part_of_the_frame() {
+        let camera = Camera::look_at(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO, 50.0);
+        let lighting = Lighting {
+            lights: Vec::new(),
+            ambient: glam::Vec3::ZERO,
+            background: glam::Vec3::ZERO,
+            exposure: 1.0,
+        };
+        let whole = FrameUniforms::new(&camera, &lighting, 64, 48);
+        let same = FrameUniforms::for_tile(&camera, &lighting, 64, 48, Tile::whole(64, 48));
+        assert_eq!(whole, same, "the whole frame as a tile is bit-identical");
+        assert_eq!(whole.tile, [1.0, 1.0, 0.0, 0.0]);
+
+        // A point at pixel (40.5, 30.5) of the frame lands at (40.5 − 32, 30.5 − 24) of the
+        // tile that starts at (32, 24), and the tile's NDC maps back through `tile`.
+        let tile = Tile { x: 32, y: 24, width: 16, height: 12 };
+        let part = FrameUniforms::for_tile(&camera, &lighting, 64, 48, tile);
+        let project = |u: &FrameUniforms, p: DVec4| {
+            let m = glam::Mat4::from_cols_array_2d(&u.view_proj).as_dmat4();
+            let c = m * p;
+            DVec2::new(c.x / c.w, c.y / c.w)
+        };
+        let to_pixel =
+            |ndc: DVec2, w: f64, h: f64| DVec2::new((ndc.x + 1.0) * w / 2.0, (1.0 - ndc.y) * h / 2.0);
+        let point = DVec4::new(0.7, -0.4, 0.0, 1.0);
+        let in_frame = to_pixel(project(&whole, point), 64.0, 48.0);
+        let in_tile = to_pixel(project(&part, point), 16.0, 12.0);
+        assert!((in_tile - (in_frame - DVec2::new(32.0, 24.0))).length() < 1e-4, "{in_frame} {in_tile}");
+        let ndc_tile = project(&part, point);
+        let [sx, sy, ox, oy] = part.tile.map(f64::from);
+        let back = DVec2::new(ndc_tile.x * sx + ox, ndc_tile.y * sy + oy);
+        assert!((back - project(&whole, point)).length() < 1e-5);
     }
 
     #[test]

@@ -8,7 +8,7 @@ mod import;
 mod upload;
 pub mod write;
 
-pub use camera::{Camera, FrameUniforms};
+pub use camera::{Camera, FrameUniforms, Tile};
 pub use import::{load_gltf, read_generator};
 pub use upload::{GpuScene, MAX_LIGHTS};
 

@@ -42,6 +42,8 @@ pub struct GpuScene {
     pub(crate) indices: wgpu::Buffer,
     pub(crate) draws: Vec<(super::DrawClass, std::ops::Range<u32>)>,
     pub(crate) light_count: u32,
+    /// The `Frame` uniform block (group 0, binding 0).
+    pub(crate) frame: wgpu::Buffer,
     pub(crate) layout: wgpu::BindGroupLayout,
     pub(crate) group: wgpu::BindGroup,
     /// Bytes of the texture array, all mips included.
@@ -90,7 +92,12 @@ impl GpuScene {
         let indices = buffer("indices", bytemuck::cast_slice(&scene.indices), wgpu::BufferUsages::INDEX);
         let materials = buffer("materials", bytemuck::cast_slice(&materials), storage);
         let lights = buffer("lights", bytemuck::cast_slice(&lights), wgpu::BufferUsages::UNIFORM);
-        let uniforms = buffer("frame", bytemuck::bytes_of(frame), wgpu::BufferUsages::UNIFORM);
+        // Rewritten when the ground truth renders tile by tile.
+        let uniforms = buffer(
+            "frame",
+            bytemuck::bytes_of(frame),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
 
         let (array, texture_bytes) = upload_texture_array(device, queue, &scene.textures);
         let view = array.create_view(&wgpu::TextureViewDescriptor {
@@ -129,6 +136,7 @@ impl GpuScene {
             indices,
             draws: scene.draws.clone(),
             light_count: lighting.lights.len().min(MAX_LIGHTS) as u32,
+            frame: uniforms,
             layout,
             group,
             texture_bytes,

@@ -1,0 +1,185 @@
+//! What CI reads from a verdict: `summary.md` (a pull-request comment or
+//! `$GITHUB_STEP_SUMMARY`), `junit.xml` (one test case per scene × mode) and `verdict.json`.
+
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+use super::{Check, Outcome, Verdict};
+use crate::report::html::escape as xml;
+
+/// Writes summary.md, junit.xml and verdict.json into `dir`, each atomically.
+pub fn write_all(verdict: &Verdict, dir: &Path) -> Result<Vec<PathBuf>, String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let write = |name: &str, text: &str| -> Result<PathBuf, String> {
+        let path = dir.join(name);
+        aabench_renderer::scene::write::write_atomic(&path, text.as_bytes())
+            .map_err(|e| format!("{}: write: {e}", path.display()))?;
+        Ok(path)
+    };
+    let json = dir.join("verdict.json");
+    crate::json::write_atomic(&json, verdict)?;
+    Ok(vec![write("summary.md", &summary(verdict))?, write("junit.xml", &junit(verdict))?, json])
+}
+
+/// The one-line tally: `2 regressed · 1 improved · 140 unchanged`.
+pub fn tally(verdict: &Verdict) -> String {
+    let parts: Vec<String> = Outcome::ALL
+        .iter()
+        .filter_map(|outcome| verdict.counts.get(outcome).map(|n| format!("{n} {}", outcome.name())))
+        .collect();
+    if parts.is_empty() { "nothing compared".into() } else { parts.join(" · ") }
+}
+
+/// Markdown: the regressions first, then improvements, then what could not be decided, then
+/// one line counting what did not change.
+pub fn summary(verdict: &Verdict) -> String {
+    let mut out = String::new();
+    let headline = if verdict.regressed { "❌ regression" } else { "✅ no regression" };
+    let reported_only = verdict.checks.iter().filter(|c| c.outcome.fails() && !c.gated).count();
+    let headline = if reported_only > 0 && !verdict.regressed {
+        format!("{headline} ({reported_only} time regressions reported, not failed)")
+    } else {
+        headline.to_string()
+    };
+    let _ = writeln!(out, "## aabench gate: {headline}\n");
+    let _ = writeln!(out, "{}\n", tally(verdict));
+    let against = match (&verdict.baseline_dir, verdict.same_platform) {
+        (None, _) => "no baselines".to_string(),
+        (Some(dir), true) => format!("`{}` (same platform)", dir.display()),
+        (Some(dir), false) => format!("`{}` (**another platform**)", dir.display()),
+    };
+    let _ = writeln!(out, "Run `{}` ({} tier) against {against}.\n", verdict.run_id, verdict.tier);
+    for note in &verdict.notes {
+        let _ = writeln!(out, "- {note}");
+    }
+    if !verdict.notes.is_empty() {
+        out.push('\n');
+    }
+    for (outcome, title) in [
+        (Outcome::Regressed, "Regressed"),
+        (Outcome::Failed, "Failed"),
+        (Outcome::Improved, "Improved"),
+        (Outcome::Noisy, "Noisy (estimate past the threshold, interval not: not failed)"),
+        (Outcome::Missing, "Missing from the run"),
+        (Outcome::New, "New (no baseline)"),
+    ] {
+        let rows: Vec<&Check> = verdict.checks.iter().filter(|c| c.outcome == outcome).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let _ = writeln!(out, "### {title}\n");
+        let _ = writeln!(out, "| scene | mode | metric | detail |\n|---|---|---|---|");
+        for check in rows {
+            let _ = writeln!(
+                out,
+                "| {} | {} | {} | {} |",
+                check.scene,
+                check.mode,
+                check.metric,
+                check.detail.replace('|', "\\|")
+            );
+        }
+        out.push('\n');
+    }
+    let unchanged = verdict.counts.get(&Outcome::Unchanged).copied().unwrap_or(0);
+    let hashes = verdict.checks.iter().filter(|c| c.metric == "output_hash").count();
+    let hashes = if hashes > 0 {
+        format!(" ({hashes} of them an output hash that changed while every metric stayed within tolerance)")
+    } else {
+        String::new()
+    };
+    let _ = writeln!(out, "{unchanged} checks unchanged{hashes}.");
+    out
+}
+
+/// JUnit XML: a suite per scene, a test case per mode; regressed and failed checks are
+/// failures carrying their numbers, new and missing modes are skipped.
+pub fn junit(verdict: &Verdict) -> String {
+    let mut cases: Vec<(&str, &str, Vec<&Check>)> = Vec::new();
+    for check in &verdict.checks {
+        match cases.iter_mut().find(|(scene, mode, _)| *scene == check.scene && *mode == check.mode) {
+            Some((_, _, checks)) => checks.push(check),
+            None => cases.push((&check.scene, &check.mode, vec![check])),
+        }
+    }
+    let failing = |checks: &[&Check]| checks.iter().any(|c| c.fails());
+    let mut scenes: Vec<&str> = cases.iter().map(|(scene, _, _)| *scene).collect();
+    scenes.dedup();
+    let total_failures = cases.iter().filter(|(_, _, checks)| failing(checks)).count();
+    let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    let _ = writeln!(
+        out,
+        "<testsuites name=\"aabench {}\" tests=\"{}\" failures=\"{total_failures}\">",
+        xml(&verdict.run_id),
+        cases.len()
+    );
+    for scene in scenes {
+        let in_scene: Vec<_> = cases.iter().filter(|(s, _, _)| *s == scene).collect();
+        let failures = in_scene.iter().filter(|(_, _, checks)| failing(checks)).count();
+        let _ = writeln!(
+            out,
+            "  <testsuite name=\"{}\" tests=\"{}\" failures=\"{failures}\">",
+            xml(scene),
+            in_scene.len()
+        );
+        for (_, mode, checks) in in_scene {
+            let _ = write!(out, "    <testcase classname=\"aabench.{}\" name=\"{}\"", xml(scene), xml(mode));
+            let bad: Vec<&&Check> = checks.iter().filter(|c| c.fails()).collect();
+            let skipped = checks.iter().find(|c| matches!(c.outcome, Outcome::New | Outcome::Missing));
+            if let Some(first) = bad.first() {
+                let _ = writeln!(
+                    out,
+                    ">\n      <failure type=\"{}\" message=\"{}: {}\">",
+                    first.outcome.name(),
+                    xml(&first.metric),
+                    xml(&first.detail)
+                );
+                for check in &bad {
+                    let _ = writeln!(
+                        out,
+                        "{} {}: {}",
+                        check.outcome.name(),
+                        xml(&check.metric),
+                        xml(&check.detail)
+                    );
+                }
+                let _ = writeln!(out, "      </failure>\n    </testcase>");
+            } else if let Some(check) = skipped {
+                let _ = writeln!(
+                    out,
+                    ">\n      <skipped message=\"{}: {}\"/>\n    </testcase>",
+                    check.outcome.name(),
+                    xml(&check.detail)
+                );
+            } else {
+                let noisy: Vec<String> = checks
+                    .iter()
+                    .filter(|c| c.outcome != Outcome::Unchanged)
+                    .map(|c| format!("{} {}: {}", c.outcome.name(), c.metric, c.detail))
+                    .collect();
+                if noisy.is_empty() {
+                    out.push_str("/>\n");
+                } else {
+                    let _ = writeln!(
+                        out,
+                        ">\n      <system-out>{}</system-out>\n    </testcase>",
+                        xml(&noisy.join("\n"))
+                    );
+                }
+            }
+        }
+        out.push_str("  </testsuite>\n");
+    }
+    out.push_str("</testsuites>\n");
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn markup_is_escaped() {
+        assert_eq!(xml("a<b & \"c\">'d'"), "a&lt;b &amp; &quot;c&quot;&gt;&apos;d&apos;");
+    }
+}

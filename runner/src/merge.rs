@@ -1,0 +1,110 @@
+//! `aabench merge`: joins the shard runs of one suite (`aabench run --shard I/N`, run on N
+//! machines) into one run, with its images, that `compare` and `report` take like any other.
+
+use std::path::{Path, PathBuf};
+
+use crate::record::{RUN_SCHEMA, RunRecord, Status};
+
+/// Merges `shards` (each a record and its folder) into `out`, a new or empty folder: images
+/// copied, run.json written last, so a merge that fails midway leaves no run. The shards must
+/// be the N slices of one run: same tier, settings, platform and aabench version, every index
+/// from 1 to N once, no scene twice. Nothing is written when they are not.
+pub fn merge(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecord, String> {
+    let merged = merged_record(shards, out)?;
+    if std::fs::read_dir(out).is_ok_and(|mut entries| entries.next().is_some()) {
+        return Err(format!("{}: is not empty; merge into a new folder", out.display()));
+    }
+    for (shard, dir) in shards {
+        for scene in shard.scenes.iter().filter(|scene| !scene.modes.is_empty() || scene.truth.is_some()) {
+            copy_folder(&dir.join(&scene.name), &out.join(&scene.name))?;
+        }
+    }
+    crate::json::write_atomic(&out.join("run.json"), &merged)?;
+    Ok(merged)
+}
+
+/// The merged record, or why the shards do not belong together.
+fn merged_record(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecord, String> {
+    let name = |dir: &PathBuf| dir.join("run.json").display().to_string();
+    let (first, first_dir) = shards.first().ok_or("no runs to merge")?;
+    let count =
+        first.shard.ok_or_else(|| format!("{}: not a shard run (no `shard`)", name(first_dir)))?.count;
+    let mut seen = vec![false; count as usize];
+    for (run, dir) in shards {
+        let differs = |what: &str| format!("{}: its {what} differs from {}'s", name(dir), name(first_dir));
+        let shard = run.shard.ok_or_else(|| format!("{}: not a shard run (no `shard`)", name(dir)))?;
+        if shard.index == 0 || shard.index > shard.count {
+            return Err(format!("{}: shard {}/{} is not a shard index", name(dir), shard.index, shard.count));
+        }
+        if shard.count != count {
+            return Err(format!(
+                "{}: a shard of {}, {} is a shard of {count}",
+                name(dir),
+                shard.count,
+                name(first_dir)
+            ));
+        }
+        if std::mem::replace(&mut seen[shard.index as usize - 1], true) {
+            return Err(format!("{}: shard {}/{count} is given twice", name(dir), shard.index));
+        }
+        if run.tier != first.tier {
+            return Err(differs("tier"));
+        }
+        if run.settings != first.settings {
+            return Err(differs("settings (modes, repetitions, warm-up or extra samples)"));
+        }
+        if run.platform.key != first.platform.key {
+            return Err(differs("platform key"));
+        }
+        if run.aabench_version != first.aabench_version {
+            return Err(differs("aabench version"));
+        }
+    }
+    let missing: Vec<String> =
+        seen.iter().enumerate().filter(|(_, s)| !**s).map(|(i, _)| format!("{}/{count}", i + 1)).collect();
+    if !missing.is_empty() {
+        return Err(format!("shards {} are missing", missing.join(", ")));
+    }
+    let mut scenes: Vec<_> = shards.iter().flat_map(|(run, _)| run.scenes.iter().cloned()).collect();
+    scenes.sort_by(|a, b| a.manifest.cmp(&b.manifest));
+    let mut names = std::collections::HashSet::new();
+    if let Some(twice) = scenes.iter().find(|scene| !names.insert(scene.name.as_str())) {
+        return Err(format!("scene `{}` is in more than one shard", twice.name));
+    }
+    let statuses: Vec<Status> = shards.iter().map(|(run, _)| run.status).collect();
+    let status = [Status::Running, Status::Interrupted, Status::Failed]
+        .into_iter()
+        .find(|worst| statuses.contains(worst))
+        .unwrap_or(Status::Ok);
+    let finished: Option<Vec<&String>> = shards.iter().map(|(run, _)| run.finished_at.as_ref()).collect();
+    Ok(RunRecord {
+        schema: RUN_SCHEMA.into(),
+        run_id: out.file_name().map_or_else(|| "merged".into(), |n| n.to_string_lossy().into_owned()),
+        started_at: shards.iter().map(|(run, _)| run.started_at.clone()).min().unwrap_or_default(),
+        finished_at: finished.and_then(|times| times.into_iter().max().cloned()),
+        status,
+        tier: first.tier,
+        aabench_version: first.aabench_version.clone(),
+        platform: first.platform.clone(),
+        settings: first.settings.clone(),
+        shard: None,
+        merged_from: shards.iter().map(|(run, _)| run.run_id.clone()).collect(),
+        scenes,
+    })
+}
+
+/// Copies the files of one folder (a scene's images) into another.
+fn copy_folder(from: &Path, to: &Path) -> Result<(), String> {
+    let entries =
+        std::fs::read_dir(from).map_err(|e| format!("{}: {e} (the shard's images)", from.display()))?;
+    std::fs::create_dir_all(to).map_err(|e| format!("{}: {e}", to.display()))?;
+    for entry in entries.filter_map(Result::ok) {
+        let path = entry.path();
+        if path.is_file() {
+            let target = to.join(entry.file_name());
+            std::fs::copy(&path, &target)
+                .map_err(|e| format!("{} → {}: {e}", path.display(), target.display()))?;
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,524 @@
+//! `aabench report`: a static, self-contained `index.html` beside a run's run.json. It opens
+//! from disk with no server and loads nothing from the network: CSS inline, plots as inline
+//! SVG (drawn with plotters), images by relative paths into the run folder.
+
+pub mod html;
+pub mod plots;
+
+use std::collections::BTreeMap;
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+use html::escape;
+use plots::{Kind, Point, Series};
+
+use crate::compare::{Check, Outcome, Verdict};
+use crate::record::{ModeRecord, RunRecord, SceneRecord};
+use crate::truth::TRUTH_ID;
+
+/// Side of the square crop around the largest error, in pixels (smaller images: their side).
+const CROP: u32 = 64;
+/// How much the zoomed crop enlarges it.
+const ZOOM: u32 = 4;
+
+/// Writes `<run_dir>/index.html` (and its crops under `<run_dir>/report/`). `history` holds
+/// earlier runs of the same tier, any order; the run itself is added when missing.
+pub fn write(
+    run_dir: &Path,
+    run: &RunRecord,
+    verdict: Option<&Verdict>,
+    history: &[RunRecord],
+) -> Result<PathBuf, String> {
+    let mut page = String::new();
+    head(&mut page, run);
+    summary(&mut page, run, verdict);
+    let history = history_runs(run, history);
+    for scene in &run.scenes {
+        scene_section(&mut page, run_dir, scene, verdict, &history)?;
+    }
+    page.push_str(
+        "<footer>Written by <code>aabench report</code>. Times are wall-clock medians of interleaved \
+         repetitions with order-statistic intervals; PSNR has peak 1 (add 48.13 dB for the paper's \
+         peak-255 convention); the truth is the reference at 8×8 samples per pixel.</footer>\n</body>\n</html>\n",
+    );
+    let path = run_dir.join("index.html");
+    aabench_renderer::scene::write::write_atomic(&path, page.as_bytes())
+        .map_err(|e| format!("{}: write: {e}", path.display()))?;
+    Ok(path)
+}
+
+fn head(page: &mut String, run: &RunRecord) {
+    let _ = write!(
+        page,
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
+         <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n\
+         <title>aabench {}</title>\n<style>\n{}</style>\n</head>\n<body>\n",
+        escape(&run.run_id),
+        html::STYLE
+    );
+}
+
+fn summary(page: &mut String, run: &RunRecord, verdict: Option<&Verdict>) {
+    let p = &run.platform;
+    let _ = writeln!(page, "<h1>aabench run <code>{}</code></h1>", escape(&run.run_id));
+    let _ = writeln!(
+        page,
+        "<p class=\"meta\">{} tier · status <b>{}</b> · started {} · finished {}<br>{} · {} · {} ({} cores) · \
+         LP_NUM_THREADS={} · {} build<br>platform key <code>{}</code><br>{} repetitions after {} warm-up round(s), \
+         {}; extra samples: {}{}</p>",
+        run.tier.name(),
+        format!("{:?}", run.status).to_lowercase(),
+        escape(&run.started_at),
+        escape(run.finished_at.as_deref().unwrap_or("–")),
+        escape(&p.adapter),
+        escape(&p.driver_info),
+        escape(&p.cpu_model),
+        p.cpu_cores,
+        escape(p.lp_num_threads.as_deref().unwrap_or("auto")),
+        escape(&p.build_profile),
+        escape(&p.key),
+        run.settings.repetitions,
+        run.settings.warmup,
+        escape(&run.settings.interleaving),
+        escape(&run.settings.extra_samples),
+        match (&run.shard, run.merged_from.is_empty()) {
+            (Some(shard), _) => format!("<br>shard {} of {}", shard.index, shard.count),
+            (None, false) => format!("<br>merged from {}", escape(&run.merged_from.join(", "))),
+            (None, true) => String::new(),
+        }
+    );
+    if let Some(verdict) = verdict {
+        let class = if verdict.regressed { "bad" } else { "good" };
+        let _ = writeln!(
+            page,
+            "<p class=\"verdict {class}\">Gate: <b>{}</b> — {}{}</p>",
+            if verdict.regressed { "regression" } else { "no regression" },
+            escape(&crate::compare::outputs::tally(verdict)),
+            verdict.notes.iter().map(|n| format!("<br>{}", escape(n))).collect::<String>()
+        );
+    }
+    page.push_str("<nav>");
+    for scene in &run.scenes {
+        let _ = write!(page, "<a href=\"#{0}\">{0}</a> ", escape(&scene.name));
+    }
+    page.push_str("</nav>\n");
+}
+
+fn scene_section(
+    page: &mut String,
+    run_dir: &Path,
+    scene: &SceneRecord,
+    verdict: Option<&Verdict>,
+    history: &[&RunRecord],
+) -> Result<(), String> {
+    let _ = writeln!(page, "<section id=\"{0}\">\n<h2>{0}</h2>", escape(&scene.name));
+    let resolution = scene.resolution.map_or("?".into(), |[w, h]| format!("{w}×{h}"));
+    let truth = scene.truth.as_ref().map_or("none".into(), |t| match (&t.error, t.cached) {
+        (Some(error), _) => format!("failed: {}", escape(error)),
+        (None, true) => format!("{} from the cache", t.id),
+        (None, false) => format!(
+            "{} rendered in {:.1} s in {} tile(s), peak memory {}",
+            t.id,
+            t.render_s.unwrap_or(0.0),
+            t.tiles.unwrap_or(0),
+            t.peak_rss_bytes.map_or("?".into(), |b| format!("{:.0} MiB", b as f64 / 1048576.0))
+        ),
+    });
+    let _ = writeln!(
+        page,
+        "<p class=\"meta\">{resolution} · {} triangles · {} textures · status <b>{}</b>{} · ground truth: {truth}</p>",
+        scene.triangles.unwrap_or(0),
+        scene.textures.unwrap_or(0),
+        format!("{:?}", scene.status).to_lowercase(),
+        scene.error.as_ref().map_or(String::new(), |e| format!(" — {}", escape(e)))
+    );
+    let checks: Vec<&Check> =
+        verdict.map_or_else(Vec::new, |v| v.checks.iter().filter(|c| c.scene == scene.name).collect());
+    mode_table(page, scene, &checks);
+    let points = error_points(scene);
+    if points.is_empty() {
+        page.push_str("<p>No mode has an error against the truth to plot.</p>\n");
+    } else {
+        let title = format!("{}: error against run time", scene.name);
+        let _ =
+            writeln!(page, "<figure class=\"plot\">{}</figure>", plots::error_against_time(&title, &points)?);
+    }
+    verdict_table(page, &checks);
+    images(page, run_dir, scene)?;
+    history_plots(page, scene, history)?;
+    page.push_str("</section>\n");
+    Ok(())
+}
+
+/// The worst outcome among a mode's checks, with every non-unchanged detail as a tooltip.
+fn mode_outcome(checks: &[&Check], mode: &str) -> Option<(Outcome, String)> {
+    let of_mode: Vec<&&Check> = checks.iter().filter(|c| c.mode == mode).collect();
+    let worst = of_mode.iter().map(|c| c.outcome).min()?;
+    let details: Vec<String> = of_mode
+        .iter()
+        .filter(|c| c.outcome != Outcome::Unchanged)
+        .map(|c| format!("{} {}: {}", c.outcome.name(), c.metric, c.detail))
+        .collect();
+    Some((worst, details.join("\n")))
+}
+
+fn mode_table(page: &mut String, scene: &SceneRecord, checks: &[&Check]) {
+    let gate = if checks.is_empty() { "" } else { "<th>gate</th>" };
+    let _ = writeln!(
+        page,
+        "<table><thead><tr><th>mode</th><th>frame ms</th><th>interval ms</th><th>×1x1</th><th>samples %</th>\
+         <th>MSE ×1e-5 vs truth</th><th>PSNR vs ref</th><th>PSNR vs truth</th><th>speed-up vs ref</th>\
+         <th>efficiency</th>{gate}</tr></thead><tbody>"
+    );
+    let db = |q: &Option<crate::metrics::Quality>| {
+        q.as_ref().map_or("–".into(), |q| {
+            let v = q.psnr_db.value();
+            if v.is_finite() { format!("{v:.2}") } else { "∞".into() }
+        })
+    };
+    for mode in &scene.modes {
+        let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
+        let frame = mode.frame_ms.as_ref();
+        let _ = write!(
+            page,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+            escape(&mode.mode),
+            cell(frame.map(|f| format!("{:.1}", f.median))),
+            cell(frame.map(|f| format!("{:.1}–{:.1}", f.ci_low, f.ci_high))),
+            cell(mode.ratio_to_deferred.map(|r| format!("{r:.2}"))),
+            cell(mode.samples.as_ref().map(|s| format!("{:.1}", s.shaded_percent))),
+            cell(mode.vs_ground_truth.as_ref().map(|q| format!("{:.3}", q.mse_e5))),
+            db(&mode.vs_reference),
+            db(&mode.vs_ground_truth),
+            cell(mode.adaptive.as_ref().map(|a| format!("{:.2}×", a.speedup))),
+            cell(mode.adaptive.as_ref().map(|a| format!("{:.2}", a.efficiency))),
+        );
+        if !checks.is_empty() {
+            match mode_outcome(checks, &mode.mode) {
+                Some((outcome, details)) => {
+                    let _ = write!(
+                        page,
+                        "<td class=\"{0}\" title=\"{1}\">{0}</td>",
+                        outcome.name(),
+                        escape(&details)
+                    );
+                }
+                None => page.push_str("<td>–</td>"),
+            }
+        }
+        if let Some(error) = &mode.error {
+            let _ = write!(page, "<td class=\"failed\">{}</td>", escape(error));
+        }
+        page.push_str("</tr>\n");
+    }
+    page.push_str("</tbody></table>\n");
+}
+
+fn verdict_table(page: &mut String, checks: &[&Check]) {
+    let notable: Vec<&&Check> = checks.iter().filter(|c| c.outcome != Outcome::Unchanged).collect();
+    if notable.is_empty() {
+        return;
+    }
+    if notable.iter().all(|c| c.outcome == Outcome::New && c.metric == "status")
+        && notable.len() == checks.len()
+    {
+        page.push_str("<p class=\"meta\">Gate: no baseline for this scene; every mode is new.</p>\n");
+        return;
+    }
+    page.push_str("<h3>Gate</h3>\n<table><thead><tr><th>mode</th><th>metric</th><th>outcome</th><th>detail</th></tr></thead><tbody>\n");
+    let mut sorted = notable;
+    sorted.sort_by_key(|c| c.outcome);
+    for check in sorted {
+        let _ = writeln!(
+            page,
+            "<tr><td>{}</td><td>{}</td><td class=\"{2}\">{2}</td><td>{3}</td></tr>",
+            escape(&check.mode),
+            escape(&check.metric),
+            check.outcome.name(),
+            escape(&check.detail)
+        );
+    }
+    page.push_str("</tbody></table>\n");
+}
+
+/// The modes with an error against the truth and a frame time.
+fn error_points(scene: &SceneRecord) -> Vec<Point> {
+    scene
+        .modes
+        .iter()
+        .filter_map(|mode| {
+            let frame = mode.frame_ms.as_ref()?;
+            let error = mode.vs_ground_truth.as_ref()?.mse_e5;
+            let kind = match mode.mode.split('-').next()? {
+                "deferred" => Kind::Deferred,
+                "reference" => Kind::Reference,
+                _ => Kind::Adaptive,
+            };
+            (error > 0.0).then(|| Point {
+                label: short_label(&mode.mode),
+                kind,
+                stalled: mode.stalled,
+                time: frame.median,
+                time_low: frame.ci_low,
+                time_high: frame.ci_high,
+                error,
+            })
+        })
+        .collect()
+}
+
+/// `adaptive-3x3-geometry-stalled` → `ada 3×3 geometry`: the series says whether it is stalled.
+fn short_label(mode: &str) -> String {
+    let mut parts: Vec<String> = mode.split('-').filter(|p| *p != "stalled").map(str::to_owned).collect();
+    if let Some(first) = parts.first_mut() {
+        *first = match first.as_str() {
+            "deferred" => "1×1".into(),
+            "reference" => "ref".into(),
+            "adaptive" => "ada".into(),
+            other => other.into(),
+        };
+    }
+    if parts.first().is_some_and(|p| p == "1×1") {
+        return "1×1".into();
+    }
+    parts.iter().map(|p| p.replace('x', "×")).collect::<Vec<_>>().join(" ")
+}
+
+/// The truth, deferred-1x1, and per M: reference, adaptive, difference and sample counts,
+/// then 1:1 crops around adaptive's largest error against the truth.
+fn images(page: &mut String, run_dir: &Path, scene: &SceneRecord) -> Result<(), String> {
+    let figure = |page: &mut String, src: &str, caption: &str| {
+        let _ = write!(
+            page,
+            "<figure><img src=\"{}\" alt=\"{1}\" loading=\"lazy\"><figcaption>{1}</figcaption></figure>",
+            escape(src),
+            escape(caption)
+        );
+    };
+    page.push_str("<h3>Images</h3>\n<div class=\"row\">");
+    if let Some(image) = scene.truth.as_ref().and_then(|t| t.image.as_deref()) {
+        figure(page, image, TRUTH_ID);
+    }
+    if let Some(image) = scene.mode("deferred-1x1").and_then(|m| m.images.display.as_deref()) {
+        figure(page, image, "deferred-1x1");
+    }
+    page.push_str("</div>\n");
+    for m in 2..=4 {
+        let pick = |technique: &str| {
+            let plain = format!("{technique}-{m}x{m}");
+            scene.mode(&plain).or_else(|| scene.mode(&format!("{plain}-stalled")))
+        };
+        let (reference, adaptive) = (pick("reference"), pick("adaptive"));
+        if reference.is_none() && adaptive.is_none() {
+            continue;
+        }
+        page.push_str("<div class=\"row\">");
+        for mode in [reference, adaptive].into_iter().flatten() {
+            if let Some(image) = &mode.images.display {
+                figure(page, image, &mode.mode);
+            }
+        }
+        if let Some(mode) = adaptive {
+            if let Some(image) = &mode.images.difference {
+                figure(page, image, &format!("|{} − reference| (32 steps full scale)", mode.mode));
+            }
+            if let Some(image) = &mode.images.samples {
+                figure(
+                    page,
+                    image,
+                    &format!("{}: samples per pixel, 1 (dark) to {} (red)", mode.mode, m * m),
+                );
+            }
+        }
+        page.push_str("</div>\n");
+        if let Some(adaptive) = adaptive {
+            crops(page, run_dir, scene, m, [reference, Some(adaptive)])?;
+        }
+    }
+    Ok(())
+}
+
+/// 1:1 and zoomed crops of the truth and the modes at the window where `modes[1]` (adaptive)
+/// is furthest from the truth.
+fn crops(
+    page: &mut String,
+    run_dir: &Path,
+    scene: &SceneRecord,
+    m: u32,
+    modes: [Option<&ModeRecord>; 2],
+) -> Result<(), String> {
+    let Some(truth_file) = scene.truth.as_ref().and_then(|t| t.image.clone()) else { return Ok(()) };
+    let Some(adaptive_file) = modes[1].and_then(|mode| mode.images.display.clone()) else { return Ok(()) };
+    let open = |relative: &str| {
+        image::open(run_dir.join(relative))
+            .map(|i| i.to_rgba8())
+            .map_err(|e| format!("{}: {e}", run_dir.join(relative).display()))
+    };
+    let (truth, adaptive) = (open(&truth_file)?, open(&adaptive_file)?);
+    if truth.dimensions() != adaptive.dimensions() {
+        return Ok(());
+    }
+    let side = CROP.min(truth.width()).min(truth.height());
+    let (x, y) = worst_window(&truth, &adaptive, side);
+    let mut sources: Vec<(String, String)> = vec![(TRUTH_ID.into(), truth_file)];
+    sources.extend(
+        modes
+            .into_iter()
+            .flatten()
+            .filter_map(|mode| Some((mode.mode.clone(), mode.images.display.clone()?))),
+    );
+    let folder = Path::new("report").join(&scene.name);
+    std::fs::create_dir_all(run_dir.join(&folder))
+        .map_err(|e| format!("{}: {e}", run_dir.join(&folder).display()))?;
+    let _ = write!(
+        page,
+        "<p class=\"meta\">Crops at ({x}, {y}), {side}×{side}: where {} differs most from the truth (1:1, then ×{ZOOM}).</p>\n<div class=\"row crops\">",
+        escape(&modes[1].map_or(String::new(), |m| m.mode.clone()))
+    );
+    for (name, file) in sources {
+        let image = open(&file)?;
+        let crop = image::imageops::crop_imm(&image, x, y, side, side).to_image();
+        let relative = folder.join(format!("crop-{m}x{m}-{name}.png"));
+        crate::images::write_png(&run_dir.join(&relative), side, side, crop.as_raw())
+            .map_err(|e| format!("{e:#}"))?;
+        let src = relative.to_string_lossy().replace('\\', "/");
+        let _ = write!(
+            page,
+            "<figure><img src=\"{0}\" width=\"{side}\" height=\"{side}\" alt=\"{1} crop\">\
+             <img class=\"zoom\" src=\"{0}\" width=\"{2}\" height=\"{2}\" alt=\"{1} crop ×{ZOOM}\"><figcaption>{1}</figcaption></figure>",
+            escape(&src),
+            escape(&name),
+            side * ZOOM
+        );
+    }
+    page.push_str("</div>\n");
+    Ok(())
+}
+
+/// The top-left corner of the `side`×`side` window with the largest squared difference
+/// between two images of one size (a summed-area table makes every window O(1)).
+pub fn worst_window(a: &image::RgbaImage, b: &image::RgbaImage, side: u32) -> (u32, u32) {
+    let (w, h) = (a.width() as usize, a.height() as usize);
+    let side = side as usize;
+    let mut sums = vec![0f64; (w + 1) * (h + 1)];
+    for y in 0..h {
+        for x in 0..w {
+            let (p, q) = (a.get_pixel(x as u32, y as u32), b.get_pixel(x as u32, y as u32));
+            let error: f64 = (0..3).map(|c| (f64::from(p[c]) - f64::from(q[c])).powi(2)).sum();
+            sums[(y + 1) * (w + 1) + x + 1] =
+                error + sums[y * (w + 1) + x + 1] + sums[(y + 1) * (w + 1) + x] - sums[y * (w + 1) + x];
+        }
+    }
+    let window = |x: usize, y: usize| {
+        let at = |x: usize, y: usize| sums[y * (w + 1) + x];
+        at(x + side, y + side) - at(x, y + side) - at(x + side, y) + at(x, y)
+    };
+    let mut best = (0, 0, f64::NEG_INFINITY);
+    for y in 0..=h - side {
+        for x in 0..=w - side {
+            let error = window(x, y);
+            if error > best.2 {
+                best = (x, y, error);
+            }
+        }
+    }
+    (best.0 as u32, best.1 as u32)
+}
+
+/// The history to plot: runs of the run's tier, oldest first, the run itself included once.
+fn history_runs<'a>(run: &'a RunRecord, history: &'a [RunRecord]) -> Vec<&'a RunRecord> {
+    if history.is_empty() {
+        return Vec::new();
+    }
+    let mut runs: BTreeMap<(&str, &str), &RunRecord> = history
+        .iter()
+        .filter(|r| r.tier == run.tier)
+        .map(|r| ((r.started_at.as_str(), r.run_id.as_str()), r))
+        .collect();
+    runs.insert((run.started_at.as_str(), run.run_id.as_str()), run);
+    runs.into_values().collect()
+}
+
+fn history_plots(page: &mut String, scene: &SceneRecord, history: &[&RunRecord]) -> Result<(), String> {
+    if history.len() < 2 {
+        return Ok(());
+    }
+    let labels: Vec<String> =
+        history.iter().map(|r| r.run_id.get(4..13).unwrap_or(&r.run_id).to_string()).collect();
+    let mode_of = |run: &RunRecord, id: &str| -> Option<ModeRecord> {
+        run.scenes.iter().find(|s| s.name == scene.name)?.mode(id).cloned()
+    };
+    let series = |ids: &[String], value: &dyn Fn(&ModeRecord) -> Option<f64>| -> Vec<Series> {
+        ids.iter()
+            .map(|id| Series {
+                name: id.clone(),
+                values: history.iter().map(|run| mode_of(run, id).as_ref().and_then(value)).collect(),
+            })
+            .filter(|s| s.values.iter().any(Option::is_some))
+            .collect()
+    };
+    let adaptive: Vec<String> =
+        (2..=4).flat_map(|m| [format!("adaptive-{m}x{m}"), format!("adaptive-{m}x{m}-stalled")]).collect();
+    let timed: Vec<String> =
+        ["deferred-1x1", "reference-4x4", "adaptive-4x4", "reference-4x4-stalled", "adaptive-4x4-stalled"]
+            .map(String::from)
+            .to_vec();
+    let charts = [
+        (
+            "speed-up over the same-M reference",
+            "×",
+            series(&adaptive, &|m| m.adaptive.as_ref().map(|a| a.speedup)),
+        ),
+        (
+            "PSNR against the truth",
+            "dB",
+            series(&adaptive[..].iter().step_by(2).cloned().collect::<Vec<_>>(), &|m| {
+                m.vs_ground_truth.as_ref().map(|q| q.psnr_db.value()).filter(|v| v.is_finite())
+            }),
+        ),
+        (
+            "frame time (absolute: drifts between processes)",
+            "ms",
+            series(&timed, &|m| m.frame_ms.as_ref().map(|f| f.median)),
+        ),
+    ];
+    let _ = writeln!(page, "<h3>History ({} runs)</h3>\n<div class=\"row\">", history.len());
+    for (title, unit, lines) in charts {
+        if lines.is_empty() {
+            continue;
+        }
+        let _ = write!(
+            page,
+            "<figure class=\"plot\">{}</figure>",
+            plots::history(&format!("{}: {title}", scene.name), unit, &labels, &lines)?
+        );
+    }
+    page.push_str("</div>\n");
+    Ok(())
+}
+
+/// Reads the runs of a history folder: `*.json` run records in it, and `*/run.json`. Files
+/// that do not read as runs of this schema (older aabench versions, strays) are skipped with a
+/// warning each, so one bad file does not stop the nightly report.
+pub fn load_history(dir: &Path) -> Result<(Vec<RunRecord>, Vec<String>), String> {
+    let entries = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|entry| entry.ok().map(|e| e.path()))
+        .filter_map(|path| {
+            if path.is_dir() {
+                Some(path.join("run.json")).filter(|p| p.is_file())
+            } else {
+                path.extension().is_some_and(|ext| ext == "json").then_some(path)
+            }
+        })
+        .collect();
+    files.sort();
+    let (mut runs, mut skipped) = (Vec::new(), Vec::new());
+    for file in files {
+        match crate::record::load_run(&file) {
+            Ok((run, _)) => runs.push(run),
+            Err(message) => skipped.push(format!("history: skipped {message}")),
+        }
+    }
+    Ok((runs, skipped))
+}

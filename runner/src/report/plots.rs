@@ -1,0 +1,270 @@
+//! The report's plots, drawn as SVG with plotters: error against run time per scene, and key
+//! metrics over past runs.
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+/// What kind of mode a point is: its marker shape.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    Deferred,
+    Reference,
+    Adaptive,
+}
+
+/// One mode on the error-against-time plot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Point {
+    pub label: String,
+    pub kind: Kind,
+    pub stalled: bool,
+    /// Frame time median and its interval, ms.
+    pub time: f64,
+    pub time_low: f64,
+    pub time_high: f64,
+    /// MSE against the truth, ×10⁻⁵.
+    pub error: f64,
+}
+
+/// The points no other point beats in both time and error, fastest first: the ones worth
+/// choosing between.
+pub fn pareto_front(points: &[&Point]) -> Vec<Point> {
+    let mut sorted: Vec<&Point> = points.to_vec();
+    sorted.sort_by(|a, b| a.time.total_cmp(&b.time).then(a.error.total_cmp(&b.error)));
+    let mut front: Vec<Point> = Vec::new();
+    for point in sorted {
+        if front.last().is_none_or(|best| point.error < best.error) {
+            front.push(point.clone());
+        }
+    }
+    front
+}
+
+type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+
+fn fail<E: std::fmt::Debug>(error: E) -> String {
+    format!("plot: {error:?}")
+}
+
+/// A log range around `values`, padded so markers and labels stay inside.
+fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
+    let (low, high) = values
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::INFINITY, 0.0f64), |(low, high), v| (low.min(v), high.max(v)));
+    if !low.is_finite() {
+        return 0.1..10.0;
+    }
+    low / 1.6..high * 1.6
+}
+
+/// Renders `draw` into an SVG string of `size` pixels.
+fn svg(size: (u32, u32), draw: impl FnOnce(&Area) -> Result<(), String>) -> Result<String, String> {
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
+        root.fill(&WHITE).map_err(fail)?;
+        draw(&root)?;
+        root.present().map_err(fail)?;
+    }
+    // Inline SVG in HTML needs no namespace, and a page that must load nothing from the network
+    // is easier to check without one.
+    Ok(text.replacen(" xmlns=\"http://www.w3.org/2000/svg\"", "", 1))
+}
+
+/// Three significant digits at most, no trailing zeros beyond them: 1000, 250, 12.5, 0.125.
+fn short_number(v: f64) -> String {
+    let digits = if v.abs() >= 100.0 {
+        0
+    } else if v.abs() >= 10.0 {
+        1
+    } else if v.abs() >= 1.0 {
+        2
+    } else {
+        3
+    };
+    format!("{v:.digits$}")
+}
+
+const UNSTALLED: RGBColor = RGBColor(31, 119, 180);
+const STALLED: RGBColor = RGBColor(214, 96, 39);
+
+/// Error against the truth over frame time, log-log: one point per mode with its time
+/// interval, stalled and unstalled as two series, each with its Pareto front dashed.
+pub fn error_against_time(title: &str, points: &[Point]) -> Result<String, String> {
+    svg((820, 520), |root| {
+        let x = log_range(points.iter().flat_map(|p| [p.time_low, p.time_high]));
+        let y = log_range(points.iter().map(|p| p.error));
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 18))
+            .margin(14)
+            .x_label_area_size(44)
+            .y_label_area_size(64)
+            .build_cartesian_2d(x.log_scale(), y.log_scale())
+            .map_err(fail)?;
+        chart
+            .configure_mesh()
+            .x_desc("frame time, ms (median and interval; log)")
+            .y_desc("MSE against the truth ×1e-5 (log)")
+            .x_label_formatter(&|v| short_number(*v))
+            .y_label_formatter(&|v| short_number(*v))
+            .light_line_style(WHITE.mix(0.0))
+            .draw()
+            .map_err(fail)?;
+        for (stalled, colour, name) in [(false, UNSTALLED, "unstalled"), (true, STALLED, "stalled")] {
+            let series: Vec<&Point> = points.iter().filter(|p| p.stalled == stalled).collect();
+            if series.is_empty() {
+                continue;
+            }
+            let style = ShapeStyle::from(&colour).filled();
+            chart
+                .draw_series(series.iter().map(|p| {
+                    ErrorBar::new_horizontal(
+                        p.error,
+                        p.time_low,
+                        p.time,
+                        p.time_high,
+                        colour.stroke_width(1),
+                        6,
+                    )
+                }))
+                .map_err(fail)?;
+            let front = pareto_front(&series);
+            chart
+                .draw_series(DashedLineSeries::new(
+                    front.iter().map(|p| (p.time, p.error)),
+                    6,
+                    4,
+                    colour.stroke_width(1),
+                ))
+                .map_err(fail)?
+                .label(format!("{name} (dashed: Pareto front)"))
+                .legend(move |(x, y)| Circle::new((x, y), 4, style));
+            for kind in [Kind::Deferred, Kind::Reference, Kind::Adaptive] {
+                let of_kind = series.iter().filter(|p| p.kind == kind);
+                chart
+                    .draw_series(of_kind.map(|p| {
+                        let at = EmptyElement::at((p.time, p.error));
+                        match kind {
+                            Kind::Deferred => at + Rectangle::new([(-4, -4), (4, 4)], style).into_dyn(),
+                            Kind::Reference => at + TriangleMarker::new((0, 0), 6, style).into_dyn(),
+                            Kind::Adaptive => at + Circle::new((0, 0), 4, style).into_dyn(),
+                        }
+                    }))
+                    .map_err(fail)?;
+            }
+            let font = ("sans-serif", 11).into_font().color(&colour);
+            chart
+                .draw_series(series.iter().map(|p| {
+                    EmptyElement::at((p.time, p.error)) + Text::new(p.label.clone(), (6, -13), font.clone())
+                }))
+                .map_err(fail)?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK.mix(0.4))
+            .draw()
+            .map_err(fail)
+    })
+}
+
+/// One line of a history plot: a value per run (`None` where a run lacks it).
+#[derive(Debug, Clone)]
+pub struct Series {
+    pub name: String,
+    pub values: Vec<Option<f64>>,
+}
+
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 96, 39),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(127, 127, 127),
+];
+
+/// A metric over past runs: x is the run (labelled by `runs`), one line per series.
+pub fn history(title: &str, y_label: &str, runs: &[String], series: &[Series]) -> Result<String, String> {
+    svg((760, 340), |root| {
+        let values = series.iter().flat_map(|s| s.values.iter().flatten().copied());
+        let (low, high) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+        let (low, high) = if low.is_finite() { (low, high) } else { (0.0, 1.0) };
+        let pad = ((high - low) * 0.1).max(high.abs() * 0.02).max(1e-6);
+        let last = runs.len().saturating_sub(1).max(1) as f64;
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 16))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(-0.2..last + 0.2, low - pad..high + pad)
+            .map_err(fail)?;
+        let label = |x: &f64| runs.get(x.round() as usize).cloned().unwrap_or_default();
+        chart
+            .configure_mesh()
+            .x_desc("run")
+            .y_desc(y_label)
+            .x_labels(runs.len().clamp(2, 8))
+            .x_label_formatter(&label)
+            .light_line_style(WHITE.mix(0.0))
+            .draw()
+            .map_err(fail)?;
+        for (line, colour) in series.iter().zip(PALETTE.iter().cycle()) {
+            let points: Vec<(f64, f64)> =
+                line.values.iter().enumerate().filter_map(|(i, v)| v.map(|v| (i as f64, v))).collect();
+            let style = ShapeStyle::from(colour).filled();
+            chart
+                .draw_series(LineSeries::new(points.iter().copied(), colour.stroke_width(2)))
+                .map_err(fail)?
+                .label(line.name.clone())
+                .legend(move |(x, y)| Circle::new((x, y), 4, style));
+            chart.draw_series(points.iter().map(|&p| Circle::new(p, 3, style))).map_err(fail)?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerLeft)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK.mix(0.4))
+            .draw()
+            .map_err(fail)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(label: &str, time: f64, error: f64) -> Point {
+        Point {
+            label: label.into(),
+            kind: Kind::Adaptive,
+            stalled: false,
+            time,
+            time_low: time * 0.9,
+            time_high: time * 1.1,
+            error,
+        }
+    }
+
+    #[test]
+    fn the_pareto_front_keeps_what_nothing_beats() {
+        let points =
+            [point("a", 10.0, 5.0), point("b", 20.0, 6.0), point("c", 30.0, 1.0), point("d", 5.0, 9.0)];
+        let refs: Vec<&Point> = points.iter().collect();
+        let front: Vec<String> = pareto_front(&refs).into_iter().map(|p| p.label).collect();
+        assert_eq!(front, ["d", "a", "c"]);
+    }
+
+    #[test]
+    fn plots_are_svg_with_their_labels_and_no_namespace_url() {
+        let points = [point("adaptive 2×2", 40.0, 2.0), point("reference 2×2", 60.0, 1.5)];
+        let text = error_against_time("thin", &points).unwrap();
+        assert!(text.starts_with("<svg"), "{}", &text[..40]);
+        assert!(text.contains("adaptive 2×2") && text.contains("reference 2×2"));
+        assert!(!text.contains("http"));
+        let series = [Series { name: "speed-up 2×2".into(), values: vec![Some(1.2), None, Some(1.4)] }];
+        let text = history("thin", "×", &["a".into(), "b".into(), "c".into()], &series).unwrap();
+        assert!(text.contains("speed-up 2×2"));
+    }
+}

@@ -1,0 +1,168 @@
+//! The ground truth every mode is measured against: the brute-force reference at 8×8 samples
+//! per pixel, more than any mode takes, with reference-MxM's shaders and texture-footprint rule.
+//! It is rendered untimed, tile by tile, and cached on disk under a key of everything that
+//! determines it, so a nightly run pays for it once per change of scene.
+
+use std::path::{Path, PathBuf};
+
+use aabench_renderer::{PlatformInfo, shaders};
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+use crate::images;
+use crate::inputs::{SceneInputs, hex};
+
+/// Samples per pixel side of the truth.
+pub const TRUTH_M: u32 = 8;
+/// The truth's name wherever a mode id would stand (`vs_ground_truth.against`, file names).
+pub const TRUTH_ID: &str = "truth-8x8";
+/// The most bytes of render targets one truth tile may take: 1024×768 at 8×8 needs 1.8 GB of
+/// targets in one piece, four bands of 453 MB in tiles.
+pub const TILE_BYTES: u64 = 512 << 20;
+
+/// How a scene's truth was obtained, in run.json.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TruthRecord {
+    /// `truth-8x8`.
+    pub id: String,
+    pub samples_per_pixel: u32,
+    /// SHA-256 of everything the image depends on (see [`cache_key`]).
+    pub key: String,
+    /// True when the image came from the cache and nothing was rendered.
+    pub cached: bool,
+    /// Wall-clock seconds of the render, read-back included (absent when cached).
+    pub render_s: Option<f64>,
+    pub tiles: Option<usize>,
+    /// The process's peak resident memory during the render (Linux; absent when cached).
+    pub peak_rss_bytes: Option<u64>,
+    /// The display image, relative to the run folder.
+    pub image: Option<String>,
+    /// Why there is no truth, when there is none.
+    pub error: Option<String>,
+}
+
+/// SHA-256 over what determines the truth image: the aabench version and the source code that
+/// renders (the renderer crate and the runner's scene set-up, fingerprinted by build.rs), the
+/// truth's sample count, the resolution, the scene's input files, the shaders as compiled
+/// (`AABENCH_SHADER_DIR` included), and the driver and build profile that render it (lavapipe
+/// gives the same bits on every machine with the same Mesa, so the CPU model is left out).
+pub fn cache_key(
+    inputs: &SceneInputs,
+    resolution: [u32; 2],
+    platform: &PlatformInfo,
+) -> anyhow::Result<String> {
+    let mut hasher = Sha256::new();
+    let mut add = |part: &str| {
+        hasher.update((part.len() as u64).to_le_bytes());
+        hasher.update(part.as_bytes());
+    };
+    add("aabench.truth/1");
+    add(env!("CARGO_PKG_VERSION"));
+    add(env!("AABENCH_RENDER_SOURCE_SHA256"));
+    add(&format!("{TRUTH_M} {}x{}", resolution[0], resolution[1]));
+    add(&inputs.manifest_sha256);
+    add(&inputs.gltf_sha256);
+    for file in shaders::pass_files() {
+        add(&shaders::compose(file)?);
+    }
+    add(&platform.adapter);
+    add(&platform.driver_info);
+    add(platform.build_profile);
+    Ok(hex(&hasher.finalize()))
+}
+
+/// `<dir>/<scene>-<w>x<h>-<first 16 hex digits of the key>.png`
+pub fn cache_file(dir: &Path, scene: &str, resolution: [u32; 2], key: &str) -> PathBuf {
+    dir.join(format!("{scene}-{}x{}-{}.png", resolution[0], resolution[1], &key[..16]))
+}
+
+/// The cached display image (RGBA8), or `None` when it is missing, unreadable or of another
+/// size: then it is rendered again.
+pub fn load_cached(path: &Path, resolution: [u32; 2]) -> Option<Vec<u8>> {
+    let image = image::open(path).ok()?.to_rgba8();
+    (image.dimensions() == (resolution[0], resolution[1])).then(|| image.into_raw())
+}
+
+/// Writes the display image to the cache (atomically).
+pub fn store(path: &Path, resolution: [u32; 2], rgba: &[u8]) -> anyhow::Result<()> {
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?;
+    }
+    images::write_png(path, resolution[0], resolution[1], rgba)
+}
+
+/// The process's peak resident set, which Linux lets a process reset: reset it before a
+/// render, read it after, and the peak is the render's (with what was resident before it).
+pub mod peak_memory {
+    /// Resets the peak to the current resident set. Returns false where that is unsupported.
+    pub fn reset() -> bool {
+        std::fs::write("/proc/self/clear_refs", "5").is_ok()
+    }
+
+    /// `VmHWM` of /proc/self/status, in bytes.
+    pub fn read() -> Option<u64> {
+        let status = std::fs::read_to_string("/proc/self/status").ok()?;
+        let line = status.lines().find(|line| line.starts_with("VmHWM:"))?;
+        let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+        Some(kib * 1024)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn platform() -> PlatformInfo {
+        PlatformInfo {
+            adapter: "llvmpipe".into(),
+            driver: "llvmpipe".into(),
+            driver_info: "Mesa 22.3.6".into(),
+            backend: "vulkan".into(),
+            device_type: "cpu".into(),
+            lp_num_threads: None,
+            cpu_model: "AMD EPYC".into(),
+            cpu_cores: 2,
+            build_profile: "release",
+        }
+    }
+
+    #[test]
+    fn the_key_follows_inputs_resolution_and_driver_but_not_the_cpu() {
+        let inputs = SceneInputs { manifest_sha256: "a".into(), gltf_sha256: "b".into() };
+        let key = |inputs: &SceneInputs, resolution, platform: &PlatformInfo| {
+            cache_key(inputs, resolution, platform).unwrap()
+        };
+        let base = key(&inputs, [64, 48], &platform());
+        assert_eq!(base, key(&inputs, [64, 48], &platform()), "deterministic");
+        assert_ne!(base, key(&inputs, [64, 49], &platform()));
+        let edited = SceneInputs { gltf_sha256: "c".into(), ..inputs.clone() };
+        assert_ne!(base, key(&edited, [64, 48], &platform()));
+        let other_mesa = PlatformInfo { driver_info: "Mesa 24.0".into(), ..platform() };
+        assert_ne!(base, key(&inputs, [64, 48], &other_mesa));
+        let other_cpu = PlatformInfo { cpu_model: "Intel Xeon".into(), cpu_cores: 8, ..platform() };
+        assert_eq!(base, key(&inputs, [64, 48], &other_cpu));
+    }
+
+    #[test]
+    fn a_corrupt_or_resized_cache_file_is_a_miss() {
+        let dir = std::env::temp_dir().join(format!("aabench-truth-{}", std::process::id()));
+        let path = cache_file(&dir, "edge", [2, 1], "0123456789abcdef0123");
+        assert!(path.ends_with("edge-2x1-0123456789abcdef.png"));
+        assert_eq!(load_cached(&path, [2, 1]), None, "missing");
+        store(&path, [2, 1], &[1, 2, 3, 255, 4, 5, 6, 255]).unwrap();
+        assert_eq!(load_cached(&path, [2, 1]), Some(vec![1, 2, 3, 255, 4, 5, 6, 255]));
+        assert_eq!(load_cached(&path, [1, 2]), None, "another size");
+        std::fs::write(&path, b"\x89PNG truncated").unwrap();
+        assert_eq!(load_cached(&path, [2, 1]), None, "corrupt");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn peak_memory_is_read_and_reset() {
+        let peak = peak_memory::read().expect("Linux reports VmHWM");
+        assert!(peak > 1 << 20, "{peak}");
+        if peak_memory::reset() {
+            assert!(peak_memory::read().unwrap() <= peak);
+        }
+    }
+}

@@ -1,0 +1,464 @@
+//! The regression gate and what reads a run, as CI uses them: real runs on lavapipe, real
+//! baseline files, real exit codes, the report opened in a real browser when one is installed.
+
+mod support;
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use serde_json::{Value, json};
+use support::*;
+
+const MODES: &str = "deferred-1x1,reference-2x2,adaptive-2x2,reference-2x2-stalled";
+
+/// The only run folder under `<workspace>/<folder>`.
+fn run_in(ws: &Workspace, folder: &str) -> PathBuf {
+    let runs: Vec<PathBuf> =
+        std::fs::read_dir(ws.dir.join(folder)).unwrap().map(|e| e.unwrap().path()).collect();
+    assert_eq!(runs.len(), 1, "{runs:?}");
+    runs[0].clone()
+}
+
+/// Runs `aabench run` into `<workspace>/<folder>` and returns the run folder. `args` replace
+/// the defaults `--modes MODES --repetitions 6` that they name.
+fn run(ws: &Workspace, folder: &str, args: &[&str]) -> PathBuf {
+    let mut all = vec!["run", "--out", folder];
+    for (flag, default) in [("--modes", MODES), ("--repetitions", "6")] {
+        if !args.contains(&flag) {
+            all.extend([flag, default]);
+        }
+    }
+    all.extend_from_slice(args);
+    let args = all;
+    let output = ws.run(&args);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    run_in(ws, folder)
+}
+
+fn path_arg(path: &Path) -> String {
+    path.to_str().unwrap().to_string()
+}
+
+fn compare(ws: &Workspace, run: &Path, out: &Path) -> Output {
+    ws.run(&["compare", &path_arg(run), "--baseline", "baselines", "--out", &path_arg(out)])
+}
+
+/// The single baseline file the workspace holds for `scene`.
+fn baseline_file(ws: &Workspace, scene: &str) -> PathBuf {
+    let keys: Vec<PathBuf> =
+        std::fs::read_dir(ws.dir.join("baselines")).unwrap().map(|e| e.unwrap().path()).collect();
+    assert_eq!(keys.len(), 1, "{keys:?}");
+    keys[0].join("quick").join(format!("{scene}.json"))
+}
+
+fn checks_of<'a>(verdict: &'a Value, mode: &str, metric: &str) -> Vec<&'a Value> {
+    verdict["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["mode"] == mode && c["metric"] == metric)
+        .collect()
+}
+
+#[test]
+fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("gate-self");
+    ws.manifest("edge", "edge", |_| {});
+    let first = run(&ws, "reports", &[]);
+
+    let blessed = ws.run(&["bless", &path_arg(&first)]);
+    assert_eq!(blessed.status.code(), Some(0), "{}", stderr(&blessed));
+    let file = baseline_file(&ws, "edge");
+    let baseline = read_json(&file);
+    assert_eq!(baseline["schema"], "aabench.baseline/1");
+    assert_eq!(baseline["tier"], "quick");
+    assert_eq!(baseline["scenes"][0]["inputs"]["manifest_sha256"].as_str().map(str::len), Some(64));
+    let samples = &mode(&baseline["scenes"][0], "adaptive-2x2")["frame_ms"]["samples"];
+    assert_eq!(samples.as_array().map(Vec::len), Some(6), "every timing sample is kept");
+
+    let out = ws.dir.join("gate");
+    let same = compare(&ws, &first, &out);
+    assert_eq!(same.status.code(), Some(0), "{}\n{}", String::from_utf8_lossy(&same.stdout), stderr(&same));
+    let verdict = read_json(&out.join("verdict.json"));
+    assert_eq!(verdict["regressed"], false);
+    assert_eq!(verdict["same_platform"], true);
+    let quality = checks_of(&verdict, "adaptive-2x2", "psnr_vs_truth");
+    assert_eq!(quality.len(), 1);
+    assert_eq!(quality[0]["outcome"], "unchanged");
+    assert_eq!(checks_of(&verdict, "adaptive-2x2", "time_vs_reference").len(), 1);
+    assert!(std::fs::read_to_string(out.join("summary.md")).unwrap().contains("no regression"));
+    assert!(std::fs::read_to_string(out.join("junit.xml")).unwrap().contains("failures=\"0\""));
+
+    // The second run of the same scene takes its truth from the cache.
+    let second = run(&ws, "again", &[]);
+    let record = read_json(&second.join("run.json"));
+    assert_eq!(record["scenes"][0]["truth"]["cached"], true);
+    let truth_png = |run: &Path| std::fs::read(run.join("edge/truth-8x8.png")).unwrap();
+    assert_eq!(truth_png(&first), truth_png(&second));
+
+    // Two runs blessed together: both kept, their rounds pooled by compare.
+    let pooled = ws.run(&["bless", &path_arg(&first), &path_arg(&second)]);
+    assert_eq!(pooled.status.code(), Some(0), "{}", stderr(&pooled));
+    let baseline = read_json(&file);
+    assert_eq!(baseline["scenes"].as_array().map(Vec::len), Some(2));
+    assert_eq!(baseline["run_ids"][1], record["run_id"]);
+    let pooled_compare = compare(&ws, &second, &out);
+    assert_eq!(pooled_compare.status.code(), Some(0), "{}", String::from_utf8_lossy(&pooled_compare.stdout));
+    // Runs that disagree on an image are not blessed together.
+    let mut other = record.clone();
+    other["scenes"][0]["modes"][1]["output_hash"] = json!("0000000000000000");
+    let other_dir = ws.dir.join("other");
+    std::fs::create_dir_all(&other_dir).unwrap();
+    write_json(&other_dir.join("run.json"), &other);
+    let refused = ws.run(&["bless", &path_arg(&first), &path_arg(&other_dir)]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(stderr(&refused).contains("disagree"), "{}", stderr(&refused));
+    assert_eq!(read_json(&file), baseline, "nothing was written");
+
+    // A baseline doctored 0.5 dB better in one mode: that mode regressed.
+    let mut doctored = baseline.clone();
+    let psnr = &mut doctored["scenes"][0]["modes"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .find(|m| m["mode"] == "adaptive-2x2")
+        .unwrap()["vs_ground_truth"]["psnr_db"];
+    *psnr = json!(psnr.as_f64().unwrap() + 0.5);
+    write_json(&file, &doctored);
+    let worse = compare(&ws, &second, &out);
+    assert_eq!(worse.status.code(), Some(1), "{}", stderr(&worse));
+    let verdict = read_json(&out.join("verdict.json"));
+    assert_eq!(checks_of(&verdict, "adaptive-2x2", "psnr_vs_truth")[0]["outcome"], "regressed");
+    assert_eq!(checks_of(&verdict, "reference-2x2", "psnr_vs_truth")[0]["outcome"], "unchanged");
+    let junit = std::fs::read_to_string(out.join("junit.xml")).unwrap();
+    let case = junit.split("<testcase").find(|c| c.contains("name=\"adaptive-2x2\"")).unwrap();
+    assert!(case.contains("<failure type=\"regressed\"") && case.contains("psnr_vs_truth"), "{case}");
+    assert!(junit.contains("failures=\"1\""), "{junit}");
+    let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(summary.find("### Regressed").unwrap() < summary.find("checks unchanged").unwrap(), "{summary}");
+
+    // A baseline of another platform is not overwritten without --force, and says why.
+    doctored["platform"]["key"] = json!("another-platform");
+    write_json(&file, &doctored);
+    let before = std::fs::read(&file).unwrap();
+    let refused = ws.run(&["bless", &path_arg(&second)]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(
+        stderr(&refused).contains("another-platform") && stderr(&refused).contains("--force"),
+        "{}",
+        stderr(&refused)
+    );
+    assert_eq!(std::fs::read(&file).unwrap(), before, "a refused bless writes nothing");
+    let forced = ws.run(&["bless", &path_arg(&second), "--force"]);
+    assert_eq!(forced.status.code(), Some(0), "{}", stderr(&forced));
+    assert_eq!(read_json(&file)["run_ids"], json!([record["run_id"]]));
+}
+
+#[test]
+fn a_real_slowdown_is_flagged_and_three_percent_jitter_is_not() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("gate-slow");
+    let resolution = |m: &mut Value| m["resolution"]["quick"] = json!([96, 72]);
+    ws.manifest("edge", "edge", resolution);
+    let modes = ["--modes", "deferred-1x1,reference-2x2,deferred-1x1-stalled,reference-2x2-stalled"];
+    let first = run(&ws, "before", &modes);
+    assert_eq!(ws.run(&["bless", &path_arg(&first)]).status.code(), Some(0));
+
+    // The stalled shader made 256 times as expensive, in a copy of the manifest.
+    ws.manifest("edge", "edge", |m| {
+        resolution(m);
+        m["stall_iterations"] = json!(16 * 256);
+    });
+    let slow = run(&ws, "after", &modes);
+    let out = ws.dir.join("gate");
+    let output = compare(&ws, &slow, &out);
+    assert_eq!(output.status.code(), Some(1), "{}", String::from_utf8_lossy(&output.stdout));
+    let verdict = read_json(&out.join("verdict.json"));
+    for stalled in ["deferred-1x1-stalled", "reference-2x2-stalled"] {
+        let check = checks_of(&verdict, stalled, "relative_time")[0];
+        assert_eq!(check["outcome"], "regressed", "{check}");
+        assert!(check["interval"][0].as_f64().unwrap() > 0.1, "{check}");
+    }
+    // The unstalled modes anchor the ratio: they stay unchanged, and so do all images.
+    assert_eq!(checks_of(&verdict, "reference-2x2", "relative_time")[0]["outcome"], "unchanged");
+    assert_eq!(checks_of(&verdict, "reference-2x2-stalled", "psnr_vs_truth")[0]["outcome"], "unchanged");
+    let notes = verdict["notes"].to_string();
+    assert!(notes.contains("manifest changed"), "{notes}");
+    // Gating quality only, the slowdown is reported and fails nothing.
+    let quality_only =
+        ws.run(&["compare", &path_arg(&slow), "--out", "gate-quality", "--fail-on", "quality"]);
+    assert_eq!(quality_only.status.code(), Some(0), "{}", String::from_utf8_lossy(&quality_only.stdout));
+    let verdict = read_json(&ws.dir.join("gate-quality/verdict.json"));
+    let check = checks_of(&verdict, "reference-2x2-stalled", "relative_time")[0];
+    assert_eq!((check["outcome"].as_str(), check["gated"].as_bool()), (Some("regressed"), Some(false)));
+
+    // 3% more time in one mode, in a copy of the first run's record: not flagged.
+    let mut record = read_json(&first.join("run.json"));
+    let stalled = record["scenes"][0]["modes"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .find(|m| m["mode"] == "reference-2x2-stalled")
+        .unwrap();
+    for sample in stalled["frame_ms"]["samples"].as_array_mut().unwrap() {
+        *sample = json!(sample.as_f64().unwrap() * 1.03);
+    }
+    let jittered = ws.dir.join("jittered");
+    std::fs::create_dir_all(&jittered).unwrap();
+    write_json(&jittered.join("run.json"), &record);
+    let output = compare(&ws, &jittered, &out);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stdout));
+    let verdict = read_json(&out.join("verdict.json"));
+    let check = checks_of(&verdict, "reference-2x2-stalled", "relative_time")[0];
+    assert_eq!(check["outcome"], "unchanged", "{check}");
+    let change = check["change"].as_f64().unwrap();
+    assert!((change - 0.03).abs() < 0.02, "the estimate finds the 3%: {check}");
+}
+
+#[test]
+fn corrupt_truncated_and_wrong_schema_baselines_exit_two_and_stay_untouched() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("gate-corrupt");
+    ws.manifest("edge", "edge", |_| {});
+    let run_dir = run(&ws, "reports", &["--repetitions", "2"]);
+    assert_eq!(ws.run(&["bless", &path_arg(&run_dir)]).status.code(), Some(0));
+    let file = baseline_file(&ws, "edge");
+    let good = std::fs::read(&file).unwrap();
+    let mut wrong_schema = read_json(&file);
+    wrong_schema["schema"] = json!("aabench.baseline/0");
+    let cases: [(&str, Vec<u8>, &str); 3] = [
+        ("corrupt", b"{ this is not json".to_vec(), "not an aabench.baseline/1 file"),
+        ("truncated", good[..good.len() / 2].to_vec(), "not an aabench.baseline/1 file"),
+        ("wrong schema", serde_json::to_vec(&wrong_schema).unwrap(), "schema is `aabench.baseline/0`"),
+    ];
+    let out = ws.dir.join("gate");
+    for (name, bytes, reason) in cases {
+        std::fs::write(&file, &bytes).unwrap();
+        let output = compare(&ws, &run_dir, &out);
+        assert_eq!(output.status.code(), Some(2), "{name}");
+        let text = stderr(&output);
+        assert!(text.contains(&path_arg(&file)) || text.contains("edge.json"), "{name}: {text}");
+        assert!(text.contains(reason), "{name}: {text}");
+        assert_eq!(std::fs::read(&file).unwrap(), bytes, "{name}: the baseline was modified");
+        assert!(!out.exists(), "{name}: outputs were written on an error");
+    }
+    let missing = ws.run(&["compare", "reports/no-such-run"]);
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(stderr(&missing).contains("no-such-run/run.json: cannot read"), "{}", stderr(&missing));
+}
+
+#[test]
+fn a_failed_scene_fails_the_gate_with_or_without_a_baseline() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("gate-failed");
+    ws.manifest("a-edge", "edge", |_| {});
+    ws.manifest("b-broken", "plane", |m| m["lights"][0]["range"] = json!(-3));
+    let output = ws.run(&["run", "--modes", "deferred-1x1", "--repetitions", "2"]);
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    let run_dir = run_in(&ws, "reports");
+    let out = ws.dir.join("gate");
+    let output = compare(&ws, &run_dir, &out);
+    assert_eq!(output.status.code(), Some(1), "{}", String::from_utf8_lossy(&output.stdout));
+    let verdict = read_json(&out.join("verdict.json"));
+    let failed: Vec<&Value> =
+        verdict["checks"].as_array().unwrap().iter().filter(|c| c["outcome"] == "failed").collect();
+    assert_eq!(failed.len(), 1, "{failed:?}");
+    assert_eq!(failed[0]["scene"], "b-broken");
+    assert!(failed[0]["detail"].as_str().unwrap().contains("lights[0].range"), "{}", failed[0]);
+    assert!(std::fs::read_to_string(out.join("junit.xml")).unwrap().contains("failures=\"1\""));
+}
+
+/// Every `src` and `href` of an HTML page: relative, and naming a file that exists (or an
+/// anchor on the page).
+fn check_links(html: &str, dir: &Path) -> usize {
+    let dom = tl::parse(html, tl::ParserOptions::default()).expect("the HTML parses");
+    let ids: Vec<String> = dom
+        .nodes()
+        .iter()
+        .filter_map(|n| n.as_tag()?.attributes().id().map(|id| id.as_utf8_str().into_owned()))
+        .collect();
+    let mut links = 0;
+    for node in dom.nodes() {
+        let Some(tag) = node.as_tag() else { continue };
+        for attribute in ["src", "href"] {
+            let Some(Some(value)) = tag.attributes().get(attribute) else { continue };
+            let value = value.as_utf8_str().into_owned();
+            links += 1;
+            assert!(
+                !value.contains("://") && !value.starts_with("//"),
+                "{attribute}={value}: not a local file"
+            );
+            match value.strip_prefix('#') {
+                Some(id) => assert!(ids.iter().any(|i| i == id), "#{id}: no such anchor"),
+                None => assert!(dir.join(&value).is_file(), "{attribute}={value}: no such file"),
+            }
+        }
+    }
+    links
+}
+
+#[test]
+fn the_report_is_self_contained_and_renders_in_a_browser() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("report");
+    ws.manifest("edge", "edge", |_| {});
+    let run_dir = run(
+        &ws,
+        "reports",
+        &["--modes", &format!("{MODES},adaptive-2x2-stalled,reference-3x3,adaptive-3x3")],
+    );
+    assert_eq!(ws.run(&["bless", &path_arg(&run_dir)]).status.code(), Some(0));
+    assert_eq!(compare(&ws, &run_dir, &run_dir).status.code(), Some(0));
+    // A history of two earlier runs: copies of this one under other ids.
+    let history = ws.dir.join("history");
+    std::fs::create_dir_all(&history).unwrap();
+    let record = read_json(&run_dir.join("run.json"));
+    for (i, stamp) in ["20260101T000000Z", "20260102T000000Z"].iter().enumerate() {
+        let mut old = record.clone();
+        old["run_id"] = json!(format!("{stamp}-quick"));
+        old["started_at"] = json!(format!("2026-01-0{}T00:00:00Z", i + 1));
+        write_json(&history.join(format!("{stamp}-quick.json")), &old);
+    }
+    let output = ws.run(&["report", &path_arg(&run_dir), "--history", "history"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let index = run_dir.join("index.html");
+    let html = std::fs::read_to_string(&index).unwrap();
+    assert!(!html.contains("http://") && !html.contains("https://"), "the page names a network address");
+    assert!(html.contains("<svg") && html.contains("error against run time"), "the plot is inline SVG");
+    assert!(html.contains("no regression"), "the verdict is shown");
+    assert!(html.contains("History (3 runs)"), "the history is plotted");
+    assert!(html.contains("Crops at"), "crops around the largest error");
+    for tag in ["section", "table", "figure", "div", "svg"] {
+        let (open, close) =
+            (html.matches(&format!("<{tag}")).count(), html.matches(&format!("</{tag}>")).count());
+        assert_eq!(open, close, "<{tag}> opened {open} times, closed {close}");
+    }
+    let links = check_links(&html, &run_dir);
+    assert!(links > 15, "{links} links");
+
+    screenshot(&index);
+}
+
+/// Opens the page in headless Chromium (Debian's `chromium` package) from disk, checks that
+/// it logged no console message, and keeps a screenshot beside it. Skipped, saying so, where
+/// no Chromium is installed (`ci/setup.sh --browser` installs it).
+fn screenshot(index: &Path) {
+    let Some(chromium) =
+        ["/usr/bin/chromium", "/usr/bin/chromium-browser"].into_iter().find(|p| Path::new(p).exists())
+    else {
+        eprintln!(
+            "chromium is not installed: the browser check is skipped (ci/setup.sh --browser installs it)"
+        );
+        return;
+    };
+    let dir = index.parent().unwrap();
+    let shot = dir.join("screenshot.png");
+    let output = std::process::Command::new(chromium)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--disable-dev-shm-usage",
+            "--enable-logging=stderr",
+            "--v=0",
+            "--window-size=1280,2400",
+        ])
+        .arg(format!("--user-data-dir={}", dir.join("chromium-profile").display()))
+        .arg(format!("--screenshot={}", shot.display()))
+        .arg(format!("file://{}", index.display()))
+        .output()
+        .expect("chromium starts");
+    let log = stderr(&output);
+    assert!(output.status.success(), "chromium failed: {log}");
+    let console: Vec<&str> = log.lines().filter(|l| l.contains(":CONSOLE")).collect();
+    assert!(console.is_empty(), "console messages: {console:?}");
+    let image = image::open(&shot).expect("a screenshot").to_rgb8();
+    assert_eq!(image.dimensions(), (1280, 2400));
+    let colours: std::collections::HashSet<[u8; 3]> = image.pixels().map(|p| p.0).collect();
+    assert!(colours.len() > 1000, "the page looks blank: {} colours", colours.len());
+}
+
+#[test]
+fn merged_shards_hold_the_pairs_of_the_unsharded_run_and_get_the_same_verdicts() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("shards");
+    // Time is judged with wide thresholds here: this test is about which pairs are compared.
+    let wide = |m: &mut Value| m["gate"] = json!({ "time_ratio": 5.0, "absolute_time": 5.0 });
+    ws.manifest("a-edge", "edge", wide);
+    ws.manifest("b-plane", "plane", wide);
+    ws.manifest("c-thin", "thin", wide);
+    let modes = ["--modes", "deferred-1x1,reference-2x2,adaptive-2x2", "--repetitions", "3"];
+    let full = run(&ws, "full", &modes);
+    assert_eq!(ws.run(&["bless", &path_arg(&full)]).status.code(), Some(0));
+    let shard = |i: &str, folder: &str| {
+        let mut args = modes.to_vec();
+        args.extend(["--shard", i]);
+        run(&ws, folder, &args)
+    };
+    let (first, second) = (shard("1/2", "shard1"), shard("2/2", "shard2"));
+    let names = |run: &Path| -> Vec<String> {
+        read_json(&run.join("run.json"))["scenes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| s["name"].as_str().unwrap().to_owned())
+            .collect()
+    };
+    assert_eq!(names(&first), ["a-edge", "c-thin"]);
+    assert_eq!(names(&second), ["b-plane"]);
+
+    let merged = ws.dir.join("merged");
+    let output = ws.run(&["merge", &path_arg(&second), &path_arg(&first), "--out", "merged"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let pairs = |run: &Path| -> Vec<(String, String)> {
+        let record = read_json(&run.join("run.json"));
+        record["scenes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|s| {
+                s["modes"].as_array().unwrap().iter().map(|m| (s["name"].to_string(), m["mode"].to_string()))
+            })
+            .collect()
+    };
+    assert_eq!(pairs(&merged), pairs(&full));
+    let record = read_json(&merged.join("run.json"));
+    for scene in record["scenes"].as_array().unwrap() {
+        let image = scene["modes"][0]["images"]["display"].as_str().unwrap();
+        assert!(merged.join(image).is_file(), "{image} was not copied");
+    }
+
+    let verdicts = |run: &Path, out: &str| -> Vec<(String, String, String, String)> {
+        let output = compare(&ws, run, &ws.dir.join(out));
+        assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stdout));
+        let verdict = read_json(&ws.dir.join(out).join("verdict.json"));
+        let mut rows: Vec<_> = verdict["checks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| {
+                (
+                    c["scene"].to_string(),
+                    c["mode"].to_string(),
+                    c["metric"].to_string(),
+                    c["outcome"].to_string(),
+                )
+            })
+            .collect();
+        rows.sort();
+        rows
+    };
+    assert_eq!(verdicts(&merged, "gate-merged"), verdicts(&full, "gate-full"));
+
+    let alone = ws.run(&["merge", &path_arg(&first), "--out", "alone"]);
+    assert_eq!(alone.status.code(), Some(2));
+    assert!(stderr(&alone).contains("shards 2/2 are missing"), "{}", stderr(&alone));
+    let twice = ws.run(&["merge", &path_arg(&first), &path_arg(&first), "--out", "twice"]);
+    assert!(stderr(&twice).contains("given twice"), "{}", stderr(&twice));
+}

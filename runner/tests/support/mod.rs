@@ -1,0 +1,91 @@
+//! Shared by the CLI's integration tests: a temporary workspace with manifests, and the
+//! `aabench` binary run in it as a real process.
+
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::Mutex;
+
+use serde_json::{Value, json};
+
+/// lavapipe uses every core: one aabench process at a time keeps the tests' timings sane.
+pub static SERIAL: Mutex<()> = Mutex::new(());
+
+pub struct Workspace {
+    pub dir: PathBuf,
+}
+
+impl Workspace {
+    pub fn new(name: &str) -> Workspace {
+        let dir = std::env::temp_dir().join(format!("aabench-cli-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(dir.join("scenes")).unwrap();
+        Workspace { dir }
+    }
+
+    /// Writes scenes/<name>.json for a generated scene at 64×48, with `edit` applied.
+    pub fn manifest(&self, name: &str, generator: &str, edit: impl Fn(&mut Value)) -> PathBuf {
+        let mut manifest = json!({
+            "schema_version": 1,
+            "name": name,
+            "gltf": format!("cache/{generator}.glb"),
+            "generate": { "generator": generator, "seed": 1 },
+            "resolution": { "quick": [64, 48], "nightly": [128, 96] },
+            "lights": [{ "position": [0.5, 0.5, 2.0], "intensity": 4.0, "range": 20.0 }],
+            "ambient": [0.05, 0.05, 0.05],
+            "stall_iterations": 16
+        });
+        edit(&mut manifest);
+        let path = self.dir.join("scenes").join(format!("{name}.json"));
+        std::fs::write(&path, serde_json::to_string_pretty(&manifest).unwrap()).unwrap();
+        path
+    }
+
+    pub fn command(&self, args: &[&str]) -> Command {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_aabench"));
+        command.args(args).current_dir(&self.dir).env("CI", "1");
+        command
+    }
+
+    pub fn run(&self, args: &[&str]) -> Output {
+        self.command(args).output().expect("aabench runs")
+    }
+
+    /// The run.json of the only run under reports/.
+    pub fn record(&self) -> Value {
+        let runs: Vec<PathBuf> =
+            std::fs::read_dir(self.dir.join("reports")).unwrap().map(|e| e.unwrap().path()).collect();
+        assert_eq!(runs.len(), 1, "{runs:?}");
+        serde_json::from_slice(&std::fs::read(runs[0].join("run.json")).unwrap()).expect("run.json is JSON")
+    }
+
+    pub fn run_dir(&self) -> PathBuf {
+        std::fs::read_dir(self.dir.join("reports")).unwrap().next().unwrap().unwrap().path()
+    }
+}
+
+impl Drop for Workspace {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+pub fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+pub fn mode<'a>(scene: &'a Value, id: &str) -> &'a Value {
+    scene["modes"].as_array().unwrap().iter().find(|m| m["mode"] == id).unwrap_or_else(|| panic!("no {id}"))
+}
+
+/// Reads a JSON file.
+pub fn read_json(path: &Path) -> Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())))
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// Writes a JSON file.
+pub fn write_json(path: &Path, value: &Value) {
+    std::fs::write(path, serde_json::to_vec_pretty(value).unwrap()).unwrap();
+}

@@ -6,11 +6,13 @@
 //   scan_total,   densely, so the next pass runs one fragment per extra sample with no idle
 //   emit          SIMD lanes
 //   shade_extra   shades the list
-//   gather        averages S with the pixel's extra samples (or, with LOOP_SHADING, shades them
-//                 itself in a loop: the paper's simplest variant, kept for comparison); a pixel
-//                 that takes all M² samples leaves S out and equals the reference
+//   gather        averages S with the pixel's extra samples (gather_loop shades them itself in a
+//                 loop instead: the paper's simplest variant, kept for comparison); a pixel that
+//                 takes all M² samples leaves S out and equals the reference
 //
 // The metric is specified by its CPU twin in renderer/src/adaptive.rs; keep the two in step.
+// Passes bind group 2 by name (renderer/src/bindings.rs): each variable below is a port of the
+// passes that use it, so binding numbers need only be unique.
 
 #include "lib/common.wgsl"
 #include "lib/scene.wgsl"
@@ -28,7 +30,6 @@ override T_EDGE: f32;
 override USE_GEOMETRY: bool;
 override USE_SHADING: bool;
 override FORCE_ALL: bool;
-override LOOP_SHADING: bool;
 // Size of the compact target that holds the extra samples, one per texel in list order.
 override COMPACT_WIDTH: u32;
 override COMPACT_HEIGHT: u32;
@@ -58,10 +59,12 @@ fn first_extra_rank(n: u32) -> u32 {
     return select(1u, 0u, n == M * M);
 }
 
-// Group 2 differs per pass; each entry point names its own bindings below.
-
 // Rank → row-major window cell, from the paper's Fig. 3 matrices (adaptive.rs: sample_order).
 @group(2) @binding(0) var<storage, read> order: array<u32>;
+// S, the shade-first image.
+@group(2) @binding(1) var first: texture_2d<f32>;
+// Samples per pixel, written by evaluate.
+@group(2) @binding(2) var counts: texture_2d<u32>;
 
 fn window_texel(pixel: vec2<i32>, rank: u32) -> vec2<i32> {
     let cell = order[rank];
@@ -80,9 +83,7 @@ fn shade_first(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32>
     return shade(window_texel(vec2<i32>(position.xy), 0u), footprint(1u));
 }
 
-// ---- evaluate: group 2 = { S }
-
-@group(2) @binding(0) var first: texture_2d<f32>;
+// ---- evaluate: reads S and the G-buffer
 
 // Perceptual luma of an S pixel: the square root (a gamma-2 stand-in for sRGB, without pow)
 // of the luminance of the exposed colour clamped to [0, 1].
@@ -178,11 +179,10 @@ fn evaluate(@builtin(position) position: vec4<f32>) -> @location(0) u32 {
 
 // ---- scan_rows, scan_total, emit: the list of extra samples
 
-@group(2) @binding(0) var counts: texture_2d<u32>;
-@group(2) @binding(1) var<storage, read_write> row_offsets: array<u32>;
-@group(2) @binding(2) var<storage, read_write> totals: array<u32>;
-@group(2) @binding(3) var<storage, read_write> pixel_offsets: array<u32>;
-@group(2) @binding(4) var<storage, read_write> entries: array<u32>;
+@group(2) @binding(3) var<storage, read_write> row_offsets: array<u32>;
+@group(2) @binding(4) var<storage, read_write> totals: array<u32>;
+@group(2) @binding(5) var<storage, read_write> pixel_offsets: array<u32>;
+@group(2) @binding(6) var<storage, read_write> entries: array<u32>;
 
 // List entries of each row.
 @compute @workgroup_size(64)
@@ -233,16 +233,15 @@ fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }
 
-// ---- shade_extra: group 2 = { order, counts, entries, totals }
+// ---- shade_extra: the list, read only
 
-@group(2) @binding(1) var extra_counts: texture_2d<u32>;
-@group(2) @binding(2) var<storage, read> extra_entries: array<u32>;
-@group(2) @binding(3) var<storage, read> extra_totals: array<u32>;
+@group(2) @binding(7) var<storage, read> list_entries: array<u32>;
+@group(2) @binding(8) var<storage, read> list_totals: array<u32>;
 
 // A rectangle over the rows of the compact target that hold list entries (none when empty).
 @vertex
 fn compact_rows(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
-    let rows = 4u * ((extra_totals[0] + 4u * COMPACT_WIDTH - 1u) / (4u * COMPACT_WIDTH));
+    let rows = 4u * ((list_totals[0] + 4u * COMPACT_WIDTH - 1u) / (4u * COMPACT_WIDTH));
     let bottom = 1.0 - 2.0 * f32(rows) / f32(COMPACT_HEIGHT);
     // Two triangles: (0 1 2) (2 1 3) over the corners left/right × top/bottom.
     let corner = array<vec2<f32>, 6>(
@@ -255,43 +254,52 @@ fn compact_rows(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f3
 @fragment
 fn shade_extra(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
     let index = compact_index(vec2<u32>(position.xy));
-    if index >= extra_totals[0] {
+    if index >= list_totals[0] {
         // The tail of the last row.
         return vec4<f32>(0.0);
     }
-    let entry = extra_entries[index];
-    let width = textureDimensions(extra_counts).x;
+    let entry = list_entries[index];
+    let width = textureDimensions(counts).x;
     let pixel_index = entry >> RANK_BITS;
     let pixel = vec2<i32>(i32(pixel_index % width), i32(pixel_index / width));
-    let n = textureLoad(extra_counts, pixel, 0).r;
+    let n = textureLoad(counts, pixel, 0).r;
     return shade(window_texel(pixel, entry & ((1u << RANK_BITS) - 1u)), footprint(n));
 }
 
-// ---- gather: group 2 = { order, S, counts, pixel offsets, extra samples }
+// ---- gather: S, the counts, each pixel's first list index and the extra samples
 
-@group(2) @binding(1) var gather_first: texture_2d<f32>;
-@group(2) @binding(2) var gather_counts: texture_2d<u32>;
-@group(2) @binding(3) var<storage, read> gather_offsets: array<u32>;
-@group(2) @binding(4) var extra_samples: texture_2d<f32>;
+@group(2) @binding(9) var<storage, read> list_offsets: array<u32>;
+@group(2) @binding(10) var extra_samples: texture_2d<f32>;
+
+// S where the pixel reuses it, else nothing: the start of the pixel's sum.
+fn gather_start(pixel: vec2<i32>, first_rank: u32) -> vec4<f32> {
+    return select(vec4<f32>(0.0), textureLoad(first, pixel, 0), first_rank == 1u);
+}
 
 @fragment
 fn gather(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
     let pixel = vec2<i32>(position.xy);
-    let n = textureLoad(gather_counts, pixel, 0).r;
+    let n = textureLoad(counts, pixel, 0).r;
     let first_rank = first_extra_rank(n);
-    var sum = select(vec4<f32>(0.0), textureLoad(gather_first, pixel, 0), first_rank == 1u);
-    if LOOP_SHADING {
-        let scale = footprint(n);
-        for (var rank = first_rank; rank < n; rank += 1u) {
-            sum += shade(window_texel(pixel, rank), scale);
-        }
-    } else {
-        let width = textureDimensions(gather_first).x;
-        let base = gather_offsets[u32(pixel.y) * width + u32(pixel.x)];
-        for (var j = 0u; j < n - first_rank; j += 1u) {
-            let index = base + j;
-            sum += textureLoad(extra_samples, compact_texel(index), 0);
-        }
+    var sum = gather_start(pixel, first_rank);
+    let width = textureDimensions(first).x;
+    let base = list_offsets[u32(pixel.y) * width + u32(pixel.x)];
+    for (var j = 0u; j < n - first_rank; j += 1u) {
+        let index = base + j;
+        sum += textureLoad(extra_samples, compact_texel(index), 0);
+    }
+    return sum / f32(n);
+}
+
+@fragment
+fn gather_loop(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
+    let pixel = vec2<i32>(position.xy);
+    let n = textureLoad(counts, pixel, 0).r;
+    let first_rank = first_extra_rank(n);
+    var sum = gather_start(pixel, first_rank);
+    let scale = footprint(n);
+    for (var rank = first_rank; rank < n; rank += 1u) {
+        sum += shade(window_texel(pixel, rank), scale);
     }
     return sum / f32(n);
 }

@@ -4,13 +4,7 @@
 
 #include "lib/common.wgsl"
 #include "lib/scene.wgsl"
-
-struct VertexIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) uv: vec2<f32>,
-    @location(3) material: u32,
-}
+#include "lib/geometry.wgsl"
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -50,10 +44,7 @@ fn gbuffer_opaque(v: VertexOut, @builtin(front_facing) front_facing: bool) -> GB
 
 @fragment
 fn gbuffer_masked(v: VertexOut, @builtin(front_facing) front_facing: bool) -> GBuffer {
-    let material = materials[v.material];
-    let texel = textureSample(scene_textures, scene_sampler, v.uv, max(material.texture, 0));
-    let alpha = material.base_color.a * select(1.0, texel.a, material.texture >= 0);
-    if alpha < material.alpha_cutoff {
+    if !passes_alpha_test(v.material, v.uv) {
         discard;
     }
     return write_gbuffer(v, front_facing);

@@ -176,11 +176,13 @@ impl Gpu {
         let texel =
             texture.format().block_copy_size(Some(aspect)).expect("a format with a readable aspect") as usize;
         let (width, height) = (texture.width() as usize, texture.height() as usize);
+        // Every layer of an array, one after another.
+        let rows = height * texture.depth_or_array_layers() as usize;
         let row = width * texel;
         let padded_row = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as usize);
         let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size: (padded_row * height) as u64,
+            size: (padded_row * rows) as u64,
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
@@ -192,15 +194,15 @@ impl Gpu {
                 layout: wgpu::TexelCopyBufferLayout {
                     offset: 0,
                     bytes_per_row: Some(padded_row as u32),
-                    rows_per_image: None,
+                    rows_per_image: Some(height as u32),
                 },
             },
             texture.size(),
         );
         self.queue.submit([encoder.finish()]);
         let bytes = self.map_read(&buffer)?;
-        let mut packed = Vec::with_capacity(row * height);
-        for y in 0..height {
+        let mut packed = Vec::with_capacity(row * rows);
+        for y in 0..rows {
             packed.extend_from_slice(&bytes[y * padded_row..y * padded_row + row]);
         }
         Ok(packed)

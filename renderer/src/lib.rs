@@ -8,9 +8,13 @@
 //! reads back its images.
 
 pub mod adaptive;
+mod bindings;
+pub mod frame;
 pub mod gpu;
+pub mod graph;
 pub mod mode;
 mod passes;
+mod pipelines;
 mod render;
 pub mod scene;
 pub mod shaders;
@@ -20,10 +24,21 @@ pub use gpu::{Gpu, PlatformInfo};
 pub use mode::{Metrics, Mode, Technique};
 pub use passes::gbuffer::BACKGROUND_MATERIAL;
 pub use render::{
-    FrameImages, FrameTiming, GBufferImages, PassTime, PreparedMode, RenderSettings, SceneRenderer, Truth,
+    FrameImages, FrameTiming, GBufferImages, PassTime, PreparedMode, SceneRenderer, ShadowDepths, Truth,
 };
 
 use std::path::PathBuf;
+
+/// What a scene is rendered with, besides its geometry and lights.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderSettings {
+    /// Output resolution; the G-buffer of an M×M mode is M·width × M·height.
+    pub width: u32,
+    pub height: u32,
+    /// Dependent ALU iterations per shaded sample in `-stalled` modes.
+    pub stall_iterations: u32,
+    pub adaptive: AdaptiveSettings,
+}
 
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
@@ -41,6 +56,12 @@ pub enum RenderError {
     TooLarge { width: u32, height: u32, limit: u32 },
     #[error("{0}")]
     Limit(String),
+    /// A frame's pass graph does not compile.
+    #[error("pass graph: {0}")]
+    Graph(#[from] graph::GraphError),
+    /// A shader's bindings do not match the resources offered for them.
+    #[error("bindings: {0}")]
+    Binding(String),
     #[error("{}: {source}", path.display())]
     Io { path: PathBuf, source: std::io::Error },
 }

@@ -1,30 +1,16 @@
 //! Building a mode's passes for one scene, running timed frames and reading back their images.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
+use crate::frame::{self, FrameGraph, GraphSummary, SceneNeeds, frame_graph};
 use crate::gpu::Gpu;
+use crate::graph::{Dims, Output, Physical, Plan, PortRef, Resolved, Usage};
 use crate::mode::{Mode, Technique};
-use crate::passes::gbuffer::{self, GBuffer, GBufferPass, GBufferPipelines};
-use crate::passes::{self, Pass, Program, Screen, Slot};
+use crate::passes::{Allocated, BuildContext, Io, Pass};
+use crate::pipelines::Pipelines;
 use crate::scene::{Camera, FrameUniforms, GpuScene, Lighting, Scene, Tile};
-use crate::{AdaptiveSettings, RenderError, shaders};
-
-/// Linear HDR radiance.
-pub(crate) const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-/// Display-encoded 8-bit colour.
-pub(crate) const DISPLAY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-
-/// What a scene is rendered with, besides its geometry and lights.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RenderSettings {
-    /// Output resolution; the G-buffer of an M×M mode is M·width × M·height.
-    pub width: u32,
-    pub height: u32,
-    /// Dependent ALU iterations per shaded sample in `-stalled` modes.
-    pub stall_iterations: u32,
-    pub adaptive: AdaptiveSettings,
-}
+use crate::{RenderError, RenderSettings};
 
 /// Wall-clock time of one pass of one frame.
 #[derive(Debug, Clone, PartialEq)]
@@ -81,22 +67,18 @@ pub struct GBufferImages {
     pub depth: Vec<f64>,
 }
 
-/// One scene on the device, with the targets and pipelines that its modes share. Modes run one
-/// at a time, so modes of the same M share one G-buffer.
+/// One scene on the device, with the pipelines that its modes share and a pool of textures
+/// and buffers. Modes run one at a time, so allocation `k` of a descriptor and usage in one
+/// mode's graph is the same texture as allocation `k` of that descriptor and usage in
+/// another's.
 #[derive(Debug)]
 pub struct SceneRenderer {
-    pub(crate) gpu: Arc<Gpu>,
-    pub(crate) scene: GpuScene,
-    pub(crate) settings: RenderSettings,
-    modules: HashMap<&'static str, wgpu::ShaderModule>,
-    pub(crate) gbuffer_layout: wgpu::BindGroupLayout,
-    pub(crate) texture_layout: wgpu::BindGroupLayout,
-    gbuffer_pipelines: Option<GBufferPipelines>,
-    pipelines: HashMap<String, wgpu::RenderPipeline>,
-    compute_pipelines: HashMap<String, wgpu::ComputePipeline>,
-    targets: HashMap<(&'static str, u32, u32), wgpu::Texture>,
-    buffers: HashMap<(&'static str, u64), wgpu::Buffer>,
-    gbuffers: HashMap<u32, GBuffer>,
+    gpu: Arc<Gpu>,
+    scene: GpuScene,
+    needs: SceneNeeds,
+    settings: RenderSettings,
+    pipelines: Pipelines,
+    pool: Pool,
     /// Kept to rewrite the frame uniforms for ground-truth tiles.
     camera: Camera,
     lighting: Lighting,
@@ -111,158 +93,91 @@ impl SceneRenderer {
         settings: RenderSettings,
     ) -> Result<SceneRenderer, RenderError> {
         let frame = FrameUniforms::new(camera, lighting, settings.width, settings.height);
-        let scene = GpuScene::new(&gpu.device, &gpu.queue, scene, lighting, &frame);
-        let device = &gpu.device;
-        let gbuffer_layout = passes::bind_group_layout(
-            device,
-            "gbuffer",
-            &[Slot::Texture, Slot::Texture, Slot::Texture, Slot::Depth],
-        );
-        let texture_layout = passes::bind_group_layout(device, "input", &[Slot::Texture]);
+        let needs = SceneNeeds::of(scene, lighting);
+        let gpu_scene = GpuScene::new(&gpu.device, &gpu.queue, scene, lighting, &frame);
         gpu.check()?;
         Ok(SceneRenderer {
+            pipelines: Pipelines::new(gpu.device.clone(), needs.features()),
             gpu,
-            scene,
+            scene: gpu_scene,
+            needs,
             settings,
-            modules: HashMap::new(),
-            gbuffer_layout,
-            texture_layout,
-            gbuffer_pipelines: None,
-            pipelines: HashMap::new(),
-            compute_pipelines: HashMap::new(),
-            targets: HashMap::new(),
-            buffers: HashMap::new(),
-            gbuffers: HashMap::new(),
+            pool: Pool::default(),
             camera: *camera,
             lighting: lighting.clone(),
         })
     }
 
-    /// Bytes of the scene's texture array on the device.
+    /// Bytes of the scene's texture array on the device (0 for an untextured scene).
     pub fn texture_bytes(&self) -> u64 {
         self.scene.texture_bytes
     }
 
-    /// Builds the passes of `mode`. Pipelines and targets are created on first use and shared.
+    /// What the scene needs its frames to have.
+    pub fn needs(&self) -> SceneNeeds {
+        self.needs
+    }
+
+    /// Bytes of every texture and buffer that the prepared modes allocated, shared between
+    /// modes as the pool shares them.
+    pub fn target_bytes(&self) -> u64 {
+        self.pool.bytes()
+    }
+
+    /// Compiles the graph of `mode` and builds its passes. Pipelines and allocations are
+    /// created on first use and shared.
     pub fn prepare(&mut self, mode: Mode) -> Result<PreparedMode, RenderError> {
-        let (width, height) = (self.settings.width, self.settings.height);
-        let gbuffer = self.gbuffer(mode.m)?;
-        let mut passes: Vec<Box<dyn Pass>> = vec![Box::new(GBufferPass {
-            pipelines: self.gbuffer_pipelines()?,
-            scene: self.scene.clone(),
-            targets: gbuffer.clone(),
-        })];
-        let hdr = self.target("hdr", width, height, HDR_FORMAT);
-        let mut sample_counts = None;
-        let mut first = None;
-        match mode.technique {
-            Technique::Deferred => passes.push(Box::new(self.shade_all(&gbuffer, mode.stalled, &hdr)?)),
-            Technique::Reference => {
-                let supersampled = self.target("supersampled", gbuffer.width(), gbuffer.height(), HDR_FORMAT);
-                passes.push(Box::new(self.shade_all(&gbuffer, mode.stalled, &supersampled)?));
-                passes.push(Box::new(self.resolve(mode.m, &supersampled, &hdr)?));
-            }
-            Technique::Adaptive(metrics) => {
-                let adaptive = crate::passes::adaptive::build(self, &gbuffer, mode, metrics, &hdr)?;
-                sample_counts = Some(adaptive.sample_counts);
-                first = Some(adaptive.first);
-                passes.extend(adaptive.passes);
-            }
-        }
-        let display = self.target("display", width, height, DISPLAY_FORMAT);
-        passes.push(Box::new(self.display(&hdr, &display)?));
+        let graph = frame_graph(&self.needs, mode, &self.settings, &self.gpu.device.limits())?;
+        let plan = graph.compile(frame::dims(&self.settings, mode))?;
+        let allocated = self.pool.acquire(&self.gpu.device, &plan)?;
+        let passes = self.build(&graph, &plan, &allocated)?;
         self.gpu.check()?;
         Ok(PreparedMode {
             gpu: Arc::clone(&self.gpu),
             mode,
             passes,
-            hdr,
-            display,
-            sample_counts,
-            gbuffer,
-            first,
+            outputs: outputs(&plan, &allocated),
+            graph: GraphSummary::of(&plan),
             clip: (self.camera.near, self.camera.far),
         })
     }
 
-    pub(crate) fn module(&mut self, file: &'static str) -> Result<wgpu::ShaderModule, RenderError> {
-        if let Some(module) = self.modules.get(file) {
-            return Ok(module.clone());
-        }
-        let module = shaders::module(&self.gpu.device, file)?;
-        self.modules.insert(file, module.clone());
-        Ok(module)
-    }
-
-    /// A render target shared by every mode that asks for the same name and size.
-    pub(crate) fn target(
+    /// Builds every pass of a compiled graph, in order, from its ports' allocations.
+    fn build(
         &mut self,
-        name: &'static str,
-        width: u32,
-        height: u32,
-        format: wgpu::TextureFormat,
-    ) -> wgpu::Texture {
-        let device = &self.gpu.device;
-        self.targets
-            .entry((name, width, height))
-            .or_insert_with(|| create_target(device, name, width, height, format))
-            .clone()
-    }
-
-    /// Bytes of all render targets allocated so far.
-    pub fn target_bytes(&self) -> u64 {
-        self.targets
-            .values()
-            .map(|t| {
-                let texel = t.format().block_copy_size(Some(wgpu::TextureAspect::All)).unwrap_or(4);
-                u64::from(t.width()) * u64::from(t.height()) * u64::from(texel)
+        graph: &FrameGraph,
+        plan: &Plan,
+        allocated: &[Allocated],
+    ) -> Result<Vec<Box<dyn Pass>>, RenderError> {
+        let mut ctx =
+            BuildContext { scene: &self.scene, pipelines: &mut self.pipelines, settings: &self.settings };
+        plan.order
+            .iter()
+            .map(|&pass| {
+                let decl = graph.decl(pass);
+                let ports = decl
+                    .ports
+                    .iter()
+                    .map(|port| {
+                        let physical =
+                            plan.physical_of(PortRef { pass, port: port.name }).expect("every port compiled");
+                        (port.name, (*port, allocated[physical].clone()))
+                    })
+                    .collect();
+                let mut io = Io::new(decl.name, ports);
+                let built = graph.node(pass).build(&mut ctx, &mut io)?;
+                io.finish()?;
+                Ok(built)
             })
-            .sum()
-    }
-
-    /// The G-buffer of the M×M modes, shared by all of them.
-    fn gbuffer(&mut self, m: u32) -> Result<GBuffer, RenderError> {
-        if let Some(gbuffer) = self.gbuffers.get(&m) {
-            return Ok(gbuffer.clone());
-        }
-        let gbuffer = self.gbuffer_targets(m * self.settings.width, m * self.settings.height, true)?;
-        self.gbuffers.insert(m, gbuffer.clone());
-        Ok(gbuffer)
-    }
-
-    /// G-buffer targets of one size: shared through [`Self::target`], or made for one use
-    /// (ground-truth tiles) and freed when dropped.
-    fn gbuffer_targets(&mut self, width: u32, height: u32, shared: bool) -> Result<GBuffer, RenderError> {
-        let limit = self.gpu.device.limits().max_texture_dimension_2d;
-        if width > limit || height > limit {
-            return Err(RenderError::TooLarge { width, height, limit });
-        }
-        let mut make = |name, format| {
-            if shared {
-                self.target(name, width, height, format)
-            } else {
-                create_target(&self.gpu.device, name, width, height, format)
-            }
-        };
-        let uv = make("gbuffer.uv", gbuffer::UV_FORMAT);
-        let normal = make("gbuffer.normal", gbuffer::NORMAL_FORMAT);
-        let uv_grad = make("gbuffer.uv_grad", gbuffer::UV_GRAD_FORMAT);
-        let depth = make("gbuffer.depth", gbuffer::DEPTH_FORMAT);
-        let views = [&uv, &normal, &uv_grad, &depth].map(view);
-        let group = passes::bind_group(
-            &self.gpu.device,
-            "gbuffer",
-            &self.gbuffer_layout,
-            &views.each_ref().map(wgpu::BindingResource::TextureView),
-        );
-        Ok(GBuffer { uv, normal, uv_grad, depth, group })
+            .collect()
     }
 
     /// Renders the ground truth: the brute-force reference at `m` × `m` samples per pixel,
-    /// unstalled and untimed, with reference-MxM's shaders and texture-footprint rule (UV
-    /// derivatives per G-buffer sample), so a single tile at m = M gives reference-MxM's image
-    /// bit for bit. Tiles keep each one's targets within `tile_bytes`: at 8×8 a 1024×768
-    /// frame needs 1.8 GB of targets at once. The frame uniforms are restored afterwards.
+    /// unstalled and untimed, through reference-MxM's graph with its texture-footprint rule
+    /// (UV derivatives per G-buffer sample), so a single tile at m = M gives reference-MxM's
+    /// image bit for bit. Tiles keep each one's allocations within `tile_bytes`: at 8×8 a
+    /// 1024×768 frame needs 1.8 GB of targets at once. The frame uniforms are restored
+    /// afterwards.
     pub fn render_truth(&mut self, m: u32, tile_bytes: u64) -> Result<Truth, RenderError> {
         let (width, height) = (self.settings.width, self.settings.height);
         let limit = self.gpu.device.limits().max_texture_dimension_2d;
@@ -281,32 +196,24 @@ impl SceneRenderer {
         Ok(Truth { images, m, tiles: tiles.len() })
     }
 
-    /// Renders one tile of the truth and copies its images into place in `out`.
+    /// Renders one tile of the truth into allocations of its own, freed afterwards, and copies
+    /// its images into place in `out`.
     fn render_truth_tile(&mut self, m: u32, tile: Tile, out: &mut FrameImages) -> Result<(), RenderError> {
         self.write_frame_uniforms(tile);
-        let gbuffer = self.gbuffer_targets(m * tile.width, m * tile.height, false)?;
-        let device = &self.gpu.device;
-        let supersampled =
-            create_target(device, "truth.supersampled", gbuffer.width(), gbuffer.height(), HDR_FORMAT);
-        let hdr = create_target(device, "truth.hdr", tile.width, tile.height, HDR_FORMAT);
-        let display = create_target(device, "truth.display", tile.width, tile.height, DISPLAY_FORMAT);
-        let passes: [Box<dyn Pass>; 4] = [
-            Box::new(GBufferPass {
-                pipelines: self.gbuffer_pipelines()?,
-                scene: self.scene.clone(),
-                targets: gbuffer.clone(),
-            }),
-            Box::new(self.shade_all(&gbuffer, false, &supersampled)?),
-            Box::new(self.resolve(m, &supersampled, &hdr)?),
-            Box::new(self.display(&hdr, &display)?),
-        ];
+        let mode = Mode::new(Technique::Reference, m, false);
+        let graph = frame_graph(&self.needs, mode, &self.settings, &self.gpu.device.limits())?;
+        let plan = graph.compile(Dims { width: tile.width, height: tile.height, m })?;
+        let allocated = Pool::default().acquire(&self.gpu.device, &plan)?;
+        let passes = self.build(&graph, &plan, &allocated)?;
         let mut encoder = self.gpu.encoder("truth");
         for pass in &passes {
             pass.encode(&mut encoder);
         }
         self.gpu.submit_timed(encoder)?;
-        let tile_display = self.gpu.read_texture(&display)?;
-        let tile_hdr: Vec<f32> = half_texels(&self.gpu.read_texture(&hdr)?).into_iter().flatten().collect();
+        let outputs = outputs(&plan, &allocated);
+        let tile_display = self.gpu.read_texture(&outputs[&Output::Display])?;
+        let tile_hdr: Vec<f32> =
+            half_texels(&self.gpu.read_texture(&outputs[&Output::Hdr])?).into_iter().flatten().collect();
         let row = 4 * tile.width as usize;
         for y in 0..tile.height as usize {
             let at = 4 * ((tile.y as usize + y) * out.width as usize + tile.x as usize);
@@ -322,192 +229,89 @@ impl SceneRenderer {
         let uniforms = FrameUniforms::for_tile(&self.camera, &self.lighting, width, height, tile);
         self.gpu.queue.write_buffer(&self.scene.frame, 0, bytemuck::bytes_of(&uniforms));
     }
+}
 
-    fn gbuffer_pipelines(&mut self) -> Result<GBufferPipelines, RenderError> {
-        if let Some(pipelines) = &self.gbuffer_pipelines {
-            return Ok(pipelines.clone());
-        }
-        let module = self.module("gbuffer.wgsl")?;
-        let pipelines = GBufferPipelines::new(&self.gpu.device, &module, &self.scene.layout);
-        self.gbuffer_pipelines = Some(pipelines.clone());
-        Ok(pipelines)
-    }
-
-    /// Override constants of the shading code: light count and stall.
-    pub(crate) fn shading_constants(&self, stalled: bool) -> Vec<(&'static str, f64)> {
-        let stall = if stalled { self.settings.stall_iterations } else { 0 };
-        vec![("LIGHT_COUNT", f64::from(self.scene.light_count)), ("STALL_ITERATIONS", f64::from(stall))]
-    }
-
-    /// A fullscreen pipeline (see [`Self::screen_pipeline`]).
-    pub(crate) fn fullscreen_pipeline(
-        &mut self,
-        file: &'static str,
-        entry: &str,
-        constants: &[(&str, f64)],
-        groups: [Option<&wgpu::BindGroupLayout>; 3],
-        format: wgpu::TextureFormat,
-    ) -> Result<wgpu::RenderPipeline, RenderError> {
-        self.screen_pipeline(file, "fullscreen", entry, constants, groups, format)
-    }
-
-    /// A render pipeline without vertex buffers, cached by file, entry points, constants and
-    /// format. Groups are given by index; `None` leaves a group out of the layout.
-    pub(crate) fn screen_pipeline(
-        &mut self,
-        file: &'static str,
-        vertex: &str,
-        entry: &str,
-        constants: &[(&str, f64)],
-        groups: [Option<&wgpu::BindGroupLayout>; 3],
-        format: wgpu::TextureFormat,
-    ) -> Result<wgpu::RenderPipeline, RenderError> {
-        let key = format!("{file}/{vertex}/{entry}/{constants:?}/{format:?}");
-        if let Some(pipeline) = self.pipelines.get(&key) {
-            return Ok(pipeline.clone());
-        }
-        let module = self.module(file)?;
-        let program = Program { module: &module, entry, constants };
-        let pipeline =
-            passes::screen_pipeline(&self.gpu.device, entry, vertex, &program, &trim(&groups), format);
-        self.pipelines.insert(key, pipeline.clone());
-        Ok(pipeline)
-    }
-
-    /// A storage buffer shared by every mode that asks for the same name and size.
-    pub(crate) fn buffer(&mut self, name: &'static str, size: u64) -> wgpu::Buffer {
-        let device = &self.gpu.device;
-        self.buffers
-            .entry((name, size))
-            .or_insert_with(|| {
-                device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(name),
-                    size: size.max(16),
-                    usage: wgpu::BufferUsages::STORAGE
-                        | wgpu::BufferUsages::COPY_DST
-                        | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                })
-            })
-            .clone()
-    }
-
-    /// A compute pipeline, cached like [`Self::fullscreen_pipeline`].
-    pub(crate) fn compute_pipeline(
-        &mut self,
-        file: &'static str,
-        entry: &str,
-        constants: &[(&str, f64)],
-        groups: [Option<&wgpu::BindGroupLayout>; 3],
-    ) -> Result<wgpu::ComputePipeline, RenderError> {
-        let key = format!("{file}/{entry}/{constants:?}");
-        if let Some(pipeline) = self.compute_pipelines.get(&key) {
-            return Ok(pipeline.clone());
-        }
-        let module = self.module(file)?;
-        let program = Program { module: &module, entry, constants };
-        let pipeline = passes::compute_pipeline(&self.gpu.device, entry, &program, &trim(&groups));
-        self.compute_pipelines.insert(key, pipeline.clone());
-        Ok(pipeline)
-    }
-
-    pub(crate) fn texture_group(&self, texture: &wgpu::Texture) -> wgpu::BindGroup {
-        passes::bind_group(
-            &self.gpu.device,
-            "input",
-            &self.texture_layout,
-            &[wgpu::BindingResource::TextureView(&view(texture))],
-        )
-    }
-
-    /// Shades every G-buffer texel into `target` (same size as the G-buffer).
-    fn shade_all(
-        &mut self,
-        gbuffer: &GBuffer,
-        stalled: bool,
-        target: &wgpu::Texture,
-    ) -> Result<Screen, RenderError> {
-        let constants = self.shading_constants(stalled);
-        let (scene, gb) = (self.scene.layout.clone(), self.gbuffer_layout.clone());
-        let pipeline = self.fullscreen_pipeline(
-            "shade.wgsl",
-            "shade_all",
-            &constants,
-            [Some(&scene), Some(&gb), None],
-            HDR_FORMAT,
-        )?;
-        Ok(Screen {
-            name: "shade",
-            pipeline,
-            groups: vec![(0, self.scene.group.clone()), (1, gbuffer.group.clone())],
-            target: view(target),
-            vertices: 3,
+/// The retained outputs' textures.
+fn outputs(plan: &Plan, allocated: &[Allocated]) -> BTreeMap<Output, wgpu::Texture> {
+    plan.resources
+        .iter()
+        .enumerate()
+        .filter_map(|(index, resource)| {
+            let output = resource.retained?;
+            match &allocated[plan.allocation.assignment[index]] {
+                Allocated::Texture(texture) => Some((output, texture.clone())),
+                Allocated::Buffer(_) => None,
+            }
         })
+        .collect()
+}
+
+/// Textures and buffers keyed by descriptor, usage and ordinal: what graphs that never run
+/// at the same time share.
+#[derive(Debug, Default)]
+struct Pool {
+    entries: HashMap<(Resolved, Usage, usize), Allocated>,
+}
+
+impl Pool {
+    /// An allocation for each of the plan's, created where the pool has none yet, in the
+    /// order the frame first writes them: lavapipe's textures are plain memory, and where they
+    /// land relative to each other decides how the loads of one texel from several targets
+    /// share the CPU's caches.
+    fn acquire(&mut self, device: &wgpu::Device, plan: &Plan) -> Result<Vec<Allocated>, RenderError> {
+        let limit = device.limits().max_texture_dimension_2d;
+        let physical = &plan.allocation.physical;
+        let first_write = |p: usize| physical[p].resources.iter().map(|&r| plan.resources[r].first).min();
+        let mut creation: Vec<usize> = (0..physical.len()).collect();
+        creation.sort_by_key(|&p| (first_write(p), p));
+        let mut allocated = vec![None; physical.len()];
+        for p in creation {
+            let physical = &physical[p];
+            if let Resolved::Texture { width, height, .. } = physical.desc
+                && (width > limit || height > limit)
+            {
+                let writer = plan.resources[physical.resources[0]].writer;
+                return Err(RenderError::Limit(format!(
+                    "{}.{}: a {width}×{height} target exceeds the device's limit of {limit} texels per side",
+                    plan.names[writer.pass], writer.port
+                )));
+            }
+            let key = (physical.desc, physical.usage, physical.ordinal);
+            allocated[p] = Some(self.entries.entry(key).or_insert_with(|| create(device, physical)).clone());
+        }
+        Ok(allocated.into_iter().map(|a| a.expect("every allocation acquired")).collect())
     }
 
-    /// Box-filters an M·w × M·h image into `target`.
-    fn resolve(
-        &mut self,
-        m: u32,
-        supersampled: &wgpu::Texture,
-        target: &wgpu::Texture,
-    ) -> Result<Screen, RenderError> {
-        let input = self.texture_layout.clone();
-        let pipeline = self.fullscreen_pipeline(
-            "resolve.wgsl",
-            "resolve",
-            &[("M", f64::from(m))],
-            [None, None, Some(&input)],
-            HDR_FORMAT,
-        )?;
-        Ok(Screen {
-            name: "resolve",
-            pipeline,
-            groups: vec![(2, self.texture_group(supersampled))],
-            target: view(target),
-            vertices: 3,
-        })
-    }
-
-    fn display(&mut self, hdr: &wgpu::Texture, target: &wgpu::Texture) -> Result<Screen, RenderError> {
-        let (scene, input) = (self.scene.layout.clone(), self.texture_layout.clone());
-        let pipeline = self.fullscreen_pipeline(
-            "display.wgsl",
-            "display",
-            &[],
-            [Some(&scene), None, Some(&input)],
-            DISPLAY_FORMAT,
-        )?;
-        Ok(Screen {
-            name: "display",
-            pipeline,
-            groups: vec![(0, self.scene.group.clone()), (2, self.texture_group(hdr))],
-            target: view(target),
-            vertices: 3,
-        })
+    fn bytes(&self) -> u64 {
+        self.entries.keys().map(|(desc, _, _)| desc.bytes()).sum()
     }
 }
 
-/// A 2D render target that passes draw into, sample and copy out of.
-fn create_target(
-    device: &wgpu::Device,
-    name: &str,
-    width: u32,
-    height: u32,
-    format: wgpu::TextureFormat,
-) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(name),
-        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
+fn create(device: &wgpu::Device, physical: &Physical) -> Allocated {
+    let label = Some(physical.desc.to_string());
+    match (physical.desc, physical.usage) {
+        (Resolved::Texture { format, width, height, layers }, Usage::Texture(usage)) => {
+            Allocated::Texture(device.create_texture(&wgpu::TextureDescriptor {
+                label: label.as_deref(),
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: layers },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            }))
+        }
+        (Resolved::Buffer { bytes }, Usage::Buffer(usage)) => {
+            Allocated::Buffer(device.create_buffer(&wgpu::BufferDescriptor {
+                label: label.as_deref(),
+                size: bytes,
+                usage,
+                mapped_at_creation: false,
+            }))
+        }
+        _ => unreachable!("a texture's usage is a texture usage"),
+    }
 }
 
 /// Target bytes per G-buffer sample of a truth tile: the G-buffer (UV 8, normal 8, UV
@@ -542,35 +346,15 @@ fn truth_tiles(
     Ok(tiles)
 }
 
-/// Pipeline layouts list groups up to the last one used; unused ones in between stay empty.
-fn trim<'a>(groups: &[Option<&'a wgpu::BindGroupLayout>; 3]) -> Vec<Option<&'a wgpu::BindGroupLayout>> {
-    let used = groups.iter().rposition(Option::is_some).map_or(0, |i| i + 1);
-    groups[..used].to_vec()
-}
-
-pub(crate) fn view(texture: &wgpu::Texture) -> wgpu::TextureView {
-    texture.create_view(&Default::default())
-}
-
-/// A mode ready to render: its passes in order and the targets holding its results.
+/// A mode ready to render: its passes in order and the textures holding its results.
 #[derive(Debug)]
 pub struct PreparedMode {
     gpu: Arc<Gpu>,
     pub mode: Mode,
     passes: Vec<Box<dyn Pass>>,
-    hdr: wgpu::Texture,
-    display: wgpu::Texture,
-    sample_counts: Option<wgpu::Texture>,
-    gbuffer: GBuffer,
-    /// S, the shade-first image of adaptive modes.
-    first: Option<wgpu::Texture>,
+    outputs: BTreeMap<Output, wgpu::Texture>,
+    graph: GraphSummary,
     clip: (f64, f64),
-}
-
-impl std::fmt::Debug for dyn Pass {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
 }
 
 impl PreparedMode {
@@ -586,56 +370,84 @@ impl PreparedMode {
         Ok(timing)
     }
 
+    /// The compiled graph: passes in order, allocations and their bytes.
+    pub fn graph(&self) -> &GraphSummary {
+        &self.graph
+    }
+
+    fn output(&self, output: Output) -> &wgpu::Texture {
+        &self.outputs[&output]
+    }
+
     /// Reads back the display image of the last frame (RGBA8), for determinism checks.
     pub fn read_display(&self) -> Result<Vec<u8>, RenderError> {
-        self.gpu.read_texture(&self.display)
+        self.gpu.read_texture(self.output(Output::Display))
     }
 
     /// Reads back the sample counts of the last frame (adaptive modes).
     pub fn read_sample_counts(&self) -> Result<Option<Vec<u8>>, RenderError> {
-        self.sample_counts.as_ref().map(|t| self.gpu.read_texture(t)).transpose()
+        self.outputs.get(&Output::SampleCounts).map(|t| self.gpu.read_texture(t)).transpose()
     }
 
     /// Reads back the G-buffer of the last frame.
     pub fn read_gbuffer(&self) -> Result<GBufferImages, RenderError> {
-        let normal_material = half_texels(&self.gpu.read_texture(&self.gbuffer.normal)?);
+        let normal = self.output(Output::GBufferNormal);
+        let normal_material = half_texels(&self.gpu.read_texture(normal)?);
         let (near, far) = self.clip;
         let depth = self
             .gpu
-            .read_texture(&self.gbuffer.depth)?
+            .read_texture(self.output(Output::GBufferDepth))?
             .chunks_exact(4)
             .map(|b| {
                 let d = f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]]));
                 near * far / (d * (far - near) + near)
             })
             .collect();
-        Ok(GBufferImages {
-            width: self.gbuffer.width(),
-            height: self.gbuffer.height(),
-            normal_material,
-            depth,
-        })
+        Ok(GBufferImages { width: normal.width(), height: normal.height(), normal_material, depth })
     }
 
     /// Reads back S, the shade-first image of an adaptive mode (linear RGBA).
     pub fn read_first(&self) -> Result<Option<Vec<[f32; 4]>>, RenderError> {
-        self.first.as_ref().map(|t| Ok(half_texels(&self.gpu.read_texture(t)?))).transpose()
+        self.outputs.get(&Output::First).map(|t| Ok(half_texels(&self.gpu.read_texture(t)?))).transpose()
+    }
+
+    /// Reads back the shadow cubes of the last frame, where the scene has shadow lights:
+    /// reversed depth per texel, layer after layer (6 per light: +X, −X, +Y, −Y, +Z, −Z), each
+    /// `resolution`² from the top row.
+    pub fn read_shadow_cubes(&self) -> Result<Option<ShadowDepths>, RenderError> {
+        let Some(cubes) = self.outputs.get(&Output::ShadowCubes) else { return Ok(None) };
+        let depth = self
+            .gpu
+            .read_texture(cubes)?
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        Ok(Some(ShadowDepths { resolution: cubes.width(), layers: cubes.depth_or_array_layers(), depth }))
     }
 
     /// Reads back the images of the last frame. Call it before another mode of the same scene
-    /// renders: modes share their targets.
+    /// renders: modes share their allocations.
     pub fn read_images(&self) -> Result<FrameImages, RenderError> {
-        let display = self.gpu.read_texture(&self.display)?;
-        let hdr = half_texels(&self.gpu.read_texture(&self.hdr)?).into_iter().flatten().collect();
-        let sample_counts = self.read_sample_counts()?;
+        let display = self.output(Output::Display);
+        let hdr =
+            half_texels(&self.gpu.read_texture(self.output(Output::Hdr))?).into_iter().flatten().collect();
         Ok(FrameImages {
-            width: self.display.width(),
-            height: self.display.height(),
-            display,
+            width: display.width(),
+            height: display.height(),
+            display: self.gpu.read_texture(display)?,
             hdr,
-            sample_counts,
+            sample_counts: self.read_sample_counts()?,
         })
     }
+}
+
+/// The shadow cubes of a frame, read back.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShadowDepths {
+    pub resolution: u32,
+    pub layers: u32,
+    /// Reversed depth (1 at the near plane, 0 at the light's range), layer by layer.
+    pub depth: Vec<f32>,
 }
 
 /// RGBA f16 texels as f32.

@@ -1,5 +1,9 @@
-//! The WGSL sources in `shaders/`, embedded at build time, and the one preprocessor feature they
-//! use: a line `#include "lib/name.wgsl"` is replaced by that file (once per module).
+//! The WGSL sources in `shaders/`, embedded at build time, and the two preprocessor features
+//! they use: a line `#include "lib/name.wgsl"` is replaced by that file (once per module), and
+//! lines between `#ifdef NAME` (or `#ifndef NAME`), an optional `#else` and `#endif` are kept
+//! only when the [`Features`] of the module say so. Features remove bindings, which override
+//! constants cannot: an untextured scene's shaders declare no texture array, a scene without
+//! shadow-casting lights no shadow cubes.
 
 use std::collections::HashSet;
 
@@ -17,9 +21,12 @@ macro_rules! sources {
 sources!(
     "lib/common.wgsl",
     "lib/scene.wgsl",
+    "lib/geometry.wgsl",
     "lib/gbuffer.wgsl",
+    "lib/shadows.wgsl",
     "lib/shading.wgsl",
     "gbuffer.wgsl",
+    "shadow.wgsl",
     "shade.wgsl",
     "resolve.wgsl",
     "display.wgsl",
@@ -49,44 +56,86 @@ fn source(name: &str) -> Result<String, RenderError> {
         .ok_or_else(|| RenderError::Shader(format!("shaders/{name}: no such shader")))
 }
 
-/// The text of `name` with its includes spliced in, ready for naga.
-pub fn compose(name: &str) -> Result<String, RenderError> {
+/// What a scene needs its shaders to declare.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub struct Features {
+    /// `TEXTURED`: the scene texture array, its sampler and every lookup into them.
+    pub textured: bool,
+    /// `SHADOWS`: the shadow cube array, its sampler and the shadow test in shading.
+    pub shadows: bool,
+}
+
+impl Features {
+    pub const ALL: Features = Features { textured: true, shadows: true };
+
+    /// Every combination, for tests that validate each variant of a shader.
+    pub fn combinations() -> impl Iterator<Item = Features> {
+        (0..4).map(|bits| Features { textured: bits & 1 != 0, shadows: bits & 2 != 0 })
+    }
+
+    fn defines(self, name: &str) -> Option<bool> {
+        match name {
+            "TEXTURED" => Some(self.textured),
+            "SHADOWS" => Some(self.shadows),
+            _ => None,
+        }
+    }
+}
+
+/// The text of `name` with its includes spliced in and its conditional lines resolved for
+/// `features`, ready for naga.
+pub fn compose(name: &str, features: Features) -> Result<String, RenderError> {
     let mut out = String::new();
     let mut seen = HashSet::new();
-    splice(name, &mut out, &mut seen)?;
+    splice(name, features, &mut out, &mut seen)?;
     Ok(out)
 }
 
-fn splice(name: &str, out: &mut String, seen: &mut HashSet<String>) -> Result<(), RenderError> {
+fn splice(
+    name: &str,
+    features: Features,
+    out: &mut String,
+    seen: &mut HashSet<String>,
+) -> Result<(), RenderError> {
     if !seen.insert(name.to_string()) {
         return Ok(());
     }
+    let error = |number: usize, message: &str| {
+        RenderError::Shader(format!("shaders/{name}:{}: {message}", number + 1))
+    };
+    // Whether each open conditional keeps its lines, innermost last.
+    let mut open: Vec<bool> = Vec::new();
     for (number, line) in source(name)?.lines().enumerate() {
-        match line.trim().strip_prefix("#include") {
-            Some(rest) => {
-                let include = rest.trim().trim_matches('"');
-                if include.is_empty() {
-                    return Err(RenderError::Shader(format!(
-                        "shaders/{name}:{}: #include needs a file name",
-                        number + 1
-                    )));
-                }
-                splice(include, out, seen)?;
+        let directive = line.trim();
+        let condition = |rest: &str| {
+            features
+                .defines(rest.trim())
+                .ok_or_else(|| error(number, &format!("unknown feature {:?}", rest.trim())))
+        };
+        if let Some(rest) = directive.strip_prefix("#ifdef ") {
+            open.push(condition(rest)?);
+        } else if let Some(rest) = directive.strip_prefix("#ifndef ") {
+            open.push(!condition(rest)?);
+        } else if directive == "#else" {
+            let keep = open.last_mut().ok_or_else(|| error(number, "#else without #ifdef"))?;
+            *keep = !*keep;
+        } else if directive == "#endif" {
+            open.pop().ok_or_else(|| error(number, "#endif without #ifdef"))?;
+        } else if !open.iter().all(|&keep| keep) {
+            continue;
+        } else if let Some(rest) = directive.strip_prefix("#include") {
+            let include = rest.trim().trim_matches('"');
+            if include.is_empty() {
+                return Err(error(number, "#include needs a file name"));
             }
-            None => {
-                out.push_str(line);
-                out.push('\n');
-            }
+            splice(include, features, out, seen)?;
+        } else {
+            out.push_str(line);
+            out.push('\n');
         }
     }
+    if !open.is_empty() {
+        return Err(RenderError::Shader(format!("shaders/{name}: #ifdef without #endif")));
+    }
     Ok(())
-}
-
-/// Compiles a pass shader into a module on `device`.
-pub fn module(device: &wgpu::Device, name: &str) -> Result<wgpu::ShaderModule, RenderError> {
-    let text = compose(name)?;
-    Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(name),
-        source: wgpu::ShaderSource::Wgsl(text.into()),
-    }))
 }

@@ -75,7 +75,7 @@ fn softly_lit() -> Lighting {
             color: Vec3::ONE,
             intensity: 3.0,
             range: 30.0,
-            casts_shadows: false,
+            shadow: None,
         }],
         ambient: Vec3::splat(0.05),
         ..ambient_only()
@@ -125,7 +125,7 @@ fn sample_counts_stay_in_the_window_on_every_generated_scene() {
             color: Vec3::ONE,
             intensity: 1e6,
             range: 50.0,
-            casts_shadows: false,
+            shadow: None,
         }],
         ..lit()
     };

@@ -1,28 +1,51 @@
 //! Every WGSL file is valid, embedded, and agrees with the Rust side on shared constants.
 
-use aabench_renderer::shaders::{self, SOURCES};
+use aabench_renderer::shaders::{self, Features, SOURCES};
+
+fn parse_with(name: &str, features: Features) -> naga::Module {
+    let text = shaders::compose(name, features).unwrap_or_else(|e| panic!("{name}: {e}"));
+    naga::front::wgsl::parse_str(&text)
+        .unwrap_or_else(|e| panic!("{features:?}: {}", e.emit_to_string_with_path(&text, name)))
+}
 
 fn parse(name: &str) -> naga::Module {
-    let text = shaders::compose(name).unwrap_or_else(|e| panic!("{name}: {e}"));
-    naga::front::wgsl::parse_str(&text)
-        .unwrap_or_else(|e| panic!("{}", e.emit_to_string_with_path(&text, name)))
+    parse_with(name, Features::ALL)
 }
 
 #[test]
-fn every_pass_shader_parses_and_validates_with_naga() {
+fn every_pass_shader_parses_and_validates_with_naga_under_every_feature_set() {
     let mut validated = 0;
     for name in shaders::pass_files() {
-        let module = parse(name);
-        naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::default(),
-        )
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("shaders/{name}: {e:?}"));
-        assert!(!module.entry_points.is_empty(), "shaders/{name} has no entry point");
-        validated += 1;
+        for features in Features::combinations() {
+            let module = parse_with(name, features);
+            // Cube arrays are a downlevel capability that lavapipe has.
+            naga::valid::Validator::new(
+                naga::valid::ValidationFlags::all(),
+                naga::valid::Capabilities::CUBE_ARRAY_TEXTURES,
+            )
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("shaders/{name} with {features:?}: {e:?}"));
+            assert!(!module.entry_points.is_empty(), "shaders/{name} has no entry point");
+            validated += 1;
+        }
     }
-    assert!(validated >= 5, "only {validated} pass shaders found");
+    assert!(validated >= 20, "only {validated} pass shader variants found");
+}
+
+#[test]
+fn features_remove_the_bindings_a_scene_does_not_need() {
+    let names = |features| {
+        let module = parse_with("shade.wgsl", features);
+        module.global_variables.iter().filter_map(|(_, g)| g.name.clone()).collect::<Vec<_>>()
+    };
+    let plain = names(Features::default());
+    for absent in ["scene_textures", "scene_sampler", "shadow_cubes", "shadow_sampler"] {
+        assert!(!plain.contains(&absent.to_string()), "{absent} in {plain:?}");
+    }
+    let all = names(Features::ALL);
+    for present in ["scene_textures", "scene_sampler", "shadow_cubes", "shadow_sampler"] {
+        assert!(all.contains(&present.to_string()), "{present} missing in {all:?}");
+    }
 }
 
 #[test]
@@ -41,11 +64,11 @@ fn every_file_in_the_shaders_folder_is_embedded_and_used() {
     let mut embedded: Vec<String> = SOURCES.iter().map(|(name, _)| name.to_string()).collect();
     embedded.sort();
     assert_eq!(on_disk, embedded, "shaders/ and shaders::SOURCES differ");
-    // Every include is included by some pass.
+    // Every include is included by some other file.
     for (name, _) in SOURCES.iter().filter(|(n, _)| n.starts_with("lib/")) {
-        let used = shaders::pass_files()
-            .any(|pass| SOURCES.iter().any(|(n, text)| *n == pass && text.contains(name)));
-        assert!(used, "shaders/{name} is included by no pass");
+        let directive = format!("#include \"{name}\"");
+        let used = SOURCES.iter().any(|(other, text)| other != name && text.contains(&directive));
+        assert!(used, "shaders/{name} is included by no file");
     }
 }
 
@@ -73,6 +96,10 @@ fn constants_shared_with_rust_agree() {
         constant("shade.wgsl", "BACKGROUND"),
         naga::Literal::I32(aabench_renderer::BACKGROUND_MATERIAL)
     );
+    assert_eq!(
+        constant("shadow.wgsl", "MAX_SHADOW_FACES"),
+        naga::Literal::U32(6 * aabench_renderer::scene::MAX_SHADOW_LIGHTS as u32)
+    );
     // A list entry packs a rank below M² ≤ 16 and the index of a pixel of up to 4096×4096.
     let naga::Literal::U32(rank_bits) = constant("adaptive.wgsl", "RANK_BITS") else { panic!("u32") };
     assert!(1u64 << rank_bits >= 16, "{rank_bits} bits cannot hold 16 ranks");
@@ -81,8 +108,8 @@ fn constants_shared_with_rust_agree() {
 
 #[test]
 fn includes_are_spliced_once_and_bad_names_fail() {
-    let text = shaders::compose("adaptive.wgsl").unwrap();
+    let text = shaders::compose("adaptive.wgsl", Features::ALL).unwrap();
     assert_eq!(text.matches("struct Frame {").count(), 1);
-    assert!(!text.contains("#include"));
-    assert!(shaders::compose("missing.wgsl").is_err());
+    assert!(!text.contains('#'), "a directive survived composition");
+    assert!(shaders::compose("missing.wgsl", Features::ALL).is_err());
 }

@@ -47,7 +47,7 @@ pub fn lit() -> Lighting {
         color,
         intensity: 12.0,
         range: 30.0,
-        casts_shadows: false,
+        shadow: None,
     };
     Lighting {
         lights: vec![

@@ -89,6 +89,25 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Print the pass graph of one mode of a scene: passes in order, their ports, the
+    /// allocation each port got and its lifetime, and the bytes against one allocation per
+    /// output and the lower bound.
+    Graph {
+        /// The scene's manifest.
+        manifest: PathBuf,
+        /// The mode id, e.g. adaptive-2x2.
+        #[arg(long)]
+        mode: String,
+        /// Whose resolution to compile for.
+        #[arg(long, value_enum, default_value = "quick")]
+        tier: Tier,
+        /// How adaptive modes shade their extra samples.
+        #[arg(long, value_enum, default_value = "compact")]
+        extra_samples: ExtraSamplesArg,
+        /// Write Graphviz instead of the table (`aabench graph … --dot | dot -Tsvg`).
+        #[arg(long)]
+        dot: bool,
+    },
     /// Print the Vulkan adapter and the platform key that results are filed under.
     Info,
     /// List the mode ids and groups that --modes accepts.
@@ -136,6 +155,15 @@ enum ExtraSamplesArg {
     Loop,
 }
 
+impl From<ExtraSamplesArg> for ExtraSamples {
+    fn from(arg: ExtraSamplesArg) -> ExtraSamples {
+        match arg {
+            ExtraSamplesArg::Compact => ExtraSamples::Compact,
+            ExtraSamplesArg::Loop => ExtraSamples::Loop,
+        }
+    }
+}
+
 fn main() -> ExitCode {
     quiet_mesa_device_select();
     let cli = Cli::parse();
@@ -146,6 +174,12 @@ fn main() -> ExitCode {
         Command::Compare { run, baseline, out, fail_on } => compare(&run, &baseline, out.as_deref(), fail_on),
         Command::Report { runs, history, verdict } => report(&runs, history.as_deref(), verdict.as_deref()),
         Command::Merge { runs, out } => merge(&runs, &out),
+        Command::Graph { manifest, mode, tier, extra_samples, dot } => {
+            match print_graph(&manifest, &mode, tier, extra_samples.into(), dot) {
+                Ok(()) => exit::OK,
+                Err(error) => fail(format!("{error:#}")),
+            }
+        }
         Command::Info => info(),
         Command::Modes => {
             list_modes();
@@ -229,10 +263,7 @@ fn make_plan(args: &RunArgs) -> Result<RunPlan, String> {
         repetitions,
         warmup: args.warmup,
         frame_timeout,
-        extra_samples: match args.extra_samples {
-            ExtraSamplesArg::Compact => ExtraSamples::Compact,
-            ExtraSamplesArg::Loop => ExtraSamples::Loop,
-        },
+        extra_samples: args.extra_samples.into(),
         truth_cache: args.truth_cache.clone(),
         shard,
         run_dir: args.out.join(&run_id),
@@ -367,6 +398,29 @@ fn merge(runs: &[PathBuf], out: &Path) -> u8 {
         }
         Err(message) => fail(message),
     }
+}
+
+fn print_graph(
+    path: &Path,
+    mode: &str,
+    tier: Tier,
+    extra_samples: ExtraSamples,
+    dot: bool,
+) -> anyhow::Result<()> {
+    let mode: Mode = mode.parse().map_err(|e| anyhow::anyhow!("--mode: {e}"))?;
+    let manifest = Manifest::load(path)?;
+    let loaded = scenes::load(&manifest)?;
+    let settings = run::render_settings(&manifest, tier, extra_samples);
+    let needs = aabench_renderer::frame::SceneNeeds::of(&loaded.scene, &loaded.lighting);
+    // The adaptive list's layout follows the device's limits.
+    let limits = aabench_renderer::Gpu::new()?.device.limits();
+    let graph = aabench_renderer::frame::describe(&needs, mode, &settings, &limits, dot)?;
+    if !dot {
+        let [width, height] = [settings.width, settings.height];
+        println!("{} {mode} ({} tier, {width}×{height}; {needs})\n", manifest.name, tier.name());
+    }
+    print!("{graph}");
+    Ok(())
 }
 
 fn info() -> u8 {

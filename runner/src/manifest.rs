@@ -5,8 +5,8 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use aabench_renderer::AdaptiveSettings;
-use aabench_renderer::scene::MAX_LIGHTS;
 use aabench_renderer::scene::generate::Generator;
+use aabench_renderer::scene::{MAX_LIGHTS, MAX_SHADOW_LIGHTS, Shadow};
 use serde::Deserialize;
 
 use crate::gate::Tolerances;
@@ -82,7 +82,44 @@ pub struct LightSpec {
     pub range: f32,
     #[serde(default)]
     pub casts_shadows: bool,
+    /// Shadow settings of a light that casts shadows; omitted fields take [`Shadow::default`].
+    pub shadow: Option<ShadowSpec>,
 }
+
+impl LightSpec {
+    /// The light's shadow, when it casts one.
+    pub fn shadow(&self) -> Option<Shadow> {
+        self.casts_shadows.then(|| self.shadow.unwrap_or_default().settings())
+    }
+}
+
+/// A shadow-casting light's cube: resolution of each face, depth bias and PCF radius (world
+/// units; see [`Shadow`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShadowSpec {
+    pub resolution: Option<u32>,
+    pub bias: Option<f32>,
+    pub radius: Option<f32>,
+}
+
+impl ShadowSpec {
+    pub fn settings(&self) -> Shadow {
+        let d = Shadow::default();
+        Shadow {
+            resolution: self.resolution.unwrap_or(d.resolution),
+            bias: self.bias.unwrap_or(d.bias),
+            radius: self.radius.unwrap_or(d.radius),
+        }
+    }
+}
+
+/// Bytes all of a scene's shadow cubes may take (f32 depth, six faces each): every mode and
+/// every ground-truth tile holds them beside its own targets.
+const MAX_SHADOW_CUBE_BYTES: u64 = 512 << 20;
+
+/// Texels per side of a shadow cube face.
+const SHADOW_RESOLUTIONS: std::ops::RangeInclusive<u32> = 16..=4096;
 
 fn white() -> [f32; 3] {
     [1.0; 3]
@@ -297,6 +334,55 @@ impl Manifest {
             if !(light.range > 0.0 && light.range.is_finite()) {
                 return fail(&field("range"), format!("{} must be finite and > 0", light.range));
             }
+            if light.shadow.is_some() && !light.casts_shadows {
+                return fail(&field("shadow"), "is given but casts_shadows is false".into());
+            }
+            if let Some(shadow) = light.shadow() {
+                let settings = |name: &str| field(&format!("shadow.{name}"));
+                if !SHADOW_RESOLUTIONS.contains(&shadow.resolution) {
+                    let (lo, hi) = (SHADOW_RESOLUTIONS.start(), SHADOW_RESOLUTIONS.end());
+                    return fail(
+                        &settings("resolution"),
+                        format!("{} must be in [{lo}, {hi}]", shadow.resolution),
+                    );
+                }
+                for (name, value) in [("bias", shadow.bias), ("radius", shadow.radius)] {
+                    if !(value >= 0.0 && value.is_finite()) {
+                        return fail(&settings(name), format!("{value} must be finite and ≥ 0"));
+                    }
+                }
+            }
+        }
+        let shadows: Vec<(usize, Shadow)> =
+            self.lights.iter().enumerate().filter_map(|(i, l)| Some((i, l.shadow()?))).collect();
+        if shadows.len() > MAX_SHADOW_LIGHTS {
+            return fail(
+                "lights",
+                format!("{} lights cast shadows, at most {MAX_SHADOW_LIGHTS} may", shadows.len()),
+            );
+        }
+        let cube_bytes: u64 = shadows.iter().map(|(_, s)| 6 * 4 * u64::from(s.resolution).pow(2)).sum();
+        if cube_bytes > MAX_SHADOW_CUBE_BYTES {
+            return fail(
+                "lights",
+                format!(
+                    "the shadow cubes take {} MiB, more than {} MiB: lower lights[i].shadow.resolution",
+                    cube_bytes >> 20,
+                    MAX_SHADOW_CUBE_BYTES >> 20
+                ),
+            );
+        }
+        if let (Some((first, a)), Some((i, b))) =
+            (shadows.first(), shadows.iter().find(|(_, s)| s.resolution != shadows[0].1.resolution))
+        {
+            return fail(
+                &format!("lights[{i}].shadow.resolution"),
+                format!(
+                    "{} differs from lights[{first}]'s {}: all shadow cubes of a scene are layers of \
+                     one array, so they share one resolution",
+                    b.resolution, a.resolution
+                ),
+            );
         }
         for (name, value) in [("ambient", self.ambient), ("background", self.background)] {
             if !value.iter().all(|c| c.is_finite() && *c >= 0.0) {
@@ -428,6 +514,44 @@ mod tests {
         check(|j| j["ambient"] = json!([0, -1, 0]), "ambient", "≥ 0");
         let light = json!({ "position": [0, 1, 2], "intensity": 5, "range": 10 });
         check(|j| j["lights"] = json!(vec![light.clone(); 65]), "lights", "at most 64");
+    }
+
+    #[test]
+    fn shadow_settings_are_validated_per_light() {
+        use serde_json::json;
+        let shadowed = |shadow: serde_json::Value| {
+            move |j: &mut serde_json::Value| {
+                j["lights"][0]["casts_shadows"] = json!(true);
+                j["lights"][0]["shadow"] = shadow.clone();
+            }
+        };
+        check(shadowed(json!({"resolution": 8})), "lights[0].shadow.resolution", "[16, 4096]");
+        check(shadowed(json!({"bias": -0.1})), "lights[0].shadow.bias", "≥ 0");
+        check(shadowed(json!({"radius": -1})), "lights[0].shadow.radius", "≥ 0");
+        check(shadowed(json!({"radious": 1})), "lights[0].shadow.radious", "unknown field `radious`");
+        check(
+            |j| j["lights"][0]["shadow"] = json!({"bias": 0.1}),
+            "lights[0].shadow",
+            "casts_shadows is false",
+        );
+        let light = |resolution: u32| {
+            json!({ "position": [0, 1, 2], "intensity": 5, "range": 10, "casts_shadows": true,
+                    "shadow": { "resolution": resolution } })
+        };
+        check(
+            |j| j["lights"] = json!([light(512), light(256)]),
+            "lights[1].shadow.resolution",
+            "one resolution",
+        );
+        check(|j| j["lights"] = json!(vec![light(64); 9]), "lights", "at most 8");
+        check(|j| j["lights"] = json!(vec![light(4096); 2]), "lights", "768 MiB, more than 512 MiB");
+        // Defaults, and no shadow for a light that casts none.
+        let mut json: serde_json::Value = serde_json::from_str(VALID).unwrap();
+        shadowed(json!({"bias": 0.2}))(&mut json);
+        let manifest = Manifest::parse(Path::new("scenes/edge.json"), &json.to_string()).unwrap();
+        assert_eq!(manifest.lights[0].shadow(), Some(Shadow { bias: 0.2, ..Shadow::default() }));
+        let plain = Manifest::parse(Path::new("scenes/edge.json"), VALID).unwrap();
+        assert_eq!(plain.lights[0].shadow(), None);
     }
 
     #[test]

@@ -27,6 +27,14 @@ impl Tier {
         }
     }
 
+    /// The output resolution a manifest asks for in this tier.
+    pub fn resolution(self, manifest: &crate::manifest::Manifest) -> [u32; 2] {
+        match self {
+            Tier::Quick => manifest.resolution.quick,
+            Tier::Nightly => manifest.resolution.nightly,
+        }
+    }
+
     /// Timed repetitions of every mode, after warm-up. The quick tier is the CI gate's: on
     /// these machines one frame's time varies by about 10% from the next, so 25 repetitions
     /// are what lets the gate catch a 25% slowdown with no false alarms (README, "The gate").

@@ -179,6 +179,51 @@ pub struct ModeRecord {
     /// Against the ground truth (`truth-8x8`).
     pub vs_ground_truth: Option<Quality>,
     pub adaptive: Option<AdaptiveCost>,
+    /// The mode's compiled pass graph: passes run and the allocations they share.
+    #[serde(default)]
+    pub graph: Option<GraphRecord>,
+}
+
+/// A mode's pass graph as compiled for this scene: what ran and what it allocated, against
+/// one allocation per output and against the lower bound (per descriptor, the most resources
+/// alive at once). `allocated_bytes − lower_bound_bytes` is what the allocator missed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GraphRecord {
+    /// In submission order.
+    pub passes: Vec<String>,
+    pub allocations: Vec<AllocationRecord>,
+    pub allocated_bytes: u64,
+    pub one_per_output_bytes: u64,
+    pub lower_bound_bytes: u64,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AllocationRecord {
+    /// Format and size (`Rgba16Float 512×384`) or `buffer N B`.
+    pub descriptor: String,
+    pub bytes: u64,
+    /// The outputs it holds in turn, as `pass.port`.
+    pub holds: Vec<String>,
+}
+
+impl GraphRecord {
+    pub fn of(graph: &aabench_renderer::frame::GraphSummary) -> GraphRecord {
+        GraphRecord {
+            passes: graph.passes.clone(),
+            allocations: graph
+                .allocations
+                .iter()
+                .map(|a| AllocationRecord {
+                    descriptor: a.descriptor.clone(),
+                    bytes: a.bytes,
+                    holds: a.holds.clone(),
+                })
+                .collect(),
+            allocated_bytes: graph.allocated_bytes,
+            one_per_output_bytes: graph.one_per_output_bytes,
+            lower_bound_bytes: graph.lower_bound_bytes,
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

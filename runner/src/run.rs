@@ -8,18 +8,20 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant, SystemTime};
 
-use aabench_renderer::{AdaptiveSettings, FrameImages, FrameTiming, Mode, RenderSettings, Technique};
+use aabench_renderer::{
+    AdaptiveSettings, ExtraSamples, FrameImages, FrameTiming, Mode, RenderSettings, Technique,
+};
 use anyhow::Context;
 
 use crate::images;
 use crate::inputs::SceneInputs;
 use crate::manifest::Manifest;
 use crate::metrics::{self, Quality};
-use crate::plan::{RunPlan, SceneEntry, fallback_name};
+use crate::plan::{RunPlan, SceneEntry, Tier, fallback_name};
 use crate::progress::Progress;
 use crate::record::{
-    AdaptiveCost, ImageFiles, ModeRecord, PassRecord, Platform, RUN_SCHEMA, RunRecord, RunSettings,
-    SceneRecord, Status, fnv1a,
+    AdaptiveCost, GraphRecord, ImageFiles, ModeRecord, PassRecord, Platform, RUN_SCHEMA, RunRecord,
+    RunSettings, SceneRecord, Status, fnv1a,
 };
 use crate::scenes;
 use crate::stats::Summary;
@@ -154,10 +156,22 @@ fn empty_scene_at(manifest: &Path) -> SceneRecord {
 /// What one mode measured during the scene's timed loop.
 #[derive(Debug, Default)]
 struct ModeRun {
+    graph: Option<GraphRecord>,
     timings: Vec<FrameTiming>,
     hashes: Vec<String>,
     images: Option<FrameImages>,
     error: Option<String>,
+}
+
+/// What a manifest's scene renders with in `tier`.
+pub fn render_settings(manifest: &Manifest, tier: Tier, extra_samples: ExtraSamples) -> RenderSettings {
+    let [width, height] = tier.resolution(manifest);
+    RenderSettings {
+        width,
+        height,
+        stall_iterations: manifest.stall_iterations,
+        adaptive: AdaptiveSettings { extra_samples, ..manifest.adaptive.settings() },
+    }
 }
 
 async fn run_scene(
@@ -168,10 +182,7 @@ async fn run_scene(
     cancel: &AtomicBool,
 ) -> SceneRecord {
     let mut record = empty_scene(manifest);
-    let [width, height] = match plan.tier {
-        crate::plan::Tier::Quick => manifest.resolution.quick,
-        crate::plan::Tier::Nightly => manifest.resolution.nightly,
-    };
+    let [width, height] = plan.tier.resolution(manifest);
     record.resolution = Some([width, height]);
     let scene_dir = plan.run_dir.join(&manifest.name);
     if let Err(error) = std::fs::create_dir_all(&scene_dir) {
@@ -191,12 +202,7 @@ async fn run_scene(
     record.textures = Some(loaded.scene.textures.len());
     record.inputs = Some(inputs.clone());
 
-    let settings = RenderSettings {
-        width,
-        height,
-        stall_iterations: manifest.stall_iterations,
-        adaptive: AdaptiveSettings { extra_samples: plan.extra_samples, ..manifest.adaptive.settings() },
-    };
+    let settings = render_settings(manifest, plan.tier, plan.extra_samples);
     progress.status(&format!("[{}] uploading", manifest.name));
     let uploaded = worker
         .call(plan.frame_timeout, move |state| {
@@ -231,26 +237,32 @@ async fn run_scene(
     let prepared = worker
         .call(plan.frame_timeout.saturating_mul(modes.len() as u32), move |state| {
             let renderer = state.renderer.as_mut().expect("an uploaded scene");
-            let mut errors = Vec::new();
+            let mut outcomes = Vec::new();
             for mode in modes {
                 match renderer.prepare(mode) {
                     Ok(prepared) => {
+                        outcomes.push(Ok(GraphRecord::of(prepared.graph())));
                         state.modes.push(Some(prepared));
-                        errors.push(None);
                     }
                     Err(error) => {
                         state.modes.push(None);
-                        errors.push(Some(error.to_string()));
+                        outcomes.push(Err(error.to_string()));
                     }
                 }
             }
-            (errors, renderer.target_bytes())
+            (outcomes, renderer.target_bytes())
         })
         .await;
     let mut runs: Vec<ModeRun> = match prepared {
-        Ok((errors, bytes)) => {
+        Ok((outcomes, bytes)) => {
             record.target_bytes = Some(bytes);
-            errors.into_iter().map(|error| ModeRun { error, ..Default::default() }).collect()
+            outcomes
+                .into_iter()
+                .map(|outcome| match outcome {
+                    Ok(graph) => ModeRun { graph: Some(graph), ..Default::default() },
+                    Err(error) => ModeRun { error: Some(error), ..Default::default() },
+                })
+                .collect()
         }
         Err(error) => return fail(record, error.to_string()),
     };
@@ -563,6 +575,7 @@ fn timing_record(mode: Mode, run: &ModeRun, repetitions: u32, interrupted: bool)
         vs_reference: None,
         vs_ground_truth: None,
         adaptive: None,
+        graph: run.graph.clone(),
     }
 }
 

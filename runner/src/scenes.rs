@@ -62,7 +62,7 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
                 color: Vec3::from(l.color),
                 intensity: l.intensity,
                 range: l.range,
-                casts_shadows: l.casts_shadows,
+                shadow: l.shadow(),
             })
             .collect(),
         ambient: Vec3::from(manifest.ambient),

@@ -63,7 +63,9 @@ pub fn cache_key(
     add(&inputs.manifest_sha256);
     add(&inputs.gltf_sha256);
     for file in shaders::pass_files() {
-        add(&shaders::compose(file)?);
+        for features in shaders::Features::combinations() {
+            add(&shaders::compose(file, features)?);
+        }
     }
     add(&platform.adapter);
     add(&platform.driver_info);

@@ -65,6 +65,57 @@ fn a_run_writes_its_record_and_images_and_exits_zero() {
     assert!(adaptive["adaptive"]["speedup"].as_f64().unwrap() > 0.0);
     assert!(ws.run_dir().join(adaptive["images"]["samples"].as_str().unwrap()).exists());
     assert!(ws.run_dir().join(adaptive["images"]["difference"].as_str().unwrap()).exists());
+    let graph = &adaptive["graph"];
+    assert_eq!(
+        graph["passes"],
+        json!(["gbuffer", "shade_first", "evaluate", "compact", "shade_extra", "gather", "display"])
+    );
+    assert_eq!(graph["allocated_bytes"], graph["lower_bound_bytes"], "{graph}");
+    assert!(
+        graph["allocations"].as_array().unwrap().iter().any(|a| a["holds"] == json!(["evaluate.counts"]))
+    );
+    assert_eq!(mode(scene, "deferred-1x1")["graph"]["passes"], json!(["gbuffer", "shade", "display"]));
+}
+
+#[test]
+fn graph_prints_a_modes_passes_ports_and_allocations() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("graph");
+    let shadowed = ws.manifest("room", "shadow-room", |m| {
+        m["lights"][0]["casts_shadows"] = json!(true);
+        m["lights"][0]["shadow"] = json!({ "resolution": 64 });
+    });
+    let path = shadowed.to_str().unwrap();
+    let output = ws.run(&["graph", path, "--mode", "reference-2x2"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let text = String::from_utf8(output.stdout).unwrap();
+    for needle in [
+        "room reference-2x2 (quick tier, 64×48; textured, 1 shadow cube(s) of 64²)",
+        " 1. shadow",
+        " 2. gbuffer",
+        "reads  shadow_cubes",
+        "Depth32Float 64×64×6",
+        "writes color          Attachment",
+        "Rgba16Float 128×96",
+        "[retained: Display]",
+        "lower bound",
+    ] {
+        assert!(text.contains(needle), "{needle:?} missing in\n{text}");
+    }
+    let dot = ws.run(&["graph", path, "--mode", "adaptive-2x2", "--dot"]);
+    let dot = String::from_utf8(dot.stdout).unwrap();
+    assert!(
+        dot.starts_with("digraph frame {") && dot.contains("shade_extra") && dot.trim_end().ends_with('}'),
+        "{dot}"
+    );
+    // Without the shadow light there is no shadow pass.
+    let plain = ws.manifest("plain", "shadow-room", |_| {});
+    let output = ws.run(&["graph", plain.to_str().unwrap(), "--mode", "deferred-1x1"]);
+    let text = String::from_utf8(output.stdout).unwrap();
+    assert!(text.contains("no shadow-casting light") && !text.contains("shadow_cubes"), "{text}");
+    let bad = ws.run(&["graph", path, "--mode", "fancy-2x2"]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(stderr(&bad).contains("--mode"), "{}", stderr(&bad));
 }
 
 #[test]

@@ -1,4 +1,5 @@
-// The scene's bindings: materials, point lights and all textures in one 2D array with mipmaps.
+// The scene's bindings: materials, point lights and, in textured scenes, all textures in one 2D
+// array with mipmaps. Bound by name from the scene's resources (scene/upload.rs).
 
 struct Material {
     // Linear RGBA, multiplied with the texture.
@@ -17,7 +18,15 @@ struct PointLight {
     range: f32,
     // Colour times intensity.
     radiance: vec3<f32>,
-    casts_shadows: u32,
+    // The light's cube in `shadow_cubes`, or -1 for a light without shadows.
+    shadow: i32,
+    // World units a surface may lie behind the stored depth and count as lit.
+    shadow_bias: f32,
+    // PCF disk radius at the light; it grows with view distance (lib/shadows.wgsl).
+    shadow_radius: f32,
+    // Near plane of the light's cube; its far plane is `range`.
+    shadow_near: f32,
+    padding: f32,
 }
 
 // The number of lights is an override constant, not a uniform: lavapipe recompiles a shader
@@ -35,5 +44,7 @@ struct Lights {
 // A uniform block, not a storage buffer: lavapipe loads a storage array element per SIMD lane;
 // the uniform table makes 4×4 atrium shading 22% faster (1470 → 1150 ms, measured).
 @group(0) @binding(2) var<uniform> lights: Lights;
+#ifdef TEXTURED
 @group(0) @binding(3) var scene_textures: texture_2d_array<f32>;
 @group(0) @binding(4) var scene_sampler: sampler;
+#endif

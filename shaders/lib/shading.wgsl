@@ -1,5 +1,8 @@
 // Shading one G-buffer sample: metallic-roughness BRDF under the scene's point lights, albedo
-// fetched here, and an optional stall that simulates an expensive shader.
+// fetched here, shadows of shadow-casting lights, and an optional stall that simulates an
+// expensive shader.
+
+#include "lib/shadows.wgsl"
 
 const PI: f32 = 3.14159265358979;
 
@@ -45,6 +48,7 @@ fn attenuation(distance2: f32, inverse2: f32, range: f32) -> f32 {
     return window * window * min(inverse2, 1e4);
 }
 
+#ifdef TEXTURED
 // Most taps of one anisotropic lookup.
 const MAX_ANISOTROPY: f32 = 16.0;
 
@@ -69,6 +73,7 @@ fn sample_albedo(layer: i32, uv: vec2<f32>, dx: vec2<f32>, dy: vec2<f32>) -> vec
     }
     return sum / f32(taps);
 }
+#endif
 
 // Linear HDR radiance of the sample at `texel`; alpha carries the stall result. `footprint`
 // scales the stored UV derivatives: 1 for the reference, sqrt((1 + M²/n) / 2) when n adaptive
@@ -81,9 +86,11 @@ fn shade(texel: vec2<i32>, footprint: f32) -> vec4<f32> {
     }
     let material = materials[s.material];
     var albedo = material.base_color.rgb;
+#ifdef TEXTURED
     if material.texture >= 0 {
         albedo *= sample_albedo(material.texture, s.uv, s.uv_dx * footprint, s.uv_dy * footprint).rgb;
     }
+#endif
     let roughness = clamp(material.roughness, 0.03, 1.0);
     let a = roughness * roughness;
     let a2 = a * a;
@@ -98,8 +105,14 @@ fn shade(texel: vec2<i32>, footprint: f32) -> vec4<f32> {
         let l = to_light * inverse;
         let n_l = dot(s.normal, l);
         if n_l > 0.0 {
-            radiance += brdf(s.normal, v, l, n_l, albedo, material.metallic, a2, a)
+            var contribution = brdf(s.normal, v, l, n_l, albedo, material.metallic, a2, a)
                 * light.radiance * attenuation(distance2, inverse * inverse, light.range);
+#ifdef SHADOWS
+            if light.shadow >= 0 {
+                contribution *= shadow_visibility(light, position, s.normal, length(frame.eye.xyz - position));
+            }
+#endif
+            radiance += contribution;
         }
     }
     return vec4<f32>(radiance, stalled);

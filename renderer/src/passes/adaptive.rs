@@ -1,252 +1,252 @@
 //! The passes of an adaptive mode (see `shaders/adaptive.wgsl` for the algorithm's outline).
 
-use wgpu::util::DeviceExt;
-
-use super::{Compute, ComputeStep, Pass, Screen, Slot, bind_group, bind_group_layout};
-use crate::RenderError;
-use crate::adaptive::{ExtraSamples, sample_order};
-use crate::mode::{Metrics, Mode};
-use crate::passes::gbuffer::GBuffer;
-use crate::render::{HDR_FORMAT, SceneRenderer, view};
+use super::{
+    BuildContext, Compute, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, gbuffer, shading_inputs,
+};
+use crate::bindings::Bound;
+use crate::graph::{Access, Extent, PassDecl, Port, Resource};
+use crate::mode::Metrics;
+use crate::pipelines::Constants;
+use crate::{AdaptiveSettings, RenderError};
 
 /// Per-pixel sample counts, 1…16.
-const COUNT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Uint;
+pub(crate) const COUNT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Uint;
 
-/// Vertex entry points and their vertex counts: one triangle over the whole target, or a
-/// rectangle over the rows of the compact target that hold list entries.
-const FULLSCREEN: (&str, u32) = ("fullscreen", 3);
+/// A rectangle over the rows of the compact target that hold list entries.
 const COMPACT_ROWS: (&str, u32) = ("compact_rows", 6);
 
-pub(crate) struct AdaptivePasses {
-    pub passes: Vec<Box<dyn Pass>>,
-    pub sample_counts: wgpu::Texture,
-    /// S, the shade-first image.
-    pub first: wgpu::Texture,
+const SHADER: &str = "adaptive.wgsl";
+
+fn first() -> Resource {
+    Resource::texture(HDR_FORMAT, Extent::Output)
 }
 
-pub(crate) fn build(
-    r: &mut SceneRenderer,
-    gbuffer: &GBuffer,
-    mode: Mode,
-    metrics: Metrics,
-    hdr: &wgpu::Texture,
-) -> Result<AdaptivePasses, RenderError> {
-    let m = mode.m;
-    let (width, height) = (r.settings.width, r.settings.height);
-    let settings = r.settings.adaptive;
-    let loop_shading = settings.extra_samples == ExtraSamples::Loop;
-    let device = r.gpu.device.clone();
-    let first = r.target("adaptive.first", width, height, HDR_FORMAT);
-    let counts = r.target("adaptive.counts", width, height, COUNT_FORMAT);
-    let shared = Shared {
-        scene: (r.scene.layout.clone(), r.scene.group.clone()),
-        gbuffer: (r.gbuffer_layout.clone(), gbuffer.group.clone()),
-        order: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("sample order"),
-            contents: bytemuck::cast_slice(&sample_order(m)),
-            usage: wgpu::BufferUsages::STORAGE,
-        }),
-        counts: view(&counts),
-        shading: r.shading_constants(mode.stalled),
-        window: [("M", f64::from(m))],
-    };
-    let mut passes: Vec<Box<dyn Pass>> = Vec::new();
-
-    // S: one sample per pixel.
-    let layout = bind_group_layout(&device, "shade_first", &[Slot::StorageRead]);
-    let group = bind_group(&device, "shade_first", &layout, &[shared.order.as_entire_binding()]);
-    let constants = [&shared.shading[..], &shared.window].concat();
-    passes.push(Box::new(shared.pass(r, "shade_first", FULLSCREEN, &constants, (&layout, group), &first)?));
-
-    // The sample count per pixel. Only this pass depends on the metric, so the others are
-    // shared by every metric variant (each entry point gets just the constants it reads).
-    let layout = bind_group_layout(&device, "evaluate", &[Slot::Texture]);
-    let first_view = view(&first);
-    let group = bind_group(&device, "evaluate", &layout, &[wgpu::BindingResource::TextureView(&first_view)]);
-    let metric = [
-        ("C_DEPTH", f64::from(settings.c_depth)),
-        ("C_NORMAL", f64::from(settings.c_normal)),
-        ("C_SHADING", f64::from(settings.c_shading)),
-        ("T_MIN", f64::from(settings.t_min)),
-        ("T_EDGE", f64::from(settings.t_edge)),
-        ("USE_GEOMETRY", flag(metrics != Metrics::Shading)),
-        ("USE_SHADING", flag(metrics != Metrics::Geometry)),
-        ("FORCE_ALL", flag(settings.force_all_samples)),
-    ];
-    let constants = [&shared.window[..], &metric].concat();
-    passes.push(Box::new(shared.pass(r, "evaluate", FULLSCREEN, &constants, (&layout, group), &counts)?));
-
-    // The average of S and the extra samples. The loop variant shades them in the gather and
-    // reads no list, but the bindings stay: a placeholder stands in for the list.
-    let list = if loop_shading { None } else { Some(compact_list(r, &shared, m, &mut passes)?) };
-    let (pixel_offsets, extra, compact_width) = match list {
-        Some(list) => (list.pixel_offsets, list.extra, list.width),
-        None => (r.buffer("adaptive.placeholder", 4), r.target("adaptive.placeholder", 1, 1, HDR_FORMAT), 4),
-    };
-    let layout = bind_group_layout(
-        &device,
-        "gather",
-        &[Slot::StorageRead, Slot::Texture, Slot::UintTexture, Slot::StorageRead, Slot::Texture],
-    );
-    let extra_view = view(&extra);
-    let group = bind_group(
-        &device,
-        "gather",
-        &layout,
-        &[
-            shared.order.as_entire_binding(),
-            wgpu::BindingResource::TextureView(&first_view),
-            wgpu::BindingResource::TextureView(&shared.counts),
-            pixel_offsets.as_entire_binding(),
-            wgpu::BindingResource::TextureView(&extra_view),
-        ],
-    );
-    let list_constants = [("LOOP_SHADING", flag(loop_shading)), ("COMPACT_WIDTH", f64::from(compact_width))];
-    let constants = [&shared.shading[..], &shared.window, &list_constants].concat();
-    passes.push(Box::new(shared.pass(r, "gather", FULLSCREEN, &constants, (&layout, group), hdr)?));
-
-    Ok(AdaptivePasses { passes, sample_counts: counts, first })
+fn counts() -> Resource {
+    Resource::texture(COUNT_FORMAT, Extent::Output)
 }
 
-/// What the adaptive passes share: the scene and G-buffer groups (0 and 1), the sample order,
-/// the count map, and the shading and window constants.
-struct Shared {
-    scene: (wgpu::BindGroupLayout, wgpu::BindGroup),
-    gbuffer: (wgpu::BindGroupLayout, wgpu::BindGroup),
-    order: wgpu::Buffer,
-    counts: wgpu::TextureView,
-    shading: Vec<(&'static str, f64)>,
-    window: [(&'static str, f64); 1],
+fn window(m: u32) -> Constants {
+    Constants::new().with("M", m)
 }
 
-impl Shared {
-    /// The fragment pass named after its entry point `entry` in adaptive.wgsl, run over
-    /// `target` with groups 0 and 1 and its own `inputs` as group 2.
-    fn pass(
-        &self,
-        r: &mut SceneRenderer,
-        entry: &'static str,
-        (vertex, vertices): (&str, u32),
-        constants: &[(&str, f64)],
-        inputs: (&wgpu::BindGroupLayout, wgpu::BindGroup),
-        target: &wgpu::Texture,
-    ) -> Result<Screen, RenderError> {
-        let groups = [Some(&self.scene.0), Some(&self.gbuffer.0), Some(inputs.0)];
-        let pipeline =
-            r.screen_pipeline("adaptive.wgsl", vertex, entry, constants, groups, target.format())?;
-        Ok(Screen {
-            name: entry,
-            pipeline,
-            groups: vec![(0, self.scene.1.clone()), (1, self.gbuffer.1.clone()), (2, inputs.1)],
-            target: view(target),
-            vertices,
-        })
+/// The dither order, owned by the passes that read it: constant data, not a frame resource.
+fn order(ctx: &mut BuildContext, m: u32) -> [(&'static str, Bound); 1] {
+    [("order", Bound::Buffer(ctx.pipelines.sample_order(m)))]
+}
+
+/// The list of extra samples: at most M² entries per pixel (a full window shades rank 0
+/// again), stored in 4×4 blocks of a target as wide as the device allows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct List {
+    pub capacity: u64,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl List {
+    pub fn new(m: u32, width: u32, height: u32, limits: &wgpu::Limits) -> Result<List, RenderError> {
+        let capacity = u64::from(m * m) * u64::from(width) * u64::from(height);
+        let compact_width = limits.max_texture_dimension_2d / 4 * 4;
+        let compact_height = capacity.div_ceil(4 * u64::from(compact_width)).max(1) * 4;
+        let entries_bytes = 4 * capacity;
+        let max_binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        if compact_height > u64::from(limits.max_texture_dimension_2d) || entries_bytes > max_binding {
+            return Err(RenderError::Limit(format!(
+                "adaptive-{m}x{m} at {width}×{height} lists up to {capacity} samples ({entries_bytes} bytes), \
+                 more than this device holds in one buffer ({max_binding} bytes) or target; lower the resolution"
+            )));
+        }
+        Ok(List { capacity, width: compact_width, height: compact_height as u32 })
+    }
+
+    fn extra(&self) -> Resource {
+        Resource::texture(HDR_FORMAT, Extent::Fixed { width: self.width, height: self.height })
+    }
+
+    fn constants(&self) -> Constants {
+        Constants::new().with("COMPACT_WIDTH", self.width).with("COMPACT_HEIGHT", self.height)
     }
 }
 
-/// The list of samples to shade after S, and its compact target.
-struct CompactList {
-    pixel_offsets: wgpu::Buffer,
-    extra: wgpu::Texture,
-    width: u32,
+fn buffer(bytes: u64) -> Resource {
+    // Zero-sized bindings are invalid.
+    Resource::Buffer { bytes: bytes.max(16) }
 }
 
-/// Adds the `compact` (prefix sums) and `shade_extra` passes.
-fn compact_list(
-    r: &mut SceneRenderer,
-    shared: &Shared,
-    m: u32,
-    passes: &mut Vec<Box<dyn Pass>>,
-) -> Result<CompactList, RenderError> {
-    let (width, height) = (r.settings.width, r.settings.height);
-    let device = r.gpu.device.clone();
-    let limits = device.limits();
-    // At most M² entries per pixel (a full window shades rank 0 again), in 4×4 blocks of a
-    // target as wide as the device allows.
-    let capacity = u64::from(m * m) * u64::from(width) * u64::from(height);
-    let compact_width = limits.max_texture_dimension_2d / 4 * 4;
-    let compact_height = capacity.div_ceil(4 * u64::from(compact_width)).max(1) * 4;
-    let entries_bytes = 4 * capacity;
-    let max_binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
-    if compact_height > u64::from(limits.max_texture_dimension_2d) || entries_bytes > max_binding {
-        return Err(RenderError::Limit(format!(
-            "adaptive-{m}x{m} at {width}×{height} lists up to {capacity} samples ({entries_bytes} bytes), \
-             more than this device holds in one buffer ({max_binding} bytes) or target; lower the resolution"
-        )));
-    }
-    let compact_height = compact_height as u32;
-    let extra = r.target("adaptive.extra", compact_width, compact_height, HDR_FORMAT);
-    let row_offsets = r.buffer("adaptive.row_offsets", 4 * u64::from(height));
-    let totals = r.buffer("adaptive.totals", 4);
-    let pixel_offsets = r.buffer("adaptive.pixel_offsets", 4 * u64::from(width) * u64::from(height));
-    let entries = r.buffer("adaptive.entries", entries_bytes);
-
-    let layout = bind_group_layout(
-        &device,
-        "compact",
-        &[
-            Slot::UintTexture,
-            Slot::StorageReadWrite,
-            Slot::StorageReadWrite,
-            Slot::StorageReadWrite,
-            Slot::StorageReadWrite,
-        ],
-    );
-    let group = bind_group(
-        &device,
-        "compact",
-        &layout,
-        &[
-            wgpu::BindingResource::TextureView(&shared.counts),
-            row_offsets.as_entire_binding(),
-            totals.as_entire_binding(),
-            pixel_offsets.as_entire_binding(),
-            entries.as_entire_binding(),
-        ],
-    );
-    let row_groups = height.div_ceil(64);
-    let mut steps = Vec::new();
-    for (entry, workgroups) in [("scan_rows", row_groups), ("scan_total", 1), ("emit", row_groups)] {
-        let pipeline =
-            r.compute_pipeline("adaptive.wgsl", entry, &shared.window, [None, None, Some(&layout)])?;
-        steps.push(ComputeStep {
-            pipeline,
-            groups: vec![(2, group.clone())],
-            workgroups: [workgroups, 1, 1],
-        });
-    }
-    passes.push(Box::new(Compute { name: "compact", steps }));
-
-    // One fragment per listed sample.
-    let layout = bind_group_layout(
-        &device,
-        "shade_extra",
-        &[Slot::StorageRead, Slot::UintTexture, Slot::StorageRead, Slot::StorageRead],
-    );
-    let group = bind_group(
-        &device,
-        "shade_extra",
-        &layout,
-        &[
-            shared.order.as_entire_binding(),
-            wgpu::BindingResource::TextureView(&shared.counts),
-            entries.as_entire_binding(),
-            totals.as_entire_binding(),
-        ],
-    );
-    let size = [("COMPACT_WIDTH", f64::from(compact_width)), ("COMPACT_HEIGHT", f64::from(compact_height))];
-    let constants = [&shared.shading[..], &shared.window, &size].concat();
-    passes.push(Box::new(shared.pass(
-        r,
-        "shade_extra",
-        COMPACT_ROWS,
-        &constants,
-        (&layout, group),
-        &extra,
-    )?));
-    Ok(CompactList { pixel_offsets, extra, width: compact_width })
+/// S: one sample per pixel, at dither rank 0.
+#[derive(Debug)]
+pub(crate) struct ShadeFirstNode {
+    pub m: u32,
+    pub stalled: bool,
+    pub shadows: Option<Resource>,
 }
 
-fn flag(value: bool) -> f64 {
-    if value { 1.0 } else { 0.0 }
+impl Node for ShadeFirstNode {
+    fn decl(&self) -> PassDecl {
+        let mut ports = shading_inputs(self.shadows);
+        ports.push(Port::new("first", first(), Access::Attachment));
+        PassDecl { name: "shade_first", ports }
+    }
+
+    fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
+        let constants = ctx.shading_constants(self.stalled).extend(&window(self.m));
+        let program =
+            Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some("shade_first"), constants };
+        let owned = order(ctx, self.m);
+        Ok(Box::new(ctx.screen(io, "shade_first", program, "first", FULLSCREEN.1, &owned)?))
+    }
+}
+
+/// The sample count per pixel. Only this pass depends on the metric, so the others are shared
+/// by every metric variant (each entry point gets just the constants it reads).
+#[derive(Debug)]
+pub(crate) struct EvaluateNode {
+    pub m: u32,
+    pub metrics: Metrics,
+    pub settings: AdaptiveSettings,
+}
+
+impl Node for EvaluateNode {
+    fn decl(&self) -> PassDecl {
+        let gbuffer = gbuffer::outputs();
+        let read = |port: Port| Port { access: Access::Loaded, ..port };
+        PassDecl {
+            name: "evaluate",
+            ports: vec![
+                read(gbuffer[1]),
+                read(gbuffer[3]),
+                Port::new("first", first(), Access::Loaded),
+                Port::new("counts", counts(), Access::Attachment),
+            ],
+        }
+    }
+
+    fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
+        let s = self.settings;
+        let constants = window(self.m)
+            .with("C_DEPTH", s.c_depth)
+            .with("C_NORMAL", s.c_normal)
+            .with("C_SHADING", s.c_shading)
+            .with("T_MIN", s.t_min)
+            .with("T_EDGE", s.t_edge)
+            .flag("USE_GEOMETRY", self.metrics != Metrics::Shading)
+            .flag("USE_SHADING", self.metrics != Metrics::Geometry)
+            .flag("FORCE_ALL", s.force_all_samples);
+        let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some("evaluate"), constants };
+        Ok(Box::new(ctx.screen(io, "evaluate", program, "counts", FULLSCREEN.1, &[])?))
+    }
+}
+
+/// Prefix sums over the counts list every (pixel, rank) still to shade, densely.
+#[derive(Debug)]
+pub(crate) struct CompactNode {
+    pub m: u32,
+    pub list: List,
+}
+
+impl Node for CompactNode {
+    fn decl(&self) -> PassDecl {
+        // Rows and pixels are bounded by the list's capacity over M².
+        let pixels = self.list.capacity / u64::from(self.m * self.m);
+        PassDecl {
+            name: "compact",
+            ports: vec![
+                Port::new("counts", counts(), Access::Loaded),
+                // Scratch: each row's offset, read by nothing after this pass.
+                Port::new("row_offsets", buffer(4 * pixels), Access::StorageWrite),
+                Port::new("totals", buffer(4), Access::StorageWrite),
+                Port::new("pixel_offsets", buffer(4 * pixels), Access::StorageWrite),
+                Port::new("entries", buffer(4 * self.list.capacity), Access::StorageWrite),
+            ],
+        }
+    }
+
+    fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
+        let rows = io.texture("counts")?.height();
+        let row_groups = rows.div_ceil(64);
+        let mut steps = Vec::new();
+        for (entry, workgroups) in [("scan_rows", row_groups), ("scan_total", 1), ("emit", row_groups)] {
+            steps.push(ctx.compute_step(io, SHADER, entry, window(self.m), [workgroups, 1, 1])?);
+        }
+        Ok(Box::new(Compute { name: "compact", steps }))
+    }
+}
+
+/// One fragment per listed sample, into the compact target.
+#[derive(Debug)]
+pub(crate) struct ShadeExtraNode {
+    pub m: u32,
+    pub stalled: bool,
+    pub list: List,
+    pub shadows: Option<Resource>,
+}
+
+impl Node for ShadeExtraNode {
+    fn decl(&self) -> PassDecl {
+        let mut ports = shading_inputs(self.shadows);
+        ports.extend([
+            Port::new("counts", counts(), Access::Loaded),
+            Port::new("list_entries", buffer(4 * self.list.capacity), Access::StorageRead),
+            Port::new("list_totals", buffer(4), Access::StorageRead),
+            Port::new("extra", self.list.extra(), Access::Attachment),
+        ]);
+        PassDecl { name: "shade_extra", ports }
+    }
+
+    fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
+        let constants =
+            ctx.shading_constants(self.stalled).extend(&window(self.m)).extend(&self.list.constants());
+        let program =
+            Program { shader: SHADER, vertex: COMPACT_ROWS.0, fragment: Some("shade_extra"), constants };
+        let owned = order(ctx, self.m);
+        Ok(Box::new(ctx.screen(io, "shade_extra", program, "extra", COMPACT_ROWS.1, &owned)?))
+    }
+}
+
+/// Where gather finds a pixel's extra samples.
+#[derive(Debug)]
+pub(crate) enum Extra {
+    /// In the compact target that shade_extra wrote.
+    List(List),
+    /// Nowhere: gather shades them itself in a loop (the paper's simplest variant).
+    Loop { stalled: bool, shadows: Option<Resource> },
+}
+
+/// The average of S and the extra samples.
+#[derive(Debug)]
+pub(crate) struct GatherNode {
+    pub m: u32,
+    pub extra: Extra,
+}
+
+impl Node for GatherNode {
+    fn decl(&self) -> PassDecl {
+        let mut ports =
+            vec![Port::new("first", first(), Access::Loaded), Port::new("counts", counts(), Access::Loaded)];
+        match &self.extra {
+            Extra::List(list) => ports.extend([
+                Port::new(
+                    "list_offsets",
+                    buffer(list.capacity / u64::from(self.m * self.m) * 4),
+                    Access::StorageRead,
+                ),
+                Port::new("extra_samples", list.extra(), Access::Loaded),
+            ]),
+            Extra::Loop { shadows, .. } => ports.extend(shading_inputs(*shadows)),
+        }
+        ports.push(Port::new("color", Resource::texture(HDR_FORMAT, Extent::Output), Access::Attachment));
+        PassDecl { name: "gather", ports }
+    }
+
+    fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
+        let (entry, constants) = match &self.extra {
+            Extra::List(list) => ("gather", window(self.m).extend(&list.constants())),
+            Extra::Loop { stalled, .. } => {
+                ("gather_loop", ctx.shading_constants(*stalled).extend(&window(self.m)))
+            }
+        };
+        let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some(entry), constants };
+        let owned = order(ctx, self.m);
+        Ok(Box::new(ctx.screen(io, "gather", program, "color", FULLSCREEN.1, &owned)?))
+    }
 }

@@ -1,6 +1,9 @@
 //! The G-buffer pass: rasterizes the scene once into M·w × M·h targets.
 
-use super::{Pass, Program};
+use super::{BuildContext, Bundle, Io, Node, Pass, Program};
+use crate::RenderError;
+use crate::graph::{Access, Extent, PassDecl, Port, Resource};
+use crate::pipelines::{Constants, Raster, RenderKey};
 use crate::scene::{DrawClass, GpuScene, Vertex};
 
 /// UV. f32: UVs of tiled textures grow large, and their derivatives come from differences.
@@ -18,122 +21,132 @@ pub const MAX_MATERIALS: usize = 2048;
 /// Material index written where no geometry covers a sample (`BACKGROUND` in WGSL).
 pub const BACKGROUND_MATERIAL: i32 = -1;
 
-/// One G-buffer pipeline per draw class: opaque geometry keeps early depth testing, masked
-/// geometry discards; single-sided geometry has its back faces culled.
-#[derive(Debug, Clone)]
-pub(crate) struct GBufferPipelines {
-    pipelines: Vec<(DrawClass, wgpu::RenderPipeline)>,
+/// The port names, which are also the names that `lib/gbuffer.wgsl` binds them under.
+pub(crate) const UV: &str = "gb_uv";
+pub(crate) const NORMAL: &str = "gb_normal";
+pub(crate) const UV_GRAD: &str = "gb_uv_grad";
+pub(crate) const DEPTH: &str = "gb_depth";
+pub(crate) const PORTS: [&str; 4] = [UV, NORMAL, UV_GRAD, DEPTH];
+
+/// What the G-buffer pass writes, at the G-buffer's extent.
+pub(crate) fn outputs() -> [Port; 4] {
+    let target =
+        |name, format| Port::new(name, Resource::texture(format, Extent::GBuffer), Access::Attachment);
+    [
+        target(UV, UV_FORMAT),
+        target(NORMAL, NORMAL_FORMAT),
+        target(UV_GRAD, UV_GRAD_FORMAT),
+        Port::new(DEPTH, Resource::texture(DEPTH_FORMAT, Extent::GBuffer), Access::Depth),
+    ]
 }
 
-impl GBufferPipelines {
-    pub fn new(
-        device: &wgpu::Device,
-        module: &wgpu::ShaderModule,
-        scene_layout: &wgpu::BindGroupLayout,
-    ) -> GBufferPipelines {
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("gbuffer"),
-            bind_group_layouts: &[Some(scene_layout)],
-            immediate_size: 0,
-        });
-        let pipelines = DrawClass::ALL
-            .into_iter()
-            .map(|class| {
-                let entry = if class.masked { "gbuffer_masked" } else { "gbuffer_opaque" };
-                let program = Program { module, entry, constants: &[] };
-                (class, create(device, &layout, &program, class))
-            })
-            .collect();
-        GBufferPipelines { pipelines }
+#[derive(Debug)]
+pub(crate) struct GBufferNode;
+
+impl Node for GBufferNode {
+    fn decl(&self) -> PassDecl {
+        PassDecl { name: "gbuffer", ports: outputs().to_vec() }
     }
 
-    fn get(&self, class: DrawClass) -> &wgpu::RenderPipeline {
-        &self.pipelines.iter().find(|(c, _)| *c == class).expect("a pipeline per class").1
+    fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
+        // Pipelines only for the draw classes the scene has: no alpha test without MASK
+        // materials.
+        let mut pipelines = Vec::new();
+        for class in ctx.scene.draw_classes() {
+            let fragment = if class.masked { "gbuffer_masked" } else { "gbuffer_opaque" };
+            let program = Program {
+                shader: "gbuffer.wgsl",
+                vertex: "vertex",
+                fragment: Some(fragment),
+                constants: Constants::new(),
+            };
+            let bundle = ctx.render_pipeline(io, &program, Raster::GBuffer(class), &[], create)?;
+            pipelines.push((class, bundle));
+        }
+        Ok(Box::new(GBufferPass {
+            pipelines,
+            scene: ctx.scene.clone(),
+            targets: [UV, NORMAL, UV_GRAD]
+                .map(|port| io.texture(port))
+                .into_iter()
+                .collect::<Result<_, _>>()?,
+            depth: io.texture(DEPTH)?,
+        }))
+    }
+}
+
+/// The vertex layout of [`Vertex`], shared by every pass that draws the scene.
+pub(crate) const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![
+    0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Uint32
+];
+
+pub(crate) fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
+    wgpu::VertexBufferLayout {
+        array_stride: size_of::<Vertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &VERTEX_ATTRIBUTES,
     }
 }
 
 fn create(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
-    program: &Program,
-    class: DrawClass,
+    module: &wgpu::ShaderModule,
+    key: &RenderKey,
 ) -> wgpu::RenderPipeline {
-    let attributes = wgpu::vertex_attr_array![
-        0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Uint32
-    ];
+    let Raster::GBuffer(class) = key.raster else { unreachable!("a G-buffer key") };
     let targets = [UV_FORMAT, NORMAL_FORMAT, UV_GRAD_FORMAT].map(|format| Some(format.into()));
+    // glTF front faces wind counter-clockwise. Double-sided surfaces keep their back faces
+    // (the shader flips their normals towards the viewer); culling the others saves 11% of
+    // the 4×4 atrium G-buffer (515 → 458 ms, measured in one process).
+    let primitive = wgpu::PrimitiveState {
+        front_face: wgpu::FrontFace::Ccw,
+        cull_mode: (!class.double_sided).then_some(wgpu::Face::Back),
+        ..Default::default()
+    };
+    scene_pipeline(device, layout, module, key, primitive, DEPTH_FORMAT, &targets)
+}
+
+/// A pipeline that draws the scene's vertices with reversed depth into a `depth` target, and
+/// into `targets` when the key has a fragment stage: what the G-buffer and shadow passes share.
+pub(crate) fn scene_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    key: &RenderKey,
+    primitive: wgpu::PrimitiveState,
+    depth: wgpu::TextureFormat,
+    targets: &[Option<wgpu::ColorTargetState>],
+) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(program.entry),
+        label: key.fragment.or(Some(key.vertex)),
         layout: Some(layout),
         vertex: wgpu::VertexState {
-            module: program.module,
-            entry_point: Some("vertex"),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants: program.constants,
-                ..Default::default()
-            },
-            buffers: &[Some(wgpu::VertexBufferLayout {
-                array_stride: size_of::<Vertex>() as u64,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &attributes,
-            })],
+            module,
+            entry_point: Some(key.vertex),
+            compilation_options: Default::default(),
+            buffers: &[Some(vertex_layout())],
         },
-        // glTF front faces wind counter-clockwise. Double-sided surfaces keep their back faces
-        // (the shader flips their normals towards the viewer); culling the others saves 11% of
-        // the 4×4 atrium G-buffer (515 → 458 ms, measured in one process).
-        primitive: wgpu::PrimitiveState {
-            front_face: wgpu::FrontFace::Ccw,
-            cull_mode: (!class.double_sided).then_some(wgpu::Face::Back),
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(true),
-            // Reversed depth: nearer is larger.
-            depth_compare: Some(wgpu::CompareFunction::Greater),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
+        primitive,
+        depth_stencil: Some(reversed_depth_test(depth)),
         multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: program.module,
-            entry_point: Some(program.entry),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants: program.constants,
-                ..Default::default()
-            },
-            targets: &targets,
+        fragment: key.fragment.map(|entry| wgpu::FragmentState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            targets,
         }),
         multiview_mask: None,
         cache: None,
     })
 }
 
-/// The G-buffer targets of one size and the bind group (group 1) that reads them.
-#[derive(Debug, Clone)]
-pub(crate) struct GBuffer {
-    pub uv: wgpu::Texture,
-    pub normal: wgpu::Texture,
-    pub uv_grad: wgpu::Texture,
-    pub depth: wgpu::Texture,
-    pub group: wgpu::BindGroup,
-}
-
-impl GBuffer {
-    pub fn width(&self) -> u32 {
-        self.uv.width()
-    }
-
-    pub fn height(&self) -> u32 {
-        self.uv.height()
-    }
-}
-
 #[derive(Debug)]
-pub(crate) struct GBufferPass {
-    pub pipelines: GBufferPipelines,
-    pub scene: GpuScene,
-    pub targets: GBuffer,
+struct GBufferPass {
+    pipelines: Vec<(DrawClass, Bundle<wgpu::RenderPipeline>)>,
+    scene: GpuScene,
+    targets: Vec<wgpu::Texture>,
+    depth: wgpu::Texture,
 }
 
 impl Pass for GBufferPass {
@@ -142,44 +155,61 @@ impl Pass for GBufferPass {
     }
 
     fn encode(&self, encoder: &mut wgpu::CommandEncoder) {
-        let view = |texture: &wgpu::Texture| texture.create_view(&Default::default());
-        let attachment = |view, clear: wgpu::Color| {
-            Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store: wgpu::StoreOp::Store },
-            })
-        };
-        let t = &self.targets;
-        let (uv, normal, uv_grad, depth) = (view(&t.uv), view(&t.normal), view(&t.uv_grad), view(&t.depth));
+        let views: Vec<wgpu::TextureView> =
+            self.targets.iter().map(|t| t.create_view(&Default::default())).collect();
         let background = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: f64::from(BACKGROUND_MATERIAL) };
+        let clears = [wgpu::Color::TRANSPARENT, background, wgpu::Color::TRANSPARENT];
+        let attachments: Vec<_> = views
+            .iter()
+            .zip(clears)
+            .map(|(view, clear)| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store: wgpu::StoreOp::Store },
+                })
+            })
+            .collect();
+        let depth = self.depth.create_view(&Default::default());
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("gbuffer"),
-            color_attachments: &[
-                attachment(&uv, wgpu::Color::TRANSPARENT),
-                attachment(&normal, background),
-                attachment(&uv_grad, wgpu::Color::TRANSPARENT),
-            ],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(0.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
+            color_attachments: &attachments,
+            depth_stencil_attachment: Some(cleared_to_far(&depth)),
             timestamp_writes: None,
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        let scene = &self.scene;
-        pass.set_bind_group(0, &scene.group, &[]);
-        pass.set_vertex_buffer(0, scene.vertices.slice(..));
-        pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-        for (class, range) in &scene.draws {
-            pass.set_pipeline(self.pipelines.get(*class));
-            pass.draw_indexed(range.clone(), 0, 0..1);
-        }
+        self.scene.draw(&mut pass, |class| lookup(&self.pipelines, class), 0..1);
+    }
+}
+
+/// The pipeline and bind groups of a draw class.
+pub(crate) fn lookup<K: PartialEq>(
+    pipelines: &[(K, Bundle<wgpu::RenderPipeline>)],
+    key: K,
+) -> (&wgpu::RenderPipeline, &[(u32, wgpu::BindGroup)]) {
+    let bundle =
+        &pipelines.iter().find(|(k, _)| *k == key).expect("a pipeline for every class the scene draws").1;
+    (&bundle.pipeline, &bundle.groups)
+}
+
+/// Depth testing and writing with reversed depth: nearer is larger.
+pub(crate) fn reversed_depth_test(format: wgpu::TextureFormat) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::Greater),
+        stencil: Default::default(),
+        bias: Default::default(),
+    }
+}
+
+/// A depth attachment cleared to the far plane (0 in reversed depth) and kept.
+pub(crate) fn cleared_to_far(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(0.0), store: wgpu::StoreOp::Store }),
+        stencil_ops: None,
     }
 }

@@ -1,11 +1,32 @@
 //! Passes: units of GPU work that are submitted and timed one at a time.
 //!
-//! Bind group conventions shared by all WGSL files: group 0 is the scene (frame uniform,
-//! materials, lights, texture array, sampler), group 1 the G-buffer, group 2 the pass's own
-//! inputs and outputs. A pipeline layout leaves out the groups its shader does not use.
+//! A [`Node`] declares a pass's ports (device-free, for the graph's compile step) and builds
+//! the pass from a small [`BuildContext`] and the resources its ports were given ([`Io`]).
+//! Bindings are matched by name: a port, a constant the pass owns or a scene resource named
+//! like the WGSL variable (see `bindings.rs`). Every port a pass declares for binding must be
+//! bound by one of its shaders, or building it fails: a declaration cannot drift from the WGSL.
 
 pub(crate) mod adaptive;
+pub(crate) mod display;
 pub(crate) mod gbuffer;
+pub(crate) mod shade;
+pub(crate) mod shadow;
+
+use std::collections::{BTreeSet, HashMap};
+
+use crate::bindings::{self, Bound, Stages};
+use crate::graph::{Access, PassDecl, Port, Resource};
+use crate::pipelines::{ComputeKey, Constants, LayoutEntries, Pipelines, Raster, RenderKey};
+use crate::scene::GpuScene;
+use crate::{RenderError, RenderSettings};
+
+/// Linear HDR radiance.
+pub(crate) const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// Display-encoded 8-bit colour.
+pub(crate) const DISPLAY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+/// The fullscreen triangle's vertex entry point (`lib/common.wgsl`) and its vertex count.
+pub(crate) const FULLSCREEN: (&str, u32) = ("fullscreen", 3);
 
 /// One measured unit of work.
 pub(crate) trait Pass: Send + Sync {
@@ -13,167 +34,229 @@ pub(crate) trait Pass: Send + Sync {
     fn encode(&self, encoder: &mut wgpu::CommandEncoder);
 }
 
-/// What a binding slot holds. Slots are numbered in the order given, from 0.
-#[derive(Debug, Clone, Copy)]
-pub(crate) enum Slot {
-    Uniform,
-    StorageRead,
-    StorageReadWrite,
-    /// A 2D float texture read with `textureLoad` (no filtering, any float format).
-    Texture,
-    /// A 2D unsigned-integer texture.
-    UintTexture,
-    /// A filterable 2D array texture.
-    TextureArray,
-    /// A 2D depth texture read with `textureLoad`.
-    Depth,
-    Sampler,
+impl std::fmt::Debug for dyn Pass {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
-pub(crate) fn bind_group_layout(device: &wgpu::Device, label: &str, slots: &[Slot]) -> wgpu::BindGroupLayout {
-    let entries: Vec<_> = slots
-        .iter()
-        .enumerate()
-        .map(|(binding, slot)| {
-            let texture = |sample_type, view_dimension| wgpu::BindingType::Texture {
-                sample_type,
-                view_dimension,
-                multisampled: false,
-            };
-            let storage = |read_only| wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            };
-            let ty = match slot {
-                Slot::Uniform => wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                Slot::StorageRead => storage(true),
-                Slot::StorageReadWrite => storage(false),
-                Slot::Texture => texture(
-                    wgpu::TextureSampleType::Float { filterable: false },
-                    wgpu::TextureViewDimension::D2,
-                ),
-                Slot::UintTexture => texture(wgpu::TextureSampleType::Uint, wgpu::TextureViewDimension::D2),
-                Slot::TextureArray => texture(
-                    wgpu::TextureSampleType::Float { filterable: true },
-                    wgpu::TextureViewDimension::D2Array,
-                ),
-                Slot::Depth => texture(wgpu::TextureSampleType::Depth, wgpu::TextureViewDimension::D2),
-                Slot::Sampler => wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-            };
-            // Vertex shaders may not write storage buffers.
-            let visibility = match slot {
-                Slot::StorageReadWrite => wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
-                _ => wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
-            };
-            wgpu::BindGroupLayoutEntry { binding: binding as u32, visibility, ty, count: None }
-        })
-        .collect();
-    device
-        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries: &entries })
+/// A pass as the graph sees it: its ports, and how to build it once they have resources.
+pub(crate) trait Node: std::fmt::Debug + Send + Sync {
+    fn decl(&self) -> PassDecl;
+    fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError>;
 }
 
-/// A bind group whose resources are bound to slots 0, 1, 2, … in order.
-pub(crate) fn bind_group(
-    device: &wgpu::Device,
-    label: &str,
-    layout: &wgpu::BindGroupLayout,
-    resources: &[wgpu::BindingResource],
-) -> wgpu::BindGroup {
-    let entries: Vec<_> = resources
-        .iter()
-        .enumerate()
-        .map(|(binding, resource)| wgpu::BindGroupEntry {
-            binding: binding as u32,
-            resource: resource.clone(),
-        })
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
+/// What a pass is built from: never the whole renderer.
+#[derive(Debug)]
+pub(crate) struct BuildContext<'a> {
+    pub scene: &'a GpuScene,
+    pub pipelines: &'a mut Pipelines,
+    pub settings: &'a RenderSettings,
 }
 
-/// Which shader entry point, with which override constants, makes a pipeline.
+/// A texture or buffer given to a port.
 #[derive(Debug, Clone)]
-pub(crate) struct Program<'a> {
-    pub module: &'a wgpu::ShaderModule,
-    pub entry: &'a str,
-    pub constants: &'a [(&'a str, f64)],
+pub(crate) enum Allocated {
+    Texture(wgpu::Texture),
+    Buffer(wgpu::Buffer),
 }
 
-fn pipeline_layout(
-    device: &wgpu::Device,
-    label: &str,
-    groups: &[Option<&wgpu::BindGroupLayout>],
-) -> wgpu::PipelineLayout {
-    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(label),
-        bind_group_layouts: groups,
-        immediate_size: 0,
-    })
+/// The resources of one pass's ports, and the names its shaders bound so far.
+#[derive(Debug)]
+pub(crate) struct Io {
+    pass: &'static str,
+    ports: HashMap<&'static str, (Port, Allocated)>,
+    bound: BTreeSet<String>,
 }
 
-/// A pipeline that runs `program` on the pixels that the vertex entry point `vertex` (no
-/// vertex buffers) covers in a `format` target.
-pub(crate) fn screen_pipeline(
-    device: &wgpu::Device,
-    label: &str,
-    vertex: &str,
-    program: &Program,
-    groups: &[Option<&wgpu::BindGroupLayout>],
-    format: wgpu::TextureFormat,
-) -> wgpu::RenderPipeline {
-    let layout = pipeline_layout(device, label, groups);
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(label),
-        layout: Some(&layout),
-        vertex: wgpu::VertexState {
-            module: program.module,
-            entry_point: Some(vertex),
-            // Both stages see the same override constants.
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants: program.constants,
-                ..Default::default()
+impl Io {
+    pub fn new(pass: &'static str, ports: HashMap<&'static str, (Port, Allocated)>) -> Io {
+        Io { pass, ports, bound: BTreeSet::new() }
+    }
+
+    /// The texture of a port.
+    pub fn texture(&self, port: &str) -> Result<wgpu::Texture, RenderError> {
+        match self.ports.get(port) {
+            Some((_, Allocated::Texture(texture))) => Ok(texture.clone()),
+            _ => Err(RenderError::Binding(format!("{}: no texture port {port}", self.pass))),
+        }
+    }
+
+    fn lookup(&self, name: &str, scene: &GpuScene, owned: &[(&str, Bound)]) -> Option<Bound> {
+        if let Some((port, allocated)) = self.ports.get(name) {
+            return port.access.is_binding().then(|| match allocated {
+                Allocated::Buffer(buffer) => Bound::Buffer(buffer.clone()),
+                Allocated::Texture(texture) => {
+                    Bound::Texture { texture: texture.clone(), filterable: port.access == Access::Sampled }
+                }
+            });
+        }
+        owned.iter().find(|(n, _)| *n == name).map(|(_, b)| b.clone()).or_else(|| scene.binding(name))
+    }
+
+    /// Fails when a port declared for binding was bound by none of the pass's shaders.
+    pub fn finish(&self) -> Result<(), RenderError> {
+        let mut unbound: Vec<&str> = self
+            .ports
+            .values()
+            .filter(|(port, _)| port.access.is_binding() && !self.bound.contains(port.name))
+            .map(|(port, _)| port.name)
+            .collect();
+        unbound.sort_unstable();
+        if unbound.is_empty() {
+            Ok(())
+        } else {
+            Err(RenderError::Binding(format!(
+                "{}: the ports {} are declared but no shader of the pass binds them",
+                self.pass,
+                unbound.join(", ")
+            )))
+        }
+    }
+}
+
+/// Which shader entry points, with which override constants, make a pipeline.
+#[derive(Debug, Clone)]
+pub(crate) struct Program {
+    pub shader: &'static str,
+    pub vertex: &'static str,
+    pub fragment: Option<&'static str>,
+    pub constants: Constants,
+}
+
+/// Bind groups by group index.
+pub(crate) type Groups = Vec<(u32, wgpu::BindGroup)>;
+
+/// A pipeline and the bind groups that its shaders' bindings resolved to.
+#[derive(Debug, Clone)]
+pub(crate) struct Bundle<P> {
+    pub pipeline: P,
+    pub groups: Groups,
+}
+
+impl BuildContext<'_> {
+    /// Reflects the entry points' bindings, resolves them by name and creates their groups.
+    fn resolve(
+        &mut self,
+        io: &mut Io,
+        shader: &'static str,
+        entries: &[&str],
+        stages: Stages,
+        owned: &[(&str, Bound)],
+    ) -> Result<(LayoutEntries, Groups), RenderError> {
+        let bindings = self.pipelines.shader(shader)?.bindings(entries)?;
+        let scene = self.scene;
+        let lookup = |name: &str| io.lookup(name, scene, owned);
+        let mut bound = BTreeSet::new();
+        let resolved = bindings::resolve(io.pass, &bindings, stages, &lookup, &mut bound)?;
+        io.bound.extend(bound);
+        let layout = bindings::group_entries(&resolved);
+        let mut groups = Vec::new();
+        for (index, entries) in layout.iter().enumerate().filter(|(_, e)| !e.is_empty()) {
+            let group_layout = self.pipelines.group_layout(entries);
+            let resources: Vec<wgpu::BindGroupEntry> = resolved
+                .iter()
+                .filter(|r| r.group == index as u32)
+                .map(|r| wgpu::BindGroupEntry { binding: r.entry.binding, resource: r.resource.as_binding() })
+                .collect();
+            let group = self.pipelines.device().create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(io.pass),
+                layout: &group_layout,
+                entries: &resources,
+            });
+            groups.push((index as u32, group));
+        }
+        Ok((layout, groups))
+    }
+
+    /// A render pipeline for `program`; `create` builds it when the cache does not hold it.
+    pub fn render_pipeline(
+        &mut self,
+        io: &mut Io,
+        program: &Program,
+        raster: Raster,
+        owned: &[(&str, Bound)],
+        create: impl FnOnce(
+            &wgpu::Device,
+            &wgpu::PipelineLayout,
+            &wgpu::ShaderModule,
+            &RenderKey,
+        ) -> wgpu::RenderPipeline,
+    ) -> Result<Bundle<wgpu::RenderPipeline>, RenderError> {
+        let entries: Vec<&str> = std::iter::once(program.vertex).chain(program.fragment).collect();
+        let (layout, groups) = self.resolve(io, program.shader, &entries, Stages::Render, owned)?;
+        let key = RenderKey {
+            shader: program.shader,
+            vertex: program.vertex,
+            fragment: program.fragment,
+            constants: program.constants.clone(),
+            raster,
+            layout,
+        };
+        let pipeline = self
+            .pipelines
+            .render(key.clone(), |device, layout, module| create(device, layout, module, &key))?;
+        Ok(Bundle { pipeline, groups })
+    }
+
+    /// A fragment pass of `program` over the texture of the output port `target`.
+    pub fn screen(
+        &mut self,
+        io: &mut Io,
+        name: &'static str,
+        program: Program,
+        target: &str,
+        vertices: u32,
+        owned: &[(&str, Bound)],
+    ) -> Result<Screen, RenderError> {
+        let target = io.texture(target)?;
+        let format = target.format();
+        let bound = self.render_pipeline(
+            io,
+            &program,
+            Raster::Screen(format),
+            owned,
+            |device, layout, module, key| {
+                crate::pipelines::screen_pipeline(device, layout, module, key, format)
             },
-            buffers: &[],
-        },
-        primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: None,
-        multisample: wgpu::MultisampleState::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: program.module,
-            entry_point: Some(program.entry),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants: program.constants,
-                ..Default::default()
-            },
-            targets: &[Some(format.into())],
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
+        )?;
+        Ok(Screen {
+            name,
+            pipeline: bound.pipeline,
+            groups: bound.groups,
+            target: target.create_view(&Default::default()),
+            vertices,
+        })
+    }
+
+    /// One compute dispatch step of `entry`.
+    pub fn compute_step(
+        &mut self,
+        io: &mut Io,
+        shader: &'static str,
+        entry: &'static str,
+        constants: Constants,
+        workgroups: [u32; 3],
+    ) -> Result<ComputeStep, RenderError> {
+        let (layout, groups) = self.resolve(io, shader, &[entry], Stages::Compute, &[])?;
+        let pipeline = self.pipelines.compute(ComputeKey { shader, entry, constants, layout })?;
+        Ok(ComputeStep { pipeline, groups, workgroups })
+    }
+
+    /// Override constants of the shading code: light count and stall.
+    pub fn shading_constants(&self, stalled: bool) -> Constants {
+        let stall = if stalled { self.settings.stall_iterations } else { 0 };
+        Constants::new().with("LIGHT_COUNT", self.scene.light_count).with("STALL_ITERATIONS", stall)
+    }
 }
 
-pub(crate) fn compute_pipeline(
-    device: &wgpu::Device,
-    label: &str,
-    program: &Program,
-    groups: &[Option<&wgpu::BindGroupLayout>],
-) -> wgpu::ComputePipeline {
-    let layout = pipeline_layout(device, label, groups);
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(label),
-        layout: Some(&layout),
-        module: program.module,
-        entry_point: Some(program.entry),
-        compilation_options: wgpu::PipelineCompilationOptions {
-            constants: program.constants,
-            ..Default::default()
-        },
-        cache: None,
-    })
+/// The ports through which shading reads a frame: the G-buffer and, in scenes with
+/// shadow-casting lights, the shadow cubes. `lib/gbuffer.wgsl` and `lib/shadows.wgsl` bind them.
+pub(crate) fn shading_inputs(shadows: Option<Resource>) -> Vec<Port> {
+    let mut ports: Vec<Port> =
+        gbuffer::outputs().into_iter().map(|p| Port { access: Access::Loaded, ..p }).collect();
+    ports.extend(shadows.map(|resource| Port::new(shadow::CUBES, resource, Access::Loaded)));
+    ports
 }
 
 fn set_groups<P: SetBindGroup>(pass: &mut P, groups: &[(u32, wgpu::BindGroup)]) {

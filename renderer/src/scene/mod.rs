@@ -5,11 +5,13 @@
 mod camera;
 pub mod generate;
 mod import;
+pub mod shadow;
 mod upload;
 pub mod write;
 
 pub use camera::{Camera, FrameUniforms, Tile};
 pub use import::{load_gltf, read_generator};
+pub use shadow::{MAX_SHADOW_LIGHTS, Shadow, ShadowCubes};
 pub use upload::{GpuScene, MAX_LIGHTS};
 
 use glam::Vec3;
@@ -88,9 +90,11 @@ pub struct PointLight {
     pub position: Vec3,
     pub color: Vec3,
     pub intensity: f32,
-    /// Distance at which the light's contribution fades to zero.
+    /// Distance at which the light's contribution fades to zero; also the far plane of its
+    /// shadow cube.
     pub range: f32,
-    pub casts_shadows: bool,
+    /// An omnidirectional shadow, when the light casts one.
+    pub shadow: Option<Shadow>,
 }
 
 /// Lighting and display settings that a manifest gives a scene.
@@ -121,6 +125,11 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Whether any material samples a texture.
+    pub fn is_textured(&self) -> bool {
+        !self.textures.is_empty() && self.materials.iter().any(|m| m.texture.is_some())
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
     }

@@ -1,12 +1,15 @@
 //! Uploading a scene: geometry buffers, material and light tables, every texture as one layer
-//! of a single mipmapped 2D array (lavapipe has no binding arrays), and the bind group that
-//! shaders see as group 0.
+//! of a single mipmapped 2D array (lavapipe has no binding arrays), the shadow cubes' face
+//! matrices, and the named resources that shaders bind from the scene.
+
+use std::ops::Range;
 
 use bytemuck::Zeroable;
 use wgpu::util::DeviceExt;
 
-use super::{AlphaMode, FrameUniforms, Lighting, Scene, Texture};
-use crate::passes::{Slot, bind_group, bind_group_layout};
+use super::shadow::{self, MAX_SHADOW_LIGHTS, ShadowCubes};
+use super::{AlphaMode, DrawClass, FrameUniforms, Lighting, Scene, Texture};
+use crate::bindings::Bound;
 
 /// Lights a scene may have: the size of the shaders' uniform light table.
 pub const MAX_LIGHTS: usize = 64;
@@ -32,7 +35,12 @@ struct GpuLight {
     position: [f32; 3],
     range: f32,
     radiance: [f32; 3],
-    casts_shadows: u32,
+    /// The light's cube in the shadow cube array, or −1.
+    shadow: i32,
+    shadow_bias: f32,
+    shadow_radius: f32,
+    shadow_near: f32,
+    padding: f32,
 }
 
 /// A scene on the device. Cheap to clone: wgpu handles are reference counted.
@@ -40,12 +48,16 @@ struct GpuLight {
 pub struct GpuScene {
     pub(crate) vertices: wgpu::Buffer,
     pub(crate) indices: wgpu::Buffer,
-    pub(crate) draws: Vec<(super::DrawClass, std::ops::Range<u32>)>,
+    pub(crate) draws: Vec<(DrawClass, Range<u32>)>,
     pub(crate) light_count: u32,
-    /// The `Frame` uniform block (group 0, binding 0).
+    /// The `Frame` uniform block.
     pub(crate) frame: wgpu::Buffer,
-    pub(crate) layout: wgpu::BindGroupLayout,
-    pub(crate) group: wgpu::BindGroup,
+    materials: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    /// The texture array and its sampler; none for an untextured scene.
+    textures: Option<(wgpu::Texture, wgpu::Sampler)>,
+    /// Face matrices of the shadow cubes and the sampler that reads them.
+    shadow_faces: Option<(wgpu::Buffer, wgpu::Sampler)>,
     /// Bytes of the texture array, all mips included.
     pub texture_bytes: u64,
 }
@@ -74,74 +86,121 @@ impl GpuScene {
             })
         };
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
-        // A fixed-size uniform array: unused entries stay zero.
-        let mut lights: Vec<GpuLight> = lighting
-            .lights
-            .iter()
-            .take(MAX_LIGHTS)
-            .map(|light| GpuLight {
+        let lights = &lighting.lights[..lighting.lights.len().min(MAX_LIGHTS)];
+        let shadows = ShadowCubes::of(lights);
+        let mut table = Vec::with_capacity(MAX_LIGHTS);
+        let mut faces = Vec::new();
+        for light in lights {
+            let near = f64::from(light.range) * shadow::NEAR_FRACTION;
+            let cube = match light.shadow {
+                Some(_) if faces.len() < 6 * MAX_SHADOW_LIGHTS => {
+                    faces.extend(shadow::face_matrices(light.position, near, f64::from(light.range)));
+                    (faces.len() / 6 - 1) as i32
+                }
+                _ => -1,
+            };
+            let settings = light.shadow.unwrap_or_default();
+            table.push(GpuLight {
                 position: light.position.to_array(),
                 range: light.range,
                 radiance: (light.color * light.intensity).to_array(),
-                casts_shadows: u32::from(light.casts_shadows),
-            })
-            .collect();
-        lights.resize(MAX_LIGHTS, GpuLight::zeroed());
+                shadow: cube,
+                shadow_bias: settings.bias,
+                shadow_radius: settings.radius,
+                shadow_near: near as f32,
+                padding: 0.0,
+            });
+        }
+        // A fixed-size uniform array: unused entries stay zero.
+        table.resize(MAX_LIGHTS, GpuLight::zeroed());
         let storage = wgpu::BufferUsages::STORAGE;
-        let vertices = buffer("vertices", bytemuck::cast_slice(&scene.vertices), wgpu::BufferUsages::VERTEX);
-        let indices = buffer("indices", bytemuck::cast_slice(&scene.indices), wgpu::BufferUsages::INDEX);
-        let materials = buffer("materials", bytemuck::cast_slice(&materials), storage);
-        let lights = buffer("lights", bytemuck::cast_slice(&lights), wgpu::BufferUsages::UNIFORM);
-        // Rewritten when the ground truth renders tile by tile.
-        let uniforms = buffer(
-            "frame",
-            bytemuck::bytes_of(frame),
-            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        );
-
-        let (array, texture_bytes) = upload_texture_array(device, queue, &scene.textures);
-        let view = array.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
+        let uniform = wgpu::BufferUsages::UNIFORM;
+        // The shaders' table has room for every face of MAX_SHADOW_LIGHTS cubes.
+        faces.resize(6 * MAX_SHADOW_LIGHTS, [[0.0; 4]; 4]);
+        let shadow_faces = shadows.map(|_| {
+            let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("shadow cubes"),
+                ..Default::default()
+            });
+            (buffer("shadow faces", bytemuck::cast_slice(&faces), uniform), sampler)
         });
-        // Trilinear; the shaders add anisotropy with taps of their own (`sample_albedo`).
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("scene textures"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            mipmap_filter: wgpu::MipmapFilterMode::Linear,
-            ..Default::default()
-        });
-        let layout = bind_group_layout(
-            device,
-            "scene",
-            &[Slot::Uniform, Slot::StorageRead, Slot::Uniform, Slot::TextureArray, Slot::Sampler],
-        );
-        let group = bind_group(
-            device,
-            "scene",
-            &layout,
-            &[
-                uniforms.as_entire_binding(),
-                materials.as_entire_binding(),
-                lights.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&view),
-                wgpu::BindingResource::Sampler(&sampler),
-            ],
-        );
+        let textures = scene.is_textured().then(|| upload_texture_array(device, queue, &scene.textures));
         GpuScene {
-            vertices,
-            indices,
+            vertices: buffer("vertices", bytemuck::cast_slice(&scene.vertices), wgpu::BufferUsages::VERTEX),
+            indices: buffer("indices", bytemuck::cast_slice(&scene.indices), wgpu::BufferUsages::INDEX),
             draws: scene.draws.clone(),
-            light_count: lighting.lights.len().min(MAX_LIGHTS) as u32,
-            frame: uniforms,
-            layout,
-            group,
-            texture_bytes,
+            light_count: lights.len() as u32,
+            // Rewritten when the ground truth renders tile by tile.
+            frame: buffer("frame", bytemuck::bytes_of(frame), uniform | wgpu::BufferUsages::COPY_DST),
+            materials: buffer("materials", bytemuck::cast_slice(&materials), storage),
+            lights: buffer("lights", bytemuck::cast_slice(&table), uniform),
+            texture_bytes: textures.as_ref().map_or(0, |(_, bytes)| *bytes),
+            textures: textures.map(|(array, _)| (array, texture_sampler(device))),
+            shadow_faces,
         }
     }
+
+    /// The scene resource that shaders bind under `name`, if the scene has it.
+    pub(crate) fn binding(&self, name: &str) -> Option<Bound> {
+        let buffer = |b: &wgpu::Buffer| Some(Bound::Buffer(b.clone()));
+        match name {
+            "frame" => buffer(&self.frame),
+            "materials" => buffer(&self.materials),
+            "lights" => buffer(&self.lights),
+            "scene_textures" => {
+                self.textures.as_ref().map(|(t, _)| Bound::Texture { texture: t.clone(), filterable: true })
+            }
+            "scene_sampler" => {
+                self.textures.as_ref().map(|(_, s)| Bound::Sampler { sampler: s.clone(), filtering: true })
+            }
+            "shadow_faces" => self.shadow_faces.as_ref().and_then(|(b, _)| buffer(b)),
+            // Depth is read texel by texel: a filtering sampler would blend depths.
+            "shadow_sampler" => self
+                .shadow_faces
+                .as_ref()
+                .map(|(_, s)| Bound::Sampler { sampler: s.clone(), filtering: false }),
+            _ => None,
+        }
+    }
+
+    /// The draw classes the scene has, in drawing order.
+    pub fn draw_classes(&self) -> impl Iterator<Item = DrawClass> + '_ {
+        self.draws.iter().map(|(class, _)| *class)
+    }
+
+    /// Draws every triangle, each class with the pipeline and bind groups (by group index)
+    /// that `pick` gives it, instances `instances`. Passes decide how the scene is drawn; the
+    /// scene draws itself.
+    pub(crate) fn draw<'a>(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pick: impl Fn(DrawClass) -> (&'a wgpu::RenderPipeline, &'a [(u32, wgpu::BindGroup)]),
+        instances: Range<u32>,
+    ) {
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for (class, range) in &self.draws {
+            let (pipeline, groups) = pick(*class);
+            pass.set_pipeline(pipeline);
+            for (index, group) in groups {
+                pass.set_bind_group(*index, group, &[]);
+            }
+            pass.draw_indexed(range.clone(), 0, instances.clone());
+        }
+    }
+}
+
+/// Trilinear; the shaders add anisotropy with taps of their own (`sample_albedo`).
+fn texture_sampler(device: &wgpu::Device) -> wgpu::Sampler {
+    device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("scene textures"),
+        address_mode_u: wgpu::AddressMode::Repeat,
+        address_mode_v: wgpu::AddressMode::Repeat,
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        mipmap_filter: wgpu::MipmapFilterMode::Linear,
+        ..Default::default()
+    })
 }
 
 fn gpu_material(material: &super::Material) -> GpuMaterial {
@@ -157,15 +216,12 @@ fn gpu_material(material: &super::Material) -> GpuMaterial {
     }
 }
 
-/// Uploads all textures as layers of one sRGB array; a scene without textures gets one white
-/// layer so the binding exists.
+/// Uploads all textures (at least one) as layers of one sRGB array.
 fn upload_texture_array(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     textures: &[Texture],
 ) -> (wgpu::Texture, u64) {
-    let white = [Texture { width: 1, height: 1, rgba: vec![255; 4] }];
-    let textures = if textures.is_empty() { &white[..] } else { textures };
     let size = textures
         .iter()
         .map(|t| t.width.max(t.height))

@@ -1,0 +1,215 @@
+//! The recipe of a frame: which passes a (scene, mode) pair runs, how their ports connect, and
+//! which outputs are read back. Built from what the scene needs, so a scene without
+//! shadow-casting lights has no shadow pass and no cube, and only adaptive modes evaluate.
+
+use crate::graph::{Dims, Graph, Output, PassId, Plan};
+use crate::mode::{Mode, Technique};
+use crate::passes::adaptive::{
+    CompactNode, EvaluateNode, Extra, GatherNode, List, ShadeExtraNode, ShadeFirstNode,
+};
+use crate::passes::display::DisplayNode;
+use crate::passes::gbuffer::{self, GBufferNode};
+use crate::passes::shade::{ResolveNode, ShadeNode};
+use crate::passes::shadow::{self, ShadowNode};
+use crate::passes::{Node, gbuffer::PORTS as GBUFFER};
+use crate::scene::{Lighting, Scene, ShadowCubes};
+use crate::shaders::Features;
+use crate::{ExtraSamples, RenderError, RenderSettings};
+
+/// What a scene asks of its frames, besides its mode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SceneNeeds {
+    /// Some material samples a texture: the texture array and its lookups exist.
+    pub textured: bool,
+    /// Shadow-casting lights: the shadow pass and its cube array exist.
+    pub shadows: Option<ShadowCubes>,
+}
+
+impl SceneNeeds {
+    pub fn of(scene: &Scene, lighting: &Lighting) -> SceneNeeds {
+        SceneNeeds {
+            textured: scene.is_textured(),
+            shadows: ShadowCubes::of(&lighting.lights[..lighting.lights.len().min(crate::scene::MAX_LIGHTS)]),
+        }
+    }
+
+    /// How the scene's shaders are composed.
+    pub fn features(&self) -> Features {
+        Features { textured: self.textured, shadows: self.shadows.is_some() }
+    }
+}
+
+impl std::fmt::Display for SceneNeeds {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(if self.textured { "textured" } else { "untextured" })?;
+        match self.shadows {
+            Some(c) => write!(f, ", {} shadow cube(s) of {}²", c.lights, c.resolution),
+            None => f.write_str(", no shadow-casting light"),
+        }
+    }
+}
+
+pub(crate) type FrameGraph = Graph<Box<dyn Node>>;
+
+fn add(graph: &mut FrameGraph, node: impl Node + 'static) -> PassId {
+    graph.add(node.decl(), Box::new(node))
+}
+
+/// The passes that every shading pass reads from.
+#[derive(Debug, Clone, Copy)]
+struct Sources {
+    gbuffer: PassId,
+    shadow: Option<PassId>,
+}
+
+impl Sources {
+    fn feed(self, graph: &mut FrameGraph, pass: PassId) {
+        graph.connect_all(self.gbuffer, pass, &GBUFFER);
+        if let Some(shadow) = self.shadow {
+            graph.connect(shadow, shadow::CUBES, pass, shadow::CUBES);
+        }
+    }
+}
+
+/// The graph of `mode`'s frame for a scene with `needs`. `limits` bound the adaptive list.
+pub(crate) fn frame_graph(
+    needs: &SceneNeeds,
+    mode: Mode,
+    settings: &RenderSettings,
+    limits: &wgpu::Limits,
+) -> Result<FrameGraph, RenderError> {
+    let mut g = FrameGraph::new();
+    let cubes = needs.shadows.map(|c| shadow::cubes(c.lights, c.resolution));
+    // Shadows first: nothing in the frame depends on the order beyond that, and it keeps the
+    // passes that every mode shares at the front.
+    let shadow = cubes.map(|cubes| add(&mut g, ShadowNode { cubes }));
+    if let Some(shadow) = shadow {
+        g.retain(shadow, shadow::CUBES, Output::ShadowCubes);
+    }
+    let gbuffer = add(&mut g, GBufferNode);
+    g.retain(gbuffer, gbuffer::NORMAL, Output::GBufferNormal);
+    g.retain(gbuffer, gbuffer::DEPTH, Output::GBufferDepth);
+    let sources = Sources { gbuffer, shadow };
+    let (m, stalled) = (mode.m, mode.stalled);
+    let hdr = match mode.technique {
+        Technique::Deferred | Technique::Reference => {
+            let shade = add(&mut g, ShadeNode { stalled, shadows: cubes });
+            sources.feed(&mut g, shade);
+            if mode.technique == Technique::Deferred {
+                shade
+            } else {
+                let resolve = add(&mut g, ResolveNode { m });
+                g.connect(shade, "color", resolve, "supersampled");
+                resolve
+            }
+        }
+        Technique::Adaptive(metrics) => {
+            let first = add(&mut g, ShadeFirstNode { m, stalled, shadows: cubes });
+            sources.feed(&mut g, first);
+            g.retain(first, "first", Output::First);
+            let evaluate = add(&mut g, EvaluateNode { m, metrics, settings: settings.adaptive });
+            g.connect_all(gbuffer, evaluate, &[gbuffer::NORMAL, gbuffer::DEPTH]);
+            g.connect(first, "first", evaluate, "first");
+            g.retain(evaluate, "counts", Output::SampleCounts);
+            let extra = match settings.adaptive.extra_samples {
+                ExtraSamples::Loop => Extra::Loop { stalled, shadows: cubes },
+                ExtraSamples::Compact => Extra::List(List::new(m, settings.width, settings.height, limits)?),
+            };
+            let list = match extra {
+                Extra::List(list) => Some(list),
+                Extra::Loop { .. } => None,
+            };
+            let gather = add(&mut g, GatherNode { m, extra });
+            g.connect_all(first, gather, &["first"]);
+            g.connect(evaluate, "counts", gather, "counts");
+            match list {
+                None => sources.feed(&mut g, gather),
+                Some(list) => {
+                    let compact = add(&mut g, CompactNode { m, list });
+                    g.connect(evaluate, "counts", compact, "counts");
+                    let extra = add(&mut g, ShadeExtraNode { m, stalled, list, shadows: cubes });
+                    sources.feed(&mut g, extra);
+                    g.connect(evaluate, "counts", extra, "counts");
+                    g.connect(compact, "entries", extra, "list_entries");
+                    g.connect(compact, "totals", extra, "list_totals");
+                    g.connect(compact, "pixel_offsets", gather, "list_offsets");
+                    g.connect(extra, "extra", gather, "extra_samples");
+                }
+            }
+            gather
+        }
+    };
+    g.retain(hdr, "color", Output::Hdr);
+    let display = add(&mut g, DisplayNode);
+    g.connect(hdr, "color", display, "hdr");
+    g.retain(display, "display", Output::Display);
+    Ok(g)
+}
+
+/// The dimensions a mode's graph resolves against.
+pub(crate) fn dims(settings: &RenderSettings, mode: Mode) -> Dims {
+    Dims { width: settings.width, height: settings.height, m: mode.m }
+}
+
+/// A compiled graph as the runner records it: the passes in order and the allocations, with
+/// their bytes against one allocation per output and against the lower bound.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GraphSummary {
+    pub passes: Vec<String>,
+    pub allocations: Vec<AllocationSummary>,
+    pub allocated_bytes: u64,
+    pub one_per_output_bytes: u64,
+    pub lower_bound_bytes: u64,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct AllocationSummary {
+    /// Format and size, e.g. `Rgba16Float 512×384`, or `buffer 16 B`.
+    pub descriptor: String,
+    pub bytes: u64,
+    /// The ports whose resources it holds, in order: `pass.port`.
+    pub holds: Vec<String>,
+}
+
+impl GraphSummary {
+    pub(crate) fn of(plan: &Plan) -> GraphSummary {
+        let allocations = plan
+            .allocation
+            .physical
+            .iter()
+            .map(|p| AllocationSummary {
+                descriptor: p.desc.to_string(),
+                bytes: p.desc.bytes(),
+                holds: p
+                    .resources
+                    .iter()
+                    .map(|&r| {
+                        let writer = plan.resources[r].writer;
+                        format!("{}.{}", plan.names[writer.pass], writer.port)
+                    })
+                    .collect(),
+            })
+            .collect();
+        GraphSummary {
+            passes: plan.pass_names().iter().map(|s| s.to_string()).collect(),
+            allocations,
+            allocated_bytes: plan.allocated_bytes(),
+            one_per_output_bytes: plan.one_per_output_bytes(),
+            lower_bound_bytes: plan.lower_bound_bytes(),
+        }
+    }
+}
+
+/// `mode`'s graph for a scene with `needs`, compiled and printed: the text table, or Graphviz
+/// when `dot`. Needs no device beyond its limits.
+pub fn describe(
+    needs: &SceneNeeds,
+    mode: Mode,
+    settings: &RenderSettings,
+    limits: &wgpu::Limits,
+    dot: bool,
+) -> Result<String, RenderError> {
+    let graph = frame_graph(needs, mode, settings, limits)?;
+    let plan = graph.compile(dims(settings, mode))?;
+    Ok(if dot { graph.dot(&plan) } else { graph.describe(&plan) })
+}

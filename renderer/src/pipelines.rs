@@ -1,0 +1,226 @@
+//! Shader modules, bind group layouts and pipelines of one scene, each created once and cached
+//! under a typed key.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use crate::RenderError;
+use crate::bindings::Shader;
+use crate::scene::DrawClass;
+use crate::shaders::Features;
+
+/// Pipeline override constants, by name, in the order given. Values are kept as f64 bits so
+/// that keys hash and compare exactly.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Hash)]
+pub(crate) struct Constants(Vec<(&'static str, u64)>);
+
+impl Constants {
+    pub fn new() -> Constants {
+        Constants::default()
+    }
+
+    pub fn with(mut self, name: &'static str, value: impl Into<f64>) -> Constants {
+        self.0.push((name, value.into().to_bits()));
+        self
+    }
+
+    pub fn flag(self, name: &'static str, value: bool) -> Constants {
+        self.with(name, if value { 1.0 } else { 0.0 })
+    }
+
+    pub fn extend(mut self, other: &Constants) -> Constants {
+        self.0.extend_from_slice(&other.0);
+        self
+    }
+
+    pub fn pairs(&self) -> Vec<(&'static str, f64)> {
+        self.0.iter().map(|&(name, bits)| (name, f64::from_bits(bits))).collect()
+    }
+}
+
+/// How a render pipeline rasterizes, beyond its shaders: the part of its key that passes add.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(crate) enum Raster {
+    /// No vertex buffers, one colour target of this format.
+    Screen(wgpu::TextureFormat),
+    /// The scene's vertices into the G-buffer, culled as the draw class says.
+    GBuffer(DrawClass),
+    /// The scene's vertices into a depth-only target, both faces.
+    ShadowDepth,
+}
+
+/// A pipeline layout as data: the layout entries of each bind group, by group index.
+pub(crate) type LayoutEntries = Vec<Vec<wgpu::BindGroupLayoutEntry>>;
+
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub(crate) struct RenderKey {
+    pub shader: &'static str,
+    pub vertex: &'static str,
+    pub fragment: Option<&'static str>,
+    pub constants: Constants,
+    pub raster: Raster,
+    pub layout: LayoutEntries,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub(crate) struct ComputeKey {
+    pub shader: &'static str,
+    pub entry: &'static str,
+    pub constants: Constants,
+    pub layout: LayoutEntries,
+}
+
+/// Everything compiled for one scene, whose [`Features`] decide how each shader is composed.
+#[derive(Debug)]
+pub(crate) struct Pipelines {
+    device: wgpu::Device,
+    features: Features,
+    shaders: HashMap<&'static str, Arc<Shader>>,
+    group_layouts: HashMap<Vec<wgpu::BindGroupLayoutEntry>, wgpu::BindGroupLayout>,
+    render: HashMap<RenderKey, wgpu::RenderPipeline>,
+    compute: HashMap<ComputeKey, wgpu::ComputePipeline>,
+    sample_orders: HashMap<u32, wgpu::Buffer>,
+}
+
+impl Pipelines {
+    pub fn new(device: wgpu::Device, features: Features) -> Pipelines {
+        Pipelines {
+            device,
+            features,
+            shaders: HashMap::new(),
+            group_layouts: HashMap::new(),
+            render: HashMap::new(),
+            compute: HashMap::new(),
+            sample_orders: HashMap::new(),
+        }
+    }
+
+    pub fn device(&self) -> &wgpu::Device {
+        &self.device
+    }
+
+    pub fn shader(&mut self, file: &'static str) -> Result<Arc<Shader>, RenderError> {
+        if let Some(shader) = self.shaders.get(file) {
+            return Ok(Arc::clone(shader));
+        }
+        let shader = Arc::new(Shader::new(&self.device, file, self.features)?);
+        self.shaders.insert(file, Arc::clone(&shader));
+        Ok(shader)
+    }
+
+    pub fn group_layout(&mut self, entries: &[wgpu::BindGroupLayoutEntry]) -> wgpu::BindGroupLayout {
+        let device = &self.device;
+        self.group_layouts
+            .entry(entries.to_vec())
+            .or_insert_with(|| {
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries })
+            })
+            .clone()
+    }
+
+    /// A pipeline layout whose group i has `groups[i]`'s entries; empty groups are left out.
+    fn pipeline_layout(
+        &mut self,
+        label: &str,
+        groups: &[Vec<wgpu::BindGroupLayoutEntry>],
+    ) -> wgpu::PipelineLayout {
+        let layouts: Vec<Option<wgpu::BindGroupLayout>> =
+            groups.iter().map(|entries| (!entries.is_empty()).then(|| self.group_layout(entries))).collect();
+        let refs: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().map(Option::as_ref).collect();
+        self.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &refs,
+            immediate_size: 0,
+        })
+    }
+
+    /// The render pipeline of `key`, made by `create` from the layout and module on first use.
+    /// `create` must build what the key describes: the key is what the cache trusts.
+    pub fn render(
+        &mut self,
+        key: RenderKey,
+        create: impl FnOnce(&wgpu::Device, &wgpu::PipelineLayout, &wgpu::ShaderModule) -> wgpu::RenderPipeline,
+    ) -> Result<wgpu::RenderPipeline, RenderError> {
+        if let Some(pipeline) = self.render.get(&key) {
+            return Ok(pipeline.clone());
+        }
+        let shader = self.shader(key.shader)?;
+        let layout = self.pipeline_layout(key.fragment.unwrap_or(key.vertex), &key.layout);
+        let pipeline = create(&self.device, &layout, &shader.module);
+        self.render.insert(key, pipeline.clone());
+        Ok(pipeline)
+    }
+
+    pub fn compute(&mut self, key: ComputeKey) -> Result<wgpu::ComputePipeline, RenderError> {
+        if let Some(pipeline) = self.compute.get(&key) {
+            return Ok(pipeline.clone());
+        }
+        let shader = self.shader(key.shader)?;
+        let layout = self.pipeline_layout(key.entry, &key.layout);
+        let constants = key.constants.pairs();
+        let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(key.entry),
+            layout: Some(&layout),
+            module: &shader.module,
+            entry_point: Some(key.entry),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                ..Default::default()
+            },
+            cache: None,
+        });
+        self.compute.insert(key, pipeline.clone());
+        Ok(pipeline)
+    }
+
+    /// The dither order of an M×M window (`adaptive::sample_order`) as a storage buffer.
+    pub fn sample_order(&mut self, m: u32) -> wgpu::Buffer {
+        use wgpu::util::DeviceExt;
+        let device = &self.device;
+        self.sample_orders
+            .entry(m)
+            .or_insert_with(|| {
+                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("sample order"),
+                    contents: bytemuck::cast_slice(&crate::adaptive::sample_order(m)),
+                    usage: wgpu::BufferUsages::STORAGE,
+                })
+            })
+            .clone()
+    }
+}
+
+/// A pipeline that runs a fragment entry point over the triangles that a vertex entry point
+/// (no vertex buffers) makes, into one target of `format`.
+pub(crate) fn screen_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    key: &RenderKey,
+    format: wgpu::TextureFormat,
+) -> wgpu::RenderPipeline {
+    let constants = key.constants.pairs();
+    // Both stages see the same override constants.
+    let options = wgpu::PipelineCompilationOptions { constants: &constants, ..Default::default() };
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: key.fragment,
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(key.vertex),
+            compilation_options: options.clone(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: None,
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: key.fragment,
+            compilation_options: options,
+            targets: &[Some(format.into())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}

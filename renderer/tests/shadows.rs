@@ -1,0 +1,184 @@
+//! Omnidirectional shadows on lavapipe: cube faces hold what lies along their axes, occluded
+//! points are dark and visible ones lit, and PCF's penumbra widens with its radius.
+
+mod support;
+
+use aabench_renderer::scene::shadow::face_and_coordinates;
+use aabench_renderer::scene::{
+    AlphaMode, Camera, DrawClass, Lighting, Material, PointLight, Scene, Shadow, Vertex,
+};
+use aabench_renderer::{FrameImages, Mode, SceneRenderer, Technique};
+use glam::{DVec3, Vec3};
+use support::*;
+
+/// A scene of quads, each given by its centre, two half-extent vectors and its normal.
+fn quads(quads: &[(Vec3, Vec3, Vec3)], double_sided: bool) -> Scene {
+    let mut scene = Scene::default();
+    for &(centre, u, v) in quads {
+        let normal = u.cross(v).normalize();
+        let base = scene.vertices.len() as u32;
+        for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+            let position = centre + u * su + v * sv;
+            scene.vertices.push(Vertex {
+                position: position.to_array(),
+                normal: normal.to_array(),
+                uv: [0.0, 0.0],
+                material: 0,
+            });
+        }
+        scene.indices.extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+    let class = DrawClass { masked: false, double_sided };
+    scene.draws = vec![(class, 0..scene.indices.len() as u32)];
+    scene.materials = vec![Material {
+        name: "grey".into(),
+        base_color: [0.5, 0.5, 0.5, 1.0],
+        metallic: 0.0,
+        roughness: 0.9,
+        texture: None,
+        alpha: AlphaMode::Opaque,
+        double_sided,
+    }];
+    scene
+}
+
+fn light(position: Vec3, shadow: Option<Shadow>) -> Lighting {
+    Lighting {
+        lights: vec![PointLight { position, color: Vec3::ONE, intensity: 10.0, range: 10.0, shadow }],
+        ambient: Vec3::splat(0.02),
+        background: Vec3::ZERO,
+        exposure: 1.0,
+    }
+}
+
+fn deferred() -> Mode {
+    Mode::new(Technique::Deferred, 1, false)
+}
+
+#[test]
+fn a_marker_along_each_axis_lands_in_its_face_where_the_lookup_reads() {
+    // A small square 2 units from the light along each axis, off-centre towards a neighbouring
+    // axis, so a face that is mirrored or turned puts it in the wrong place.
+    let axes = [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+    let markers: Vec<(Vec3, Vec3, Vec3)> = axes
+        .iter()
+        .enumerate()
+        .map(|(i, &axis)| {
+            let side = axes[(i + 2) % 6];
+            let other = axis.cross(side);
+            (axis * 2.0 + side * 0.8 + other * 0.3, side * 0.15, other * 0.15)
+        })
+        .collect();
+    let resolution = 64;
+    let scene = quads(&markers, true);
+    let lighting = light(Vec3::ZERO, Some(Shadow { resolution, ..Shadow::default() }));
+    let (gpu, _guard) = gpu();
+    let camera = Camera::look_at(DVec3::new(0.5, 0.5, 5.0), DVec3::ZERO, 60.0);
+    let mut renderer = SceneRenderer::new(gpu, &scene, &camera, &lighting, settings(32, 24)).unwrap();
+    let prepared = renderer.prepare(deferred()).unwrap();
+    prepared.render().unwrap();
+    let cubes = prepared.read_shadow_cubes().unwrap().expect("a shadow light's cube");
+    assert_eq!((cubes.resolution, cubes.layers), (resolution, 6));
+    let side = resolution as usize;
+    let layer = |face: usize| &cubes.depth[face * side * side..(face + 1) * side * side];
+    for (marker, &(centre, _, _)) in markers.iter().enumerate() {
+        let (face, s, t) = face_and_coordinates(centre);
+        assert_eq!(face, marker, "the CPU lookup puts marker {marker} on face {face}");
+        // Each face sees exactly its own marker: the centroid of its covered texels is where
+        // the lookup reads the marker's centre.
+        let covered: Vec<(f64, f64)> = layer(face)
+            .iter()
+            .enumerate()
+            .filter(|(_, d)| **d > 0.0)
+            .map(|(i, _)| (((i % side) as f64 + 0.5) / side as f64, ((i / side) as f64 + 0.5) / side as f64))
+            .collect();
+        assert!(!covered.is_empty(), "face {face} saw nothing");
+        let n = covered.len() as f64;
+        let (cs, ct) = covered.iter().fold((0.0, 0.0), |(a, b), (s, t)| (a + s / n, b + t / n));
+        assert!(
+            (cs - s).abs() < 0.03 && (ct - t).abs() < 0.03,
+            "face {face}: marker at ({cs}, {ct}), lookup reads ({s}, {t})"
+        );
+        // The depth is reversed depth along the face's axis: n·(f − ma) / (ma·(f − n)).
+        let (near, far) = (10.0 * 1e-4, 10.0);
+        let ma = 2.0f64;
+        let expected = near * (far - ma) / (ma * (far - near));
+        let texel = (t * side as f64) as usize * side + (s * side as f64) as usize;
+        let stored = f64::from(layer(face)[texel]);
+        assert!((stored - expected).abs() < 1e-6, "face {face}: depth {stored}, expected {expected}");
+    }
+}
+
+/// A floor at y = 0 lit from (0, 2, 0), and a square occluder at y = 1 over the origin that
+/// faces down: the camera above sees its back, which the G-buffer culls, so the shadow it
+/// casts is in plain view.
+fn occluder_scene() -> (Scene, Camera) {
+    let floor = (Vec3::ZERO, Vec3::X * 4.0, -Vec3::Z * 4.0);
+    // X × Z = −Y: the occluder faces the floor.
+    let occluder = (Vec3::Y, Vec3::X * 0.25, Vec3::Z * 0.25);
+    let scene = quads(&[floor, occluder], false);
+    let camera = Camera {
+        position: DVec3::new(0.0, 6.0, 0.0),
+        forward: DVec3::NEG_Y,
+        up: DVec3::NEG_Z,
+        fov_y: 60f64.to_radians(),
+        near: 0.05,
+        far: 50.0,
+    };
+    (scene, camera)
+}
+
+fn render_floor(shadow: Option<Shadow>) -> FrameImages {
+    let (scene, camera) = occluder_scene();
+    let (gpu, _guard) = gpu();
+    let lighting = light(Vec3::new(0.0, 2.0, 0.0), shadow);
+    let mut renderer = SceneRenderer::new(gpu, &scene, &camera, &lighting, settings(96, 96)).unwrap();
+    let prepared = renderer.prepare(deferred()).unwrap();
+    prepared.render().unwrap();
+    prepared.read_images().unwrap()
+}
+
+/// Per pixel of the middle row: the fraction of the light that reaches it, from the shadowed
+/// and unshadowed renders (ambient removed).
+fn visibility_row(shadow: Shadow) -> Vec<f32> {
+    let shadowed = render_floor(Some(shadow));
+    let open = render_floor(None);
+    let ambient = 0.02 * 0.5;
+    let width = shadowed.width as usize;
+    let row = shadowed.height as usize / 2;
+    (0..width)
+        .map(|x| {
+            let at = 4 * (row * width + x);
+            (shadowed.hdr[at] - ambient) / (open.hdr[at] - ambient)
+        })
+        .collect()
+}
+
+#[test]
+fn an_occluded_point_is_shadowed_and_a_visible_one_lit() {
+    let visibility = visibility_row(Shadow { resolution: 256, bias: 0.05, radius: 0.01 });
+    let width = visibility.len();
+    // The occluder's shadow spans |x| < 0.5 on the floor (twice its half-size at half the
+    // light's height); the frame spans |x| < 6·tan 30° ≈ 3.46.
+    let centre = visibility[width / 2];
+    let outside = visibility[width / 8];
+    assert!(centre < 0.01, "under the occluder: {centre}");
+    assert!((outside - 1.0).abs() < 0.01, "in the open: {outside}");
+}
+
+#[test]
+fn pcf_gives_a_soft_edge_that_widens_with_the_radius() {
+    let penumbra = |radius: f32| {
+        let visibility = visibility_row(Shadow { resolution: 256, bias: 0.05, radius });
+        let partial = visibility.iter().filter(|&&v| v > 0.02 && v < 0.98).count();
+        assert!(visibility.iter().all(|v| v.is_finite() && (-0.01..=1.01).contains(v)), "{visibility:?}");
+        // The open floor is fully lit right up to the penumbra: a wide disk does not shadow
+        // the surface it sits on.
+        let lit = visibility.iter().filter(|&&v| v >= 0.98).count();
+        assert_eq!(lit + partial + visibility.iter().filter(|&&v| v <= 0.02).count(), visibility.len());
+        partial
+    };
+    let (narrow, wide) = (penumbra(0.03), penumbra(0.12));
+    assert!(narrow >= 2, "a soft edge on both sides: {narrow} partly lit pixels");
+    assert!(wide >= narrow + 4, "radius 0.12 gives {wide} partly lit pixels, 0.03 gives {narrow}");
+}

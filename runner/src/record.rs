@@ -251,9 +251,10 @@ pub struct AdaptiveCost {
     pub reference: String,
     /// Reference frame median over this mode's.
     pub speedup: f64,
-    /// G-buffer + S + evaluation + (samples shaded after S / M²·w·h) × the reference's
-    /// shading pass, all medians: what adaptive would cost if shading scaled exactly with
-    /// samples and its other passes were free. S's own share is not counted twice.
+    /// Shadow cubes (where the scene has them) + G-buffer + S + evaluation + (samples shaded
+    /// after S / M²·w·h) × the reference's shading pass, all medians: what adaptive would cost
+    /// if shading scaled exactly with samples and its other passes were free. S's own share is
+    /// not counted twice.
     pub limit_ms: f64,
     /// limit_ms over this mode's frame median: 1 means at the limit.
     pub efficiency: f64,

@@ -606,7 +606,9 @@ fn adaptive_cost(modes: &[Mode], runs: &[ModeRun], mode: Mode, run: &ModeRun) ->
     // Shading work beyond S, as a fraction of the reference's.
     let pixels = counts.len() as f64;
     let extra_fraction = ((stats.shaded + stats.full_pixels) as f64 - pixels) / stats.total as f64;
-    let limit = pass_median(run, "gbuffer")?
+    // Every frame of the scene pays for its shadow cubes, the reference's too.
+    let limit = pass_median(run, "shadow").unwrap_or(0.0)
+        + pass_median(run, "gbuffer")?
         + pass_median(run, "shade_first")?
         + pass_median(run, "evaluate")?
         + extra_fraction * pass_median(reference_run, "shade")?;

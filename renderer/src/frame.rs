@@ -120,7 +120,7 @@ pub(crate) fn frame_graph(
                 Extra::Loop { .. } => None,
             };
             let gather = add(&mut g, GatherNode { m, extra });
-            g.connect_all(first, gather, &["first"]);
+            g.connect(first, "first", gather, "first");
             g.connect(evaluate, "counts", gather, "counts");
             match list {
                 None => sources.feed(&mut g, gather),

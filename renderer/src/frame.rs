@@ -8,9 +8,11 @@ use crate::passes::adaptive::{
     CompactNode, EvaluateNode, Extra, GatherNode, List, ShadeExtraNode, ShadeFirstNode,
 };
 use crate::passes::display::DisplayNode;
+use crate::passes::fxaa::FxaaNode;
 use crate::passes::gbuffer::{self, GBufferNode};
 use crate::passes::shade::{ResolveNode, ShadeNode};
 use crate::passes::shadow::{self, ShadowNode};
+use crate::passes::tonemap::TonemapNode;
 use crate::passes::{Node, gbuffer::PORTS as GBUFFER};
 use crate::scene::{Lighting, Scene, ShadowCubes};
 use crate::shaders::Features;
@@ -92,10 +94,10 @@ pub(crate) fn frame_graph(
     let sources = Sources { gbuffer, shadow };
     let (m, stalled) = (mode.m, mode.stalled);
     let hdr = match mode.technique {
-        Technique::Deferred | Technique::Reference => {
+        Technique::Deferred | Technique::Fxaa | Technique::Reference => {
             let shade = add(&mut g, ShadeNode { stalled, shadows: cubes });
             sources.feed(&mut g, shade);
-            if mode.technique == Technique::Deferred {
+            if mode.technique != Technique::Reference {
                 shade
             } else {
                 let resolve = add(&mut g, ResolveNode { m });
@@ -140,10 +142,32 @@ pub(crate) fn frame_graph(
         }
     };
     g.retain(hdr, "color", Output::Hdr);
-    let display = add(&mut g, DisplayNode);
-    g.connect(hdr, "color", display, "hdr");
-    g.retain(display, "display", Output::Display);
+    add_display(&mut g, hdr, mode, settings);
     Ok(g)
+}
+
+/// The colour end of a frame: the tonemap pass in an HDR scene, the display encoding, and in
+/// FXAA modes FXAA on the encoded image.
+fn add_display(g: &mut FrameGraph, hdr: PassId, mode: Mode, settings: &RenderSettings) {
+    let color = &settings.color;
+    let bits = color.bits;
+    let (linear, port) = match color.tonemap {
+        Some(tonemap) => {
+            let tonemap = add(g, TonemapNode { tonemap });
+            g.connect(hdr, "color", tonemap, "hdr");
+            (tonemap, "tonemapped")
+        }
+        None => (hdr, "color"),
+    };
+    let display = add(g, DisplayNode { expose: color.tonemap.is_none(), bits });
+    g.connect(linear, port, display, "linear");
+    if mode.technique == Technique::Fxaa {
+        let fxaa = add(g, FxaaNode { bits });
+        g.connect(display, "display", fxaa, "encoded");
+        g.retain(fxaa, "display", Output::Display);
+    } else {
+        g.retain(display, "display", Output::Display);
+    }
 }
 
 /// The dimensions a mode's graph resolves against.

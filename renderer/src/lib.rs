@@ -9,6 +9,7 @@
 
 pub mod adaptive;
 mod bindings;
+pub mod color;
 pub mod frame;
 pub mod gpu;
 pub mod graph;
@@ -20,11 +21,13 @@ pub mod scene;
 pub mod shaders;
 
 pub use adaptive::{AdaptiveSettings, ExtraSamples};
+pub use color::ColorSettings;
 pub use gpu::{Gpu, PlatformInfo};
 pub use mode::{Metrics, Mode, Technique};
 pub use passes::gbuffer::BACKGROUND_MATERIAL;
 pub use render::{
-    FrameImages, FrameTiming, GBufferImages, PassTime, PreparedMode, SceneRenderer, ShadowDepths, Truth,
+    DisplayImage, FrameImages, FrameTiming, GBufferImages, PassTime, PreparedMode, SceneRenderer,
+    ShadowDepths, Truth,
 };
 
 use std::path::PathBuf;
@@ -38,6 +41,8 @@ pub struct RenderSettings {
     /// Dependent ALU iterations per shaded sample in `-stalled` modes.
     pub stall_iterations: u32,
     pub adaptive: AdaptiveSettings,
+    /// From linear HDR to the display image: tonemap (HDR scenes), transfer, dither, bits.
+    pub color: ColorSettings,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -59,6 +64,9 @@ pub enum RenderError {
     /// A frame's pass graph does not compile.
     #[error("pass graph: {0}")]
     Graph(#[from] graph::GraphError),
+    /// A colour-pipeline parameter that cannot make a display image.
+    #[error("colour pipeline: {0}")]
+    Color(#[from] color::ColorError),
     /// A shader's bindings do not match the resources offered for them.
     #[error("bindings: {0}")]
     Binding(String),

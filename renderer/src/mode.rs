@@ -18,6 +18,8 @@ pub enum Metrics {
 pub enum Technique {
     /// One sample per pixel.
     Deferred,
+    /// One sample per pixel, then FXAA 3.11 on the display-encoded image.
+    Fxaa,
     /// All M² samples of an M·w × M·h G-buffer shaded, box-filtered.
     Reference,
     /// Holländer et al. 2013: the same G-buffer, samples shaded where the metrics ask.
@@ -38,12 +40,13 @@ impl Mode {
         Mode { technique, m, stalled }
     }
 
-    /// The eight modes of the foundation: deferred 1×1 and reference 2×2–4×4, each plain and
-    /// stalled.
+    /// The ten modes that adaptive is measured against: deferred 1×1, FXAA and reference
+    /// 2×2–4×4, each plain and stalled.
     pub fn baseline_modes() -> Vec<Mode> {
         let mut modes = Vec::new();
         for stalled in [false, true] {
             modes.push(Mode::new(Technique::Deferred, 1, stalled));
+            modes.push(Mode::new(Technique::Fxaa, 1, stalled));
             for m in 2..=4 {
                 modes.push(Mode::new(Technique::Reference, m, stalled));
             }
@@ -75,6 +78,8 @@ impl fmt::Display for Mode {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
         let name = match self.technique {
             Technique::Deferred => "deferred",
+            // FXAA has no supersampling factor to name.
+            Technique::Fxaa => return f.write_str(if self.stalled { "fxaa-stalled" } else { "fxaa" }),
             Technique::Reference => "reference",
             Technique::Adaptive(_) => "adaptive",
         };
@@ -94,7 +99,7 @@ impl fmt::Display for Mode {
 /// A mode id that does not parse, with the reason.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry)"
+    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry)"
 )]
 pub struct ModeError {
     pub id: String,
@@ -106,6 +111,11 @@ impl FromStr for Mode {
 
     fn from_str(id: &str) -> Result<Mode, ModeError> {
         let fail = |reason: &str| ModeError { id: id.to_string(), reason: reason.to_string() };
+        match id {
+            "fxaa" => return Ok(Mode::new(Technique::Fxaa, 1, false)),
+            "fxaa-stalled" => return Ok(Mode::new(Technique::Fxaa, 1, true)),
+            _ => {}
+        }
         let mut parts = id.split('-');
         let technique = parts.next().unwrap_or_default();
         let size = parts.next().ok_or_else(|| fail("missing the size, e.g. `-2x2`"))?;
@@ -125,10 +135,11 @@ impl FromStr for Mode {
             ("adaptive", ["geometry"]) => Technique::Adaptive(Metrics::Geometry),
             ("adaptive", ["shading"]) => Technique::Adaptive(Metrics::Shading),
             ("deferred" | "reference" | "adaptive", _) => return Err(fail("unexpected suffix")),
-            _ => return Err(fail("the technique must be deferred, reference or adaptive")),
+            ("fxaa", _) => return Err(fail("FXAA has no size: `fxaa` or `fxaa-stalled`")),
+            _ => return Err(fail("the technique must be deferred, fxaa, reference or adaptive")),
         };
         let allowed = match technique {
-            Technique::Deferred => 1..=1,
+            Technique::Deferred | Technique::Fxaa => 1..=1,
             // reference-1x1 exists to check that the supersampling path equals deferred-1x1.
             Technique::Reference => 1..=4,
             Technique::Adaptive(_) => 2..=4,
@@ -147,7 +158,8 @@ mod tests {
     #[test]
     fn every_listed_mode_round_trips_through_its_id() {
         let all = [Mode::baseline_modes(), Mode::adaptive_modes(), Mode::ablation_modes()].concat();
-        assert_eq!(all.len(), 8 + 6 + 12);
+        assert_eq!(all.len(), 10 + 6 + 12);
+        assert!(all.iter().any(|m| m.to_string() == "fxaa-stalled"));
         for mode in all {
             assert_eq!(mode.to_string().parse::<Mode>(), Ok(mode));
         }
@@ -164,6 +176,7 @@ mod tests {
         check("reference-5x5", "M must be in 1..=4");
         check("reference-2x3", "equal sides");
         check("fxaa3", "missing the size");
+        check("fxaa-2x2", "FXAA has no size");
         check("reference-2x2-geometry", "unexpected suffix");
         check("supersample-2x2", "technique must be");
     }

@@ -37,12 +37,60 @@ impl FrameTiming {
 pub struct FrameImages {
     pub width: u32,
     pub height: u32,
-    /// Display-encoded RGBA8, row-major from the top.
-    pub display: Vec<u8>,
+    /// The display image's code values.
+    pub display: DisplayImage,
     /// Linear HDR RGBA as f32 (stored on the GPU as f16). Alpha carries the stall result.
     pub hdr: Vec<f32>,
     /// Samples shaded per pixel (1…M²), for adaptive modes.
     pub sample_counts: Option<Vec<u8>>,
+}
+
+/// A display image: code values per channel, RGBA, row-major from the top.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DisplayImage {
+    /// Bits per channel of the target: 8, or 10 (alpha then has 2 bits, scaled to 0…1023).
+    pub bits: u32,
+    pub rgba: Vec<u16>,
+}
+
+impl DisplayImage {
+    /// From an 8-bit image's bytes.
+    pub fn from_rgba8(bytes: &[u8]) -> DisplayImage {
+        DisplayImage { bits: 8, rgba: bytes.iter().map(|&b| u16::from(b)).collect() }
+    }
+
+    /// From a texture's bytes as read back: Rgba8Unorm or Rgb10a2Unorm.
+    fn from_texels(format: wgpu::TextureFormat, bytes: &[u8]) -> DisplayImage {
+        match format {
+            wgpu::TextureFormat::Rgb10a2Unorm => DisplayImage {
+                bits: 10,
+                rgba: bytes
+                    .chunks_exact(4)
+                    .flat_map(|t| {
+                        let v = u32::from_le_bytes([t[0], t[1], t[2], t[3]]);
+                        let channel = |shift: u32| (v >> shift & 0x3ff) as u16;
+                        [channel(0), channel(10), channel(20), (v >> 30) as u16 * 341]
+                    })
+                    .collect(),
+            },
+            _ => DisplayImage::from_rgba8(bytes),
+        }
+    }
+
+    /// The largest code value: 255 or 1023.
+    pub fn max_code(&self) -> u16 {
+        ((1u32 << self.bits) - 1) as u16
+    }
+
+    /// The code values as little-endian bytes, one per channel at 8 bits, two at 10: what
+    /// run fingerprints hash.
+    pub fn bytes(&self) -> Vec<u8> {
+        if self.bits <= 8 {
+            self.rgba.iter().map(|&v| v as u8).collect()
+        } else {
+            self.rgba.iter().flat_map(|v| v.to_le_bytes()).collect()
+        }
+    }
 }
 
 /// The ground truth of a scene: the brute-force reference at `m` × `m` samples per pixel,
@@ -92,6 +140,7 @@ impl SceneRenderer {
         lighting: &Lighting,
         settings: RenderSettings,
     ) -> Result<SceneRenderer, RenderError> {
+        settings.color.validate()?;
         let frame = FrameUniforms::new(camera, lighting, settings.width, settings.height);
         let needs = SceneNeeds::of(scene, lighting);
         let gpu_scene = GpuScene::new(&gpu.device, &gpu.queue, scene, lighting, &frame);
@@ -186,7 +235,10 @@ impl SceneRenderer {
         let mut images = FrameImages {
             width,
             height,
-            display: vec![0; 4 * pixels],
+            display: DisplayImage {
+                bits: if self.settings.color.bits <= 8 { 8 } else { 10 },
+                rgba: vec![0; 4 * pixels],
+            },
             hdr: vec![0.0; 4 * pixels],
             sample_counts: None,
         };
@@ -211,13 +263,13 @@ impl SceneRenderer {
         }
         self.gpu.submit_timed(encoder)?;
         let outputs = outputs(&plan, &allocated);
-        let tile_display = self.gpu.read_texture(&outputs[&Output::Display])?;
+        let tile_display = read_display(&self.gpu, &outputs[&Output::Display])?.rgba;
         let tile_hdr: Vec<f32> =
             half_texels(&self.gpu.read_texture(&outputs[&Output::Hdr])?).into_iter().flatten().collect();
         let row = 4 * tile.width as usize;
         for y in 0..tile.height as usize {
             let at = 4 * ((tile.y as usize + y) * out.width as usize + tile.x as usize);
-            out.display[at..at + row].copy_from_slice(&tile_display[y * row..(y + 1) * row]);
+            out.display.rgba[at..at + row].copy_from_slice(&tile_display[y * row..(y + 1) * row]);
             out.hdr[at..at + row].copy_from_slice(&tile_hdr[y * row..(y + 1) * row]);
         }
         Ok(())
@@ -230,6 +282,9 @@ impl SceneRenderer {
         self.gpu.queue.write_buffer(&self.scene.frame, 0, bytemuck::bytes_of(&uniforms));
     }
 }
+
+/// The passes that turn the HDR image into the display image, in the order a frame runs them.
+const COLOR_PASSES: [&str; 3] = ["tonemap", "display", "fxaa"];
 
 /// The retained outputs' textures.
 fn outputs(plan: &Plan, allocated: &[Allocated]) -> BTreeMap<Output, wgpu::Texture> {
@@ -370,6 +425,35 @@ impl PreparedMode {
         Ok(timing)
     }
 
+    /// Encodes a given linear HDR image (RGBA, stored as f16 like every HDR image) through this
+    /// mode's colour passes (tonemap, display, FXAA) and reads back the display image: how
+    /// tests feed the display end values that no scene shades, NaN and infinities included.
+    /// The HDR image of the last frame is overwritten.
+    pub fn display_from_hdr(&self, hdr: &[[f32; 4]]) -> Result<DisplayImage, RenderError> {
+        let target = self.output(Output::Hdr);
+        let (width, height) = (target.width(), target.height());
+        if hdr.len() != (width * height) as usize {
+            return Err(RenderError::Limit(format!(
+                "{} texels given for a {width}×{height} image",
+                hdr.len()
+            )));
+        }
+        let texels: Vec<u8> =
+            hdr.iter().flatten().flat_map(|&v| half::f16::from_f32(v).to_le_bytes()).collect();
+        self.gpu.queue.write_texture(
+            target.as_image_copy(),
+            &texels,
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(8 * width), rows_per_image: None },
+            target.size(),
+        );
+        let mut encoder = self.gpu.encoder("display_from_hdr");
+        for pass in self.passes.iter().skip_while(|p| !COLOR_PASSES.contains(&p.name())) {
+            pass.encode(&mut encoder);
+        }
+        self.gpu.submit_timed(encoder)?;
+        self.read_display()
+    }
+
     /// The compiled graph: passes in order, allocations and their bytes.
     pub fn graph(&self) -> &GraphSummary {
         &self.graph
@@ -379,9 +463,9 @@ impl PreparedMode {
         &self.outputs[&output]
     }
 
-    /// Reads back the display image of the last frame (RGBA8), for determinism checks.
-    pub fn read_display(&self) -> Result<Vec<u8>, RenderError> {
-        self.gpu.read_texture(self.output(Output::Display))
+    /// Reads back the display image of the last frame, for determinism checks.
+    pub fn read_display(&self) -> Result<DisplayImage, RenderError> {
+        read_display(&self.gpu, self.output(Output::Display))
     }
 
     /// Reads back the sample counts of the last frame (adaptive modes).
@@ -434,11 +518,15 @@ impl PreparedMode {
         Ok(FrameImages {
             width: display.width(),
             height: display.height(),
-            display: self.gpu.read_texture(display)?,
+            display: read_display(&self.gpu, display)?,
             hdr,
             sample_counts: self.read_sample_counts()?,
         })
     }
+}
+
+fn read_display(gpu: &Gpu, texture: &wgpu::Texture) -> Result<DisplayImage, RenderError> {
+    Ok(DisplayImage::from_texels(texture.format(), &gpu.read_texture(texture)?))
 }
 
 /// The shadow cubes of a frame, read back.

@@ -25,11 +25,14 @@ sources!(
     "lib/gbuffer.wgsl",
     "lib/shadows.wgsl",
     "lib/shading.wgsl",
+    "lib/color.wgsl",
     "gbuffer.wgsl",
     "shadow.wgsl",
     "shade.wgsl",
     "resolve.wgsl",
+    "tonemap.wgsl",
     "display.wgsl",
+    "fxaa.wgsl",
     "adaptive.wgsl",
 );
 

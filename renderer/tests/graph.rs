@@ -6,7 +6,7 @@ mod support;
 
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::{Lighting, PointLight, Shadow};
-use aabench_renderer::{AdaptiveSettings, ExtraSamples, Metrics, Mode, Technique};
+use aabench_renderer::{AdaptiveSettings, ColorSettings, ExtraSamples, Metrics, Mode, Technique};
 use glam::Vec3;
 use support::*;
 
@@ -31,9 +31,16 @@ fn every_mode_of_every_scene_compiles_binds_and_reaches_the_allocation_bound() {
         [Generator::Thin, Generator::Specular, Generator::ShadowRoom, Generator::Plane, Generator::Edge];
     for generator in scenes {
         for lighting in [lit(), shadowed()] {
-            for strategy in [ExtraSamples::Compact, ExtraSamples::Loop] {
+            // An LDR scene both ways, an HDR scene (tonemap pass) with the default list.
+            let variants = [
+                (ExtraSamples::Compact, ColorSettings::plain()),
+                (ExtraSamples::Loop, ColorSettings::plain()),
+                (ExtraSamples::Compact, ColorSettings { bits: 10, ..ColorSettings::default() }),
+            ];
+            for (strategy, color) in variants {
                 let mut settings = settings(64, 48);
                 settings.adaptive = AdaptiveSettings { extra_samples: strategy, ..settings.adaptive };
+                settings.color = color;
                 let (mut renderer, _gpu) = renderer(generator, &lighting, settings);
                 let shadows = renderer.needs().shadows.is_some();
                 assert_eq!(shadows, lighting.lights.iter().any(|l| l.shadow.is_some()));
@@ -62,7 +69,9 @@ fn every_mode_of_every_scene_compiles_binds_and_reaches_the_allocation_bound() {
                         graph.passes.first().map(String::as_str),
                         Some(if shadows { "shadow" } else { "gbuffer" })
                     );
-                    assert_eq!(graph.passes.last().map(String::as_str), Some("display"), "{context}");
+                    assert_eq!(has("tonemap"), color.tonemap.is_some(), "{context}");
+                    let last = if mode.technique == Technique::Fxaa { "fxaa" } else { "display" };
+                    assert_eq!(graph.passes.last().map(String::as_str), Some(last), "{context}");
                 }
             }
         }

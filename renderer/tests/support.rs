@@ -7,7 +7,9 @@ use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::{Camera, Lighting, PointLight, Scene, load_gltf};
-use aabench_renderer::{AdaptiveSettings, FrameImages, Gpu, Mode, RenderSettings, SceneRenderer};
+use aabench_renderer::{
+    AdaptiveSettings, ColorSettings, FrameImages, Gpu, Mode, RenderSettings, SceneRenderer,
+};
 use glam::Vec3;
 
 /// One device for the whole test binary, and a lock so that tests render one at a time:
@@ -61,7 +63,15 @@ pub fn lit() -> Lighting {
 }
 
 pub fn settings(width: u32, height: u32) -> RenderSettings {
-    RenderSettings { width, height, stall_iterations: 64, adaptive: AdaptiveSettings::default() }
+    // Exposure, clamp and sRGB without dither: colours that tests can predict exactly. The
+    // colour pipeline's own tests (colour.rs) set theirs.
+    RenderSettings {
+        width,
+        height,
+        stall_iterations: 64,
+        adaptive: AdaptiveSettings::default(),
+        color: ColorSettings::plain(),
+    }
 }
 
 pub fn renderer(
@@ -84,10 +94,10 @@ pub fn render(renderer: &mut SceneRenderer, mode: &str) -> FrameImages {
 
 /// Distinct display colours (RGB) of an image.
 pub fn colours(image: &FrameImages) -> std::collections::BTreeSet<[u8; 3]> {
-    image.display.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect()
+    image.display.bytes().chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect()
 }
 
-/// Largest per-channel difference between two display images, in 8-bit steps.
-pub fn max_step(a: &FrameImages, b: &FrameImages) -> u8 {
-    a.display.iter().zip(&b.display).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0)
+/// Largest per-channel difference between two display images, in code steps.
+pub fn max_step(a: &FrameImages, b: &FrameImages) -> u16 {
+    a.display.rgba.iter().zip(&b.display.rgba).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0)
 }

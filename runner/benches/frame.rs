@@ -5,7 +5,8 @@ use std::path::Path;
 use std::sync::Arc;
 
 use aabench::manifest::Manifest;
-use aabench_renderer::{Gpu, Mode, RenderSettings, SceneRenderer};
+use aabench::plan::Tier;
+use aabench_renderer::{Gpu, Mode, SceneRenderer};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn frames(c: &mut Criterion) {
@@ -13,13 +14,8 @@ fn frames(c: &mut Criterion) {
     let manifest = Manifest::load(&root).expect("scenes/atrium.json");
     let loaded = aabench::scenes::load(&manifest).expect("atrium loads");
     let gpu = Arc::new(Gpu::new().expect("a Vulkan adapter (lavapipe)"));
-    let [width, height] = manifest.resolution.quick;
-    let settings = RenderSettings {
-        width,
-        height,
-        stall_iterations: manifest.stall_iterations,
-        adaptive: manifest.adaptive.settings(),
-    };
+    let extra_samples = manifest.adaptive.settings().extra_samples;
+    let settings = aabench::run::render_settings(&manifest, Tier::Quick, extra_samples);
     let mut renderer =
         SceneRenderer::new(gpu, &loaded.scene, &loaded.camera, &loaded.lighting, settings).expect("upload");
     for id in ["adaptive-4x4", "reference-4x4"] {

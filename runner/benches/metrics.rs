@@ -2,23 +2,24 @@
 //! statistics, and the CPU twin of the adaptive metric over every window of a 4×4 G-buffer.
 
 use aabench::metrics;
-use aabench_renderer::AdaptiveSettings;
 use aabench_renderer::adaptive::{self, MetricSet, WindowSample};
+use aabench_renderer::{AdaptiveSettings, DisplayImage};
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
 const WIDTH: usize = 1024;
 const HEIGHT: usize = 768;
 
-/// A deterministic RGBA8 image with gradients and a hard edge.
-fn image(seed: u8) -> Vec<u8> {
-    (0..WIDTH * HEIGHT)
+/// A deterministic 8-bit image with gradients and a hard edge.
+fn image(seed: u8) -> DisplayImage {
+    let bytes: Vec<u8> = (0..WIDTH * HEIGHT)
         .flat_map(|p| {
             let (x, y) = (p % WIDTH, p / WIDTH);
             let edge = if x * 3 + y > 2000 { 200 } else { 30 };
             [(x / 4) as u8 ^ seed, (y / 3) as u8, edge, 255]
         })
-        .collect()
+        .collect();
+    DisplayImage::from_rgba8(&bytes)
 }
 
 fn quality(c: &mut Criterion) {

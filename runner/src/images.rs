@@ -3,22 +3,54 @@
 
 use std::path::{Path, PathBuf};
 
+use aabench_renderer::DisplayImage;
 use aabench_renderer::scene::write::write_atomic;
 use anyhow::Context;
 
 /// Writes RGBA8 pixels as PNG.
 pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> anyhow::Result<()> {
+    encode_png(path, width, height, rgba, image::ExtendedColorType::Rgba8)
+}
+
+/// Encodes samples (16-bit ones in native byte order, as the image crate takes them) and
+/// writes them atomically.
+fn encode_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    samples: &[u8],
+    color: image::ExtendedColorType,
+) -> anyhow::Result<()> {
     let mut bytes = std::io::Cursor::new(Vec::new());
-    image::write_buffer_with_format(
-        &mut bytes,
-        rgba,
-        width,
-        height,
-        image::ExtendedColorType::Rgba8,
-        image::ImageFormat::Png,
-    )
-    .with_context(|| format!("{}: PNG encoding", path.display()))?;
+    image::write_buffer_with_format(&mut bytes, samples, width, height, color, image::ImageFormat::Png)
+        .with_context(|| format!("{}: PNG encoding", path.display()))?;
     write_atomic(path, bytes.get_ref()).with_context(|| format!("{}: write", path.display()))
+}
+
+/// Writes a display image as PNG: 8-bit, or 16-bit for 10-bit code values (each scaled to
+/// the full 16-bit range by bit replication, so that the top 10 bits are the code value).
+pub fn write_display_png(path: &Path, width: u32, height: u32, image: &DisplayImage) -> anyhow::Result<()> {
+    if image.bits <= 8 {
+        return write_png(path, width, height, &image.bytes());
+    }
+    let shift = 16 - image.bits;
+    let samples: Vec<u8> =
+        image.rgba.iter().flat_map(|&v| ((v << shift) | (v >> (image.bits - shift))).to_ne_bytes()).collect();
+    encode_png(path, width, height, &samples, image::ExtendedColorType::Rgba16)
+}
+
+/// Reads a display image that [`write_display_png`] wrote with `bits` per channel.
+pub fn read_display_png(path: &Path, bits: u32) -> Option<(u32, u32, DisplayImage)> {
+    let decoded = image::open(path).ok()?;
+    let (width, height) = (decoded.width(), decoded.height());
+    let image = match (bits, decoded) {
+        (8, image::DynamicImage::ImageRgba8(rgba)) => DisplayImage::from_rgba8(rgba.as_raw()),
+        (10, image::DynamicImage::ImageRgba16(rgba)) => {
+            DisplayImage { bits, rgba: rgba.as_raw().iter().map(|&v| v >> 6).collect() }
+        }
+        _ => return None,
+    };
+    Some((width, height, image))
 }
 
 /// Writes the RGB of linear RGBA f32 pixels as a 32-bit float EXR (alpha holds the stall
@@ -66,11 +98,13 @@ pub fn sample_heatmap(counts: &[u8], m: u32) -> Vec<u8> {
 }
 
 /// Per-pixel absolute difference (largest over R, G, B) as a heatmap; `full_scale` 8-bit steps
-/// map to the top of the colour map.
-pub fn difference_heatmap(image: &[u8], reference: &[u8], full_scale: f64) -> Vec<u8> {
+/// (or as much at 10 bits) map to the top of the colour map.
+pub fn difference_heatmap(image: &DisplayImage, reference: &DisplayImage, full_scale: f64) -> Vec<u8> {
+    let full_scale = full_scale * f64::from(image.max_code()) / 255.0;
     image
+        .rgba
         .chunks_exact(4)
-        .zip(reference.chunks_exact(4))
+        .zip(reference.rgba.chunks_exact(4))
         .flat_map(|(a, b)| {
             let d = (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0);
             let [r, g, b] = turbo(f64::from(d) / full_scale);
@@ -99,6 +133,15 @@ mod tests {
         write_png(&png, 2, 1, &[255, 0, 0, 255, 0, 255, 0, 255]).unwrap();
         let decoded = image::open(&png).unwrap().to_rgba8();
         assert_eq!(decoded.as_raw(), &vec![255, 0, 0, 255, 0, 255, 0, 255]);
+
+        // 10-bit code values survive a 16-bit PNG, whose top 10 bits they are.
+        let ten = DisplayImage { bits: 10, rgba: vec![0, 1, 512, 1023, 1023, 700, 3, 1023] };
+        let png16 = dir.join("ten.png");
+        write_display_png(&png16, 2, 1, &ten).unwrap();
+        let sixteen = image::open(&png16).unwrap().to_rgba16();
+        assert_eq!(sixteen.as_raw()[3], 65535, "1023 is full scale");
+        assert_eq!(read_display_png(&png16, 10), Some((2, 1, ten)));
+        assert_eq!(read_display_png(&png16, 8), None, "a 16-bit file is no 8-bit image");
 
         let exr_path = dir.join("a.exr");
         write_exr(&exr_path, 2, 1, &[1.5, 2.0, 3.0, 0.0, 0.25, 0.5, 100.0, 0.0]).unwrap();

@@ -5,6 +5,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use aabench_renderer::AdaptiveSettings;
+use aabench_renderer::color::{ColorSettings, Dither, Tonemap, Transfer};
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::{MAX_LIGHTS, MAX_SHADOW_LIGHTS, Shadow};
 use serde::Deserialize;
@@ -150,13 +151,31 @@ impl AdaptiveSpec {
     }
 }
 
-/// Display settings. The full tonemapping operator arrives with the HDR/VDR colour pipeline;
-/// until then the display pass applies exposure, clamps and encodes sRGB.
+/// Whether a scene's shading needs a tonemap: `hdr` (the default) goes through the tonemap
+/// pass, `ldr` straight to the transfer function, exposed and clamped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DynamicRange {
+    #[default]
+    Hdr,
+    Ldr,
+}
+
+/// Exposure (every scene) and the tonemap curve (HDR scenes); omitted fields take
+/// [`Tonemap::default`], the slides' curve.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TonemapSpec {
     #[serde(default = "one")]
     pub exposure: f32,
+    pub mid_in: Option<f64>,
+    pub mid_out: Option<f64>,
+    pub hdr_max: Option<f64>,
+    pub contrast: Option<f64>,
+    pub shoulder: Option<f64>,
+    pub crosstalk: Option<f64>,
+    pub saturation: Option<f64>,
+    pub cross_saturation: Option<f64>,
 }
 
 fn one() -> f32 {
@@ -165,7 +184,90 @@ fn one() -> f32 {
 
 impl Default for TonemapSpec {
     fn default() -> Self {
-        TonemapSpec { exposure: 1.0 }
+        serde_json::from_str("{}").expect("every field has a default")
+    }
+}
+
+impl TonemapSpec {
+    /// The curve fields as the manifest names them, with their values where given.
+    fn curve_fields(&self) -> [(&'static str, Option<f64>); 8] {
+        [
+            ("mid_in", self.mid_in),
+            ("mid_out", self.mid_out),
+            ("hdr_max", self.hdr_max),
+            ("contrast", self.contrast),
+            ("shoulder", self.shoulder),
+            ("crosstalk", self.crosstalk),
+            ("saturation", self.saturation),
+            ("cross_saturation", self.cross_saturation),
+        ]
+    }
+
+    pub fn settings(&self) -> Tonemap {
+        let d = Tonemap::default();
+        Tonemap {
+            mid_in: self.mid_in.unwrap_or(d.mid_in),
+            mid_out: self.mid_out.unwrap_or(d.mid_out),
+            hdr_max: self.hdr_max.unwrap_or(d.hdr_max),
+            contrast: self.contrast.unwrap_or(d.contrast),
+            shoulder: self.shoulder.unwrap_or(d.shoulder),
+            crosstalk: self.crosstalk.unwrap_or(d.crosstalk),
+            saturation: self.saturation.unwrap_or(d.saturation),
+            cross_saturation: self.cross_saturation.unwrap_or(d.cross_saturation),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+pub enum TransferSpec {
+    #[default]
+    #[serde(rename = "srgb")]
+    Srgb,
+    #[serde(rename = "rec709")]
+    Rec709,
+    #[serde(rename = "gamma2.2")]
+    Gamma22,
+    #[serde(rename = "pq")]
+    Pq,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DitherSpec {
+    Off,
+    #[default]
+    Symmetric,
+    Asymmetric,
+}
+
+/// How the display image is encoded: transfer function (PQ with the display's peak), bits per
+/// channel and dither.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DisplaySpec {
+    #[serde(default)]
+    pub transfer: TransferSpec,
+    /// PQ only; omitted: [`DEFAULT_PEAK_NITS`].
+    pub peak_nits: Option<f64>,
+    #[serde(default = "eight")]
+    pub bits: u32,
+    #[serde(default)]
+    pub dither: DitherSpec,
+}
+
+/// The largest exposure: 2⁴⁰ (40 stops), far past any scene, and far from f32's overflow.
+const MAX_EXPOSURE: f32 = 1.1e12;
+
+/// A PQ display's peak when the manifest names none: a common HDR monitor.
+pub const DEFAULT_PEAK_NITS: f64 = 1000.0;
+
+fn eight() -> u32 {
+    8
+}
+
+impl Default for DisplaySpec {
+    fn default() -> Self {
+        serde_json::from_str("{}").expect("every field has a default")
     }
 }
 
@@ -193,7 +295,11 @@ pub struct Manifest {
     #[serde(default)]
     pub adaptive: AdaptiveSpec,
     #[serde(default)]
+    pub dynamic_range: DynamicRange,
+    #[serde(default)]
     pub tonemap: TonemapSpec,
+    #[serde(default)]
+    pub display: DisplaySpec,
     /// Tolerances of the regression gate; omitted fields take [`Tolerances::default`].
     #[serde(default)]
     pub gate: Tolerances,
@@ -247,6 +353,28 @@ impl Manifest {
         manifest.path = path.to_path_buf();
         manifest.validate().map_err(|(field, message)| fail(&field, message))?;
         Ok(manifest)
+    }
+
+    /// The colour pipeline from linear HDR to the display image.
+    pub fn color_settings(&self) -> ColorSettings {
+        let display = &self.display;
+        ColorSettings {
+            tonemap: (self.dynamic_range == DynamicRange::Hdr).then(|| self.tonemap.settings()),
+            transfer: match display.transfer {
+                TransferSpec::Srgb => Transfer::Srgb,
+                TransferSpec::Rec709 => Transfer::Rec709,
+                TransferSpec::Gamma22 => Transfer::Gamma22,
+                TransferSpec::Pq => {
+                    Transfer::Pq { peak_nits: display.peak_nits.unwrap_or(DEFAULT_PEAK_NITS) }
+                }
+            },
+            bits: display.bits,
+            dither: match display.dither {
+                DitherSpec::Off => Dither::Off,
+                DitherSpec::Symmetric => Dither::Symmetric,
+                DitherSpec::Asymmetric => Dither::Asymmetric,
+            },
+        }
     }
 
     /// The glTF file, relative to the manifest's folder.
@@ -407,10 +535,34 @@ impl Manifest {
                 return fail(&format!("adaptive.{name}"), format!("{value} must be in [0, 1]"));
             }
         }
-        if !(self.tonemap.exposure > 0.0 && self.tonemap.exposure.is_finite()) {
-            return fail("tonemap.exposure", format!("{} must be finite and > 0", self.tonemap.exposure));
+        let exposure = self.tonemap.exposure;
+        if !(exposure > 0.0 && exposure <= MAX_EXPOSURE) {
+            return fail("tonemap.exposure", format!("{exposure} must be > 0 and at most {MAX_EXPOSURE:e}"));
         }
+        self.validate_color()?;
         self.gate.validate()
+    }
+
+    fn validate_color(&self) -> Result<(), (String, String)> {
+        let fail = |field: &str, message: String| Err((field.to_string(), message));
+        if self.dynamic_range == DynamicRange::Ldr
+            && let Some((field, _)) = self.tonemap.curve_fields().into_iter().find(|(_, v)| v.is_some())
+        {
+            return fail(
+                &format!("tonemap.{field}"),
+                "an LDR scene (dynamic_range \"ldr\") has no tonemap curve; only exposure applies".into(),
+            );
+        }
+        if ![8, 10].contains(&self.display.bits) {
+            return fail("display.bits", format!("{} must be 8 or 10", self.display.bits));
+        }
+        if self.display.peak_nits.is_some() && self.display.transfer != TransferSpec::Pq {
+            return fail("display.peak_nits", "only the pq transfer has a display peak".into());
+        }
+        self.color_settings().validate().or_else(|error| {
+            let section = if error.field == "peak_nits" { "display" } else { "tonemap" };
+            fail(&format!("{section}.{}", error.field), error.message)
+        })
     }
 }
 
@@ -507,6 +659,31 @@ mod tests {
         check(|j| j["adaptive"] = json!({"c_depth": -1}), "adaptive.c_depth", "≥ 0");
         check(|j| j["adaptive"] = json!({"c_dept": 1}), "adaptive.c_dept", "unknown field `c_dept`");
         check(|j| j["tonemap"] = json!({"exposure": 0}), "tonemap.exposure", "> 0");
+        check(|j| j["tonemap"] = json!({"hdr_max": 0.1}), "tonemap.hdr_max", "greater than mid_in");
+        check(|j| j["tonemap"] = json!({"contrast": 0}), "tonemap.contrast", "> 0");
+        check(|j| j["tonemap"] = json!({"contrast": 9, "hdr_max": 6e4}), "tonemap.contrast", "f32");
+        check(|j| j["tonemap"] = json!({"exposure": 1e30}), "tonemap.exposure", "at most");
+        check(|j| j["tonemap"] = json!({"hdr_max": 1e6}), "tonemap.hdr_max", "[0, 65504]");
+        check(|j| j["tonemap"] = json!({"crosstalk": 1000}), "tonemap.crosstalk", "[0.01, 100]");
+        check(|j| j["tonemap"] = json!({"shoulder": -2}), "tonemap.shoulder", "> 0");
+        check(|j| j["tonemap"] = json!({"shoulder": 1.5}), "tonemap.shoulder", "not increasing");
+        check(|j| j["tonemap"] = json!({"mid_out": 1.2}), "tonemap.mid_out", "(0, 1)");
+        check(|j| j["tonemap"] = json!({"mid_in": "x"}), "tonemap.mid_in", "invalid type");
+        check(
+            |j| {
+                j["dynamic_range"] = json!("ldr");
+                j["tonemap"] = json!({"contrast": 1.2});
+            },
+            "tonemap.contrast",
+            "LDR scene",
+        );
+        check(|j| j["dynamic_range"] = json!("vdr"), "dynamic_range", "unknown variant");
+        check(|j| j["display"] = json!({"bits": 12}), "display.bits", "8 or 10");
+        check(|j| j["display"] = json!({"transfer": "pq", "peak_nits": 0}), "display.peak_nits", "> 0");
+        check(|j| j["display"] = json!({"transfer": "pq", "peak_nits": 2e4}), "display.peak_nits", "10000");
+        check(|j| j["display"] = json!({"peak_nits": 400}), "display.peak_nits", "only the pq");
+        check(|j| j["display"] = json!({"transfer": "gamma2.4"}), "display.transfer", "unknown variant");
+        check(|j| j["display"] = json!({"dither": "blue"}), "display.dither", "unknown variant");
         check(|j| j["gate"] = json!({"psnr_db": -0.1}), "gate.psnr_db", "≥ 0");
         check(|j| j["gate"] = json!({"time_ratio": 0}), "gate.time_ratio", "> 0");
         check(|j| j["gate"] = json!({"psnr": 1}), "gate.psnr", "unknown field `psnr`");

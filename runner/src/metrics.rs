@@ -1,6 +1,13 @@
-//! Image-quality and sample-count metrics, in f64 on the display-encoded 8-bit image scaled to
-//! [0, 1], averaged over pixels and the R, G, B channels.
+//! Image-quality and sample-count metrics, in f64 on the display image's code values scaled to
+//! [0, 1] (8- or 10-bit), averaged over pixels and the R, G, B channels.
+//!
+//! They are taken after dither and quantization, on the image a display would show: every mode
+//! of a scene and its ground truth get the same grain at the same pixel, so two modes whose
+//! linear images agree give identical code values (an infinite PSNR stays infinite), and the
+//! dither turns quantization into unbiased noise instead of banding that would shift with
+//! the anti-aliasing.
 
+use aabench_renderer::DisplayImage;
 use serde::{Deserialize, Serialize, Serializer};
 
 /// 20·log10(255): the paper reports PSNR with peak 255 over an MSE taken on [0, 1] values.
@@ -55,23 +62,25 @@ pub struct Quality {
     pub psnr_db: Decibels,
     /// Paper-comparable PSNR: peak 255 over the MSE on [0, 1] values (psnr_db + 48.13 dB).
     pub psnr_paper_db: Decibels,
-    /// Largest per-channel difference, in 8-bit steps.
-    pub max_abs_diff: u8,
+    /// Largest per-channel difference, in code steps of the images' bit depth.
+    pub max_abs_diff: u16,
 }
 
-/// Compares two RGBA8 display images of the same size (alpha ignored).
-pub fn quality(image: &[u8], reference: &[u8], against: &str) -> Quality {
-    assert_eq!(image.len(), reference.len(), "images of different sizes");
+/// Compares two display images of the same size and bit depth (alpha ignored).
+pub fn quality(image: &DisplayImage, reference: &DisplayImage, against: &str) -> Quality {
+    assert_eq!(image.rgba.len(), reference.rgba.len(), "images of different sizes");
+    assert_eq!(image.bits, reference.bits, "images of different bit depths");
+    let scale = f64::from(image.max_code());
     let mut sum = 0.0f64;
-    let mut max_abs_diff = 0u8;
-    for (a, b) in image.chunks_exact(4).zip(reference.chunks_exact(4)) {
+    let mut max_abs_diff = 0u16;
+    for (a, b) in image.rgba.chunks_exact(4).zip(reference.rgba.chunks_exact(4)) {
         for c in 0..3 {
-            let d = (f64::from(a[c]) - f64::from(b[c])) / 255.0;
+            let d = (f64::from(a[c]) - f64::from(b[c])) / scale;
             sum += d * d;
             max_abs_diff = max_abs_diff.max(a[c].abs_diff(b[c]));
         }
     }
-    let mse = sum / (image.len() / 4 * 3).max(1) as f64;
+    let mse = sum / (image.rgba.len() / 4 * 3).max(1) as f64;
     let psnr = -10.0 * mse.log10();
     Quality {
         against: against.to_string(),
@@ -131,7 +140,7 @@ mod tests {
 
     #[test]
     fn identical_images_have_infinite_psnr_written_as_inf() {
-        let image = [10, 20, 30, 255, 40, 50, 60, 255];
+        let image = DisplayImage::from_rgba8(&[10, 20, 30, 255, 40, 50, 60, 255]);
         let q = quality(&image, &image, "reference-2x2");
         assert_eq!(q.mse, 0.0);
         assert_eq!(q.psnr_db.value(), f64::INFINITY);
@@ -143,18 +152,26 @@ mod tests {
 
     #[test]
     fn one_step_everywhere_is_48_db_and_the_paper_offset_is_20_log10_255() {
-        let a = [0u8, 0, 0, 255];
-        let b = [1u8, 1, 1, 0];
+        let a = DisplayImage::from_rgba8(&[0, 0, 0, 255]);
+        let b = DisplayImage::from_rgba8(&[1, 1, 1, 0]);
         let q = quality(&a, &b, "x");
         assert!((q.mse - 1.0 / 65025.0).abs() < 1e-18);
         assert!((q.psnr_db.value() - 48.1308036).abs() < 1e-6);
         assert!((PAPER_PSNR_OFFSET_DB - 20.0 * 255f64.log10()).abs() < 1e-12);
         assert_eq!(q.max_abs_diff, 1);
+        // At 10 bits one step is a quarter of an 8-bit step: 16 times less MSE.
+        let ten = |v: u16| DisplayImage { bits: 10, rgba: vec![v, v, v, 1023] };
+        let q10 = quality(&ten(0), &ten(1), "x");
+        assert!((q10.mse - 1.0 / (1023.0 * 1023.0)).abs() < 1e-18);
     }
 
     #[test]
     fn alpha_is_ignored() {
-        let q = quality(&[5, 5, 5, 0], &[5, 5, 5, 255], "x");
+        let q = quality(
+            &DisplayImage::from_rgba8(&[5, 5, 5, 0]),
+            &DisplayImage::from_rgba8(&[5, 5, 5, 255]),
+            "x",
+        );
         assert_eq!(q.mse, 0.0);
     }
 

@@ -203,8 +203,9 @@ mod tests {
     #[test]
     fn groups_and_ids_combine_without_duplicates() {
         let modes = parse_modes("baseline, deferred-1x1,adaptive-2x2-geometry").unwrap();
-        assert_eq!(modes.len(), 9);
-        assert_eq!(modes[8].to_string(), "adaptive-2x2-geometry");
+        assert_eq!(modes.len(), 11);
+        assert_eq!(modes[1].to_string(), "fxaa");
+        assert_eq!(modes[10].to_string(), "adaptive-2x2-geometry");
         assert!(parse_modes("reference-9x9").unwrap_err().contains("M must be"));
         assert!(parse_modes(" , ").is_err());
     }
@@ -228,8 +229,8 @@ mod tests {
     fn quick_leaves_out_the_ablations_and_nightly_adds_them() {
         let quick = Tier::Quick.default_modes();
         let nightly = Tier::Nightly.default_modes();
-        assert_eq!(quick.len(), 14);
-        assert_eq!(nightly.len(), 20);
+        assert_eq!(quick.len(), 16);
+        assert_eq!(nightly.len(), 22);
         assert!(quick.iter().all(|m| !m.to_string().contains("geometry")));
     }
 }

@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant, SystemTime};
 
 use aabench_renderer::{
-    AdaptiveSettings, ExtraSamples, FrameImages, FrameTiming, Mode, RenderSettings, Technique,
+    AdaptiveSettings, DisplayImage, ExtraSamples, FrameImages, FrameTiming, Mode, RenderSettings, Technique,
 };
 use anyhow::Context;
 
@@ -171,6 +171,7 @@ pub fn render_settings(manifest: &Manifest, tier: Tier, extra_samples: ExtraSamp
         height,
         stall_iterations: manifest.stall_iterations,
         adaptive: AdaptiveSettings { extra_samples, ..manifest.adaptive.settings() },
+        color: manifest.color_settings(),
     }
 }
 
@@ -365,7 +366,7 @@ async fn ground_truth(
     inputs: &SceneInputs,
     resolution: [u32; 2],
     progress: &Progress,
-) -> (TruthRecord, Option<Vec<u8>>) {
+) -> (TruthRecord, Option<DisplayImage>) {
     let mut record = TruthRecord {
         id: TRUTH_ID.into(),
         samples_per_pixel: TRUTH_M * TRUTH_M,
@@ -386,7 +387,7 @@ async fn ground_truth(
         Err(error) => return fail(record, format!("{error:#}")),
     }
     let cache = truth::cache_file(&plan.truth_cache_dir(manifest), &manifest.name, resolution, &record.key);
-    let display = match truth::load_cached(&cache, resolution) {
+    let display = match truth::load_cached(&cache, resolution, display_bits(manifest)) {
         Some(display) => {
             record.cached = true;
             display
@@ -419,16 +420,21 @@ async fn ground_truth(
         }
     };
     let relative = format!("{}/{TRUTH_ID}.png", manifest.name);
-    match images::write_png(&plan.run_dir.join(&relative), resolution[0], resolution[1], &display) {
+    match images::write_display_png(&plan.run_dir.join(&relative), resolution[0], resolution[1], &display) {
         Ok(()) => record.image = Some(relative),
         Err(error) => return fail(record, format!("{error:#}")),
     }
     (record, Some(display))
 }
 
-/// FNV-1a of a frame's outputs: the display image, then the sample counts if any.
-fn fingerprint(display: &[u8], sample_counts: Option<&[u8]>) -> String {
-    fnv1a(&[display, sample_counts.unwrap_or_default()])
+/// FNV-1a of a frame's outputs: the display image's code values, then the sample counts if any.
+fn fingerprint(display: &DisplayImage, sample_counts: Option<&[u8]>) -> String {
+    fnv1a(&[&display.bytes(), sample_counts.unwrap_or_default()])
+}
+
+/// Bits per channel of the scene's display images as read back: 8, or 10.
+fn display_bits(manifest: &Manifest) -> u32 {
+    if manifest.display.bits <= 8 { 8 } else { 10 }
 }
 
 fn fail(mut record: SceneRecord, error: String) -> SceneRecord {
@@ -444,7 +450,7 @@ async fn finish_modes(
     scene_dir: &Path,
     manifest: &Manifest,
     runs: Vec<ModeRun>,
-    truth: Option<Vec<u8>>,
+    truth: Option<DisplayImage>,
     interrupted: bool,
 ) -> Vec<ModeRecord> {
     let modes = &plan.modes;
@@ -497,7 +503,7 @@ async fn finish_modes(
                 Some((i, _)) => Some(&images[i].as_ref().expect("reference images").display),
                 None => truth.as_deref(),
             };
-            write_mode_images(&scene_dir, &scene_name, mode, own, diff_against.map(Vec::as_slice))
+            write_mode_images(&scene_dir, &scene_name, mode, own, diff_against)
                 .map(|(files, samples)| (files, samples, vs_reference, vs_truth))
         })));
     }
@@ -522,14 +528,17 @@ fn fail_mode(record: &mut ModeRecord, error: String) {
     record.error = Some(error);
 }
 
-/// The image an adaptive mode is compared with: the reference at the same M, with the same
-/// stall if it ran, else the other (their images are identical).
+/// The image a mode is compared with, with the same stall if it ran, else the other (their
+/// images are identical): for adaptive modes the reference at the same M; for FXAA the image
+/// it post-processes, deferred-1x1, which is the 1×1 reference bit for bit.
 fn comparison_reference(modes: &[Mode], images: &[Option<FrameImages>], mode: Mode) -> Option<(usize, Mode)> {
-    if !matches!(mode.technique, Technique::Adaptive(_)) {
-        return None;
-    }
+    let technique = match mode.technique {
+        Technique::Adaptive(_) => Technique::Reference,
+        Technique::Fxaa => Technique::Deferred,
+        Technique::Deferred | Technique::Reference => return None,
+    };
     [mode.stalled, !mode.stalled].into_iter().find_map(|stalled| {
-        let reference = Mode::new(Technique::Reference, mode.m, stalled);
+        let reference = Mode::new(technique, mode.m, stalled);
         let index = modes.iter().position(|m| *m == reference)?;
         images[index].as_ref().map(|_| (index, reference))
     })
@@ -627,12 +636,12 @@ fn write_mode_images(
     scene: &str,
     mode: Mode,
     images: &FrameImages,
-    diff_against: Option<&[u8]>,
+    diff_against: Option<&DisplayImage>,
 ) -> anyhow::Result<(ImageFiles, Option<metrics::SampleStats>)> {
     let (w, h) = (images.width, images.height);
     let relative = |suffix: &str| format!("{scene}/{mode}{suffix}");
     let path = |suffix: &str| scene_dir.join(format!("{mode}{suffix}"));
-    images::write_png(&path(".png"), w, h, &images.display)?;
+    images::write_display_png(&path(".png"), w, h, &images.display)?;
     images::write_exr(&path(".exr"), w, h, &images.hdr)?;
     let mut files =
         ImageFiles { display: Some(relative(".png")), hdr: Some(relative(".exr")), ..Default::default() };

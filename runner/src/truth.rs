@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use aabench_renderer::{PlatformInfo, shaders};
+use aabench_renderer::{DisplayImage, PlatformInfo, shaders};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
@@ -78,19 +78,19 @@ pub fn cache_file(dir: &Path, scene: &str, resolution: [u32; 2], key: &str) -> P
     dir.join(format!("{scene}-{}x{}-{}.png", resolution[0], resolution[1], &key[..16]))
 }
 
-/// The cached display image (RGBA8), or `None` when it is missing, unreadable or of another
-/// size: then it is rendered again.
-pub fn load_cached(path: &Path, resolution: [u32; 2]) -> Option<Vec<u8>> {
-    let image = image::open(path).ok()?.to_rgba8();
-    (image.dimensions() == (resolution[0], resolution[1])).then(|| image.into_raw())
+/// The cached display image, or `None` when it is missing, unreadable, of another size or of
+/// another bit depth: then it is rendered again.
+pub fn load_cached(path: &Path, resolution: [u32; 2], bits: u32) -> Option<DisplayImage> {
+    let (width, height, image) = images::read_display_png(path, bits)?;
+    ([width, height] == resolution).then_some(image)
 }
 
 /// Writes the display image to the cache (atomically).
-pub fn store(path: &Path, resolution: [u32; 2], rgba: &[u8]) -> anyhow::Result<()> {
+pub fn store(path: &Path, resolution: [u32; 2], image: &DisplayImage) -> anyhow::Result<()> {
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?;
     }
-    images::write_png(path, resolution[0], resolution[1], rgba)
+    images::write_display_png(path, resolution[0], resolution[1], image)
 }
 
 /// The process's peak resident set, which Linux lets a process reset: reset it before a
@@ -150,12 +150,14 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("aabench-truth-{}", std::process::id()));
         let path = cache_file(&dir, "edge", [2, 1], "0123456789abcdef0123");
         assert!(path.ends_with("edge-2x1-0123456789abcdef.png"));
-        assert_eq!(load_cached(&path, [2, 1]), None, "missing");
-        store(&path, [2, 1], &[1, 2, 3, 255, 4, 5, 6, 255]).unwrap();
-        assert_eq!(load_cached(&path, [2, 1]), Some(vec![1, 2, 3, 255, 4, 5, 6, 255]));
-        assert_eq!(load_cached(&path, [1, 2]), None, "another size");
+        assert_eq!(load_cached(&path, [2, 1], 8), None, "missing");
+        let image = DisplayImage::from_rgba8(&[1, 2, 3, 255, 4, 5, 6, 255]);
+        store(&path, [2, 1], &image).unwrap();
+        assert_eq!(load_cached(&path, [2, 1], 8), Some(image));
+        assert_eq!(load_cached(&path, [1, 2], 8), None, "another size");
+        assert_eq!(load_cached(&path, [2, 1], 10), None, "another bit depth");
         std::fs::write(&path, b"\x89PNG truncated").unwrap();
-        assert_eq!(load_cached(&path, [2, 1]), None, "corrupt");
+        assert_eq!(load_cached(&path, [2, 1], 8), None, "corrupt");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -68,13 +68,25 @@ fn a_run_writes_its_record_and_images_and_exits_zero() {
     let graph = &adaptive["graph"];
     assert_eq!(
         graph["passes"],
-        json!(["gbuffer", "shade_first", "evaluate", "compact", "shade_extra", "gather", "display"])
+        json!([
+            "gbuffer",
+            "shade_first",
+            "evaluate",
+            "compact",
+            "shade_extra",
+            "gather",
+            "tonemap",
+            "display"
+        ])
     );
     assert_eq!(graph["allocated_bytes"], graph["lower_bound_bytes"], "{graph}");
     assert!(
         graph["allocations"].as_array().unwrap().iter().any(|a| a["holds"] == json!(["evaluate.counts"]))
     );
-    assert_eq!(mode(scene, "deferred-1x1")["graph"]["passes"], json!(["gbuffer", "shade", "display"]));
+    assert_eq!(
+        mode(scene, "deferred-1x1")["graph"]["passes"],
+        json!(["gbuffer", "shade", "tonemap", "display"])
+    );
 }
 
 #[test]
@@ -160,13 +172,55 @@ fn no_vulkan_adapter_exits_two_with_one_line_on_how_to_install_one() {
 }
 
 #[test]
+fn a_ten_bit_pq_scene_writes_16_bit_pngs_and_reuses_its_cached_truth() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("ten-bit");
+    ws.manifest("edge", "edge", |j| {
+        j["display"] = json!({"transfer": "pq", "peak_nits": 600, "bits": 10, "dither": "asymmetric"});
+    });
+    let modes = "deferred-1x1,fxaa";
+    for cached in [false, true] {
+        // One run folder at a time; the truth cache stays beside the manifest.
+        let _ = std::fs::remove_dir_all(ws.dir.join("reports"));
+        let output = ws.run(&["run", "--modes", modes, "--repetitions", "2"]);
+        assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+        let record = ws.record();
+        let scene = &record["scenes"][0];
+        assert_eq!(scene["truth"]["cached"], cached, "{}", scene["truth"]);
+        let truth = image::open(ws.run_dir().join(scene["truth"]["image"].as_str().unwrap())).unwrap();
+        assert_eq!(truth.color(), image::ColorType::Rgba16, "a 10-bit truth is a 16-bit PNG");
+        for id in modes.split(',') {
+            let m = mode(scene, id);
+            assert_eq!(m["status"], "ok", "{id}: {}", m["error"]);
+            let png = image::open(ws.run_dir().join(m["images"]["display"].as_str().unwrap())).unwrap();
+            let samples = png.to_rgba16().into_raw();
+            assert_eq!(png.color(), image::ColorType::Rgba16, "{id}");
+            // Each sample is a 10-bit code with its top bits repeated below it.
+            assert!(samples.iter().all(|&v| v & 0x3f == v >> 10), "{id}: not 10-bit codes");
+            // Some codes lie between those an 8-bit image has (code → 8 bits → back moves them).
+            let eight_bit =
+                |c: u16| ((f64::from(c) * 255.0 / 1023.0).round() * 1023.0 / 255.0).round() as u16;
+            assert!(
+                samples.iter().any(|&v| eight_bit(v >> 6) != v >> 6),
+                "{id}: only codes that 8 bits have"
+            );
+        }
+        let fxaa = mode(scene, "fxaa");
+        assert_eq!(fxaa["vs_reference"]["against"], "deferred-1x1");
+        assert_eq!(fxaa["passes"].as_array().unwrap().last().unwrap()["name"], "fxaa");
+        assert!(fxaa["vs_ground_truth"]["psnr_db"].as_f64().unwrap() > 0.0);
+    }
+}
+
+#[test]
 fn bad_arguments_exit_two_before_any_work() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let ws = Workspace::new("args");
     ws.manifest("edge", "edge", |_| {});
     for (args, reason) in [
         (vec!["run", "--modes", "reference-9x9"], "M must be in 1..=4"),
-        (vec!["run", "--modes", "fxaa-1x1"], "technique must be"),
+        (vec!["run", "--modes", "smaa-1x1"], "technique must be"),
+        (vec!["run", "--modes", "fxaa-1x1"], "FXAA has no size"),
         (vec!["run", "scenes/nope.json"], "no such file or folder"),
         (vec!["run", "--repetitions", "0"], "at least 1"),
         (vec!["run", "--frame-timeout", "0"], "positive number of seconds"),

@@ -1,4 +1,4 @@
-// Shared by every pass: the per-frame uniforms, the fullscreen triangle and colour helpers.
+// Shared by every pass: the per-frame uniforms, the fullscreen triangle and luminance.
 
 struct Frame {
     view_proj: mat4x4<f32>,
@@ -12,7 +12,8 @@ struct Frame {
     ambient: vec4<f32>,
     // rgb: radiance where no geometry covers a sample.
     background: vec4<f32>,
-    // x: exposure, a linear scale before display encoding.
+    // x: exposure, a linear scale before tonemapping or display encoding; yz: the rendered
+    // tile's origin in the frame's pixels (the dither's grain follows frame positions).
     display: vec4<f32>,
     // The rendered tile of the frame: its NDC maps to the frame's as ndc * tile.xy + tile.zw
     // ((1, 1, 0, 0) for the whole frame; the ground truth renders tile by tile).
@@ -32,16 +33,3 @@ fn fullscreen(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32>
 fn luminance(c: vec3<f32>) -> f32 {
     return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
 }
-
-// The sRGB transfer function (IEC 61966-2-1), linear [0, 1] to encoded [0, 1].
-fn srgb_encode(linear: vec3<f32>) -> vec3<f32> {
-    let low = linear * 12.92;
-    let high = 1.055 * pow(linear, vec3<f32>(1.0 / 2.4)) - 0.055;
-    return select(high, low, linear <= vec3<f32>(0.0031308));
-}
-
-// Linear HDR radiance to the display-encoded colour in [0, 1]: exposure, clamp, sRGB.
-fn display_encode(hdr: vec3<f32>) -> vec3<f32> {
-    return srgb_encode(clamp(hdr * frame.display.x, vec3<f32>(0.0), vec3<f32>(1.0)));
-}
-

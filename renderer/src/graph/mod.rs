@@ -224,10 +224,13 @@ impl Usage {
         }
     }
 
-    /// What reading back after the frame adds.
+    /// What reading back after the frame adds; a retained texture may also be written from
+    /// the CPU (tests feed the colour passes HDR images that no scene shades).
     fn read_back(self) -> Usage {
         match self {
-            Usage::Texture(u) => Usage::Texture(u | wgpu::TextureUsages::COPY_SRC),
+            Usage::Texture(u) => {
+                Usage::Texture(u | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::COPY_DST)
+            }
             Usage::Buffer(u) => Usage::Buffer(u | wgpu::BufferUsages::COPY_SRC),
         }
     }

@@ -8,9 +8,11 @@
 
 pub(crate) mod adaptive;
 pub(crate) mod display;
+pub(crate) mod fxaa;
 pub(crate) mod gbuffer;
 pub(crate) mod shade;
 pub(crate) mod shadow;
+pub(crate) mod tonemap;
 
 use std::collections::{BTreeSet, HashMap};
 
@@ -22,8 +24,11 @@ use crate::{RenderError, RenderSettings};
 
 /// Linear HDR radiance.
 pub(crate) const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
-/// Display-encoded 8-bit colour.
-pub(crate) const DISPLAY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+/// The target of display code values: 8-bit unorm up to 8 bits per channel, else 10-bit.
+pub(crate) fn display_format(bits: u32) -> wgpu::TextureFormat {
+    if bits <= 8 { wgpu::TextureFormat::Rgba8Unorm } else { wgpu::TextureFormat::Rgb10a2Unorm }
+}
 
 /// The fullscreen triangle's vertex entry point (`lib/common.wgsl`) and its vertex count.
 pub(crate) const FULLSCREEN: (&str, u32) = ("fullscreen", 3);

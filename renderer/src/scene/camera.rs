@@ -70,7 +70,8 @@ pub struct FrameUniforms {
     pub projection: [f32; 4],
     pub ambient: [f32; 4],
     pub background: [f32; 4],
-    /// x: exposure.
+    /// x: exposure; y, z: the tile's origin in the frame's pixels (the dither's grain follows
+    /// frame positions).
     pub display: [f32; 4],
     /// The rendered part of the frame: a tile's NDC maps to the whole frame's as
     /// `ndc · tile.xy + tile.zw` (1, 1, 0, 0 for the whole frame; see [`Tile`]).
@@ -145,7 +146,7 @@ impl FrameUniforms {
             projection: [(tan_y * aspect) as f32, tan_y as f32, camera.near as f32, camera.far as f32],
             ambient: lighting.ambient.extend(0.0).to_array(),
             background: lighting.background.extend(0.0).to_array(),
-            display: [lighting.exposure, 0.0, 0.0, 0.0],
+            display: [lighting.exposure, tile.x as f32, tile.y as f32, 0.0],
             tile: [scale.x as f32, scale.y as f32, offset.x as f32, offset.y as f32],
         }
     }

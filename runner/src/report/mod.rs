@@ -251,6 +251,7 @@ fn error_points(scene: &SceneRecord) -> Vec<Point> {
             let error = mode.vs_ground_truth.as_ref()?.mse_e5;
             let kind = match mode.mode.split('-').next()? {
                 "deferred" => Kind::Deferred,
+                "fxaa" => Kind::Fxaa,
                 "reference" => Kind::Reference,
                 _ => Kind::Adaptive,
             };
@@ -299,8 +300,13 @@ fn images(page: &mut String, run_dir: &Path, scene: &SceneRecord) -> Result<(), 
     if let Some(image) = scene.truth.as_ref().and_then(|t| t.image.as_deref()) {
         figure(page, image, TRUTH_ID);
     }
-    if let Some(image) = scene.mode("deferred-1x1").and_then(|m| m.images.display.as_deref()) {
-        figure(page, image, "deferred-1x1");
+    for id in ["deferred-1x1", "fxaa"] {
+        if let Some(image) = scene.mode(id).and_then(|m| m.images.display.as_deref()) {
+            figure(page, image, id);
+        }
+    }
+    if let Some(image) = scene.mode("fxaa").and_then(|m| m.images.difference.as_deref()) {
+        figure(page, image, "|fxaa − deferred-1x1|: the pixels FXAA changed (32 steps full scale)");
     }
     page.push_str("</div>\n");
     for m in 2..=4 {

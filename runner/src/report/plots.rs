@@ -8,6 +8,7 @@ use plotters::prelude::*;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
     Deferred,
+    Fxaa,
     Reference,
     Adaptive,
 }
@@ -139,13 +140,14 @@ pub fn error_against_time(title: &str, points: &[Point]) -> Result<String, Strin
                 .map_err(fail)?
                 .label(format!("{name} (dashed: Pareto front)"))
                 .legend(move |(x, y)| Circle::new((x, y), 4, style));
-            for kind in [Kind::Deferred, Kind::Reference, Kind::Adaptive] {
+            for kind in [Kind::Deferred, Kind::Fxaa, Kind::Reference, Kind::Adaptive] {
                 let of_kind = series.iter().filter(|p| p.kind == kind);
                 chart
                     .draw_series(of_kind.map(|p| {
                         let at = EmptyElement::at((p.time, p.error));
                         match kind {
                             Kind::Deferred => at + Rectangle::new([(-4, -4), (4, 4)], style).into_dyn(),
+                            Kind::Fxaa => at + Cross::new((0, 0), 5, colour.stroke_width(2)).into_dyn(),
                             Kind::Reference => at + TriangleMarker::new((0, 0), 6, style).into_dyn(),
                             Kind::Adaptive => at + Circle::new((0, 0), 4, style).into_dyn(),
                         }

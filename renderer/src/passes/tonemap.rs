@@ -1,0 +1,47 @@
+//! The tonemap pass of an HDR scene: sanitized, exposed linear HDR to display-relative linear
+//! light through the curve whose constants [`Tonemap::curve`] solves in f64.
+
+use super::{BuildContext, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program};
+use crate::RenderError;
+use crate::color::Tonemap;
+use crate::graph::{Access, Extent, PassDecl, Port, Resource};
+use crate::pipelines::Constants;
+
+/// Display-relative linear light between the tonemap and display passes. f32: at 10-bit PQ
+/// for a 1000-nit display, codes 1–5 lie between 4·10⁻⁸ and 6·10⁻⁷, at or below f16's
+/// smallest subnormal.
+pub(crate) const LINEAR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+#[derive(Debug)]
+pub(crate) struct TonemapNode {
+    pub tonemap: Tonemap,
+}
+
+impl Node for TonemapNode {
+    fn decl(&self) -> PassDecl {
+        PassDecl {
+            name: "tonemap",
+            ports: vec![
+                Port::new("hdr", Resource::texture(HDR_FORMAT, Extent::Output), Access::Loaded),
+                Port::new("tonemapped", Resource::texture(LINEAR_FORMAT, Extent::Output), Access::Attachment),
+            ],
+        }
+    }
+
+    fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
+        let t = &self.tonemap;
+        let curve = t.curve()?;
+        let constants = Constants::new()
+            .with("CONTRAST", curve.contrast)
+            .with("SHOULDER", curve.shoulder)
+            .with("CURVE_B", curve.b)
+            .with("CURVE_C", curve.c)
+            .with("HDR_MAX", t.hdr_max)
+            .with("CROSSTALK", t.crosstalk)
+            .with("SATURATION", t.saturation)
+            .with("CROSS_SATURATION", t.cross_saturation);
+        let program =
+            Program { shader: "tonemap.wgsl", vertex: FULLSCREEN.0, fragment: Some("tonemap"), constants };
+        Ok(Box::new(ctx.screen(io, "tonemap", program, "tonemapped", FULLSCREEN.1, &[])?))
+    }
+}

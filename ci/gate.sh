@@ -2,7 +2,8 @@
 # The CI regression gate: build, render every scene in scenes/ at the quick tier, compare the
 # run with the committed baselines (baselines/<platform-key>/quick/), and write summary.md,
 # junit.xml, verdict.json and the HTML report into the run's folder. Exits with compare's
-# code: 0 nothing regressed, 1 a regression, 2 an error. Extra arguments go to `aabench run`.
+# code: 0 nothing regressed, 1 a regression, 2 an error (or the run's: 3 a scene failed). Extra
+# arguments go to `aabench run`.
 # With $GITHUB_STEP_SUMMARY set, the summary is appended to it.
 #
 # Time verdicts fail the gate only against baselines of this machine's own platform key; against

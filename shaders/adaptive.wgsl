@@ -15,6 +15,7 @@
 // passes that use it, so binding numbers need only be unique.
 
 #include "lib/common.wgsl"
+#include "lib/finite.wgsl"
 #include "lib/scene.wgsl"
 #include "lib/gbuffer.wgsl"
 #include "lib/shading.wgsl"
@@ -23,6 +24,8 @@
 override M: u32;
 // k = C · M² · metric.
 override C_DEPTH: f32;
+// The depth variance relative to the squared mean depth (unit-free), or in world units².
+override RELATIVE_DEPTH: bool;
 override C_NORMAL: f32;
 override C_SHADING: f32;
 override T_MIN: f32;
@@ -86,11 +89,13 @@ fn shade_first(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32>
 // ---- evaluate: reads S and the G-buffer
 
 // Perceptual luma of an S pixel: the square root (a gamma-2 stand-in for sRGB, without pow)
-// of the luminance of the exposed colour clamped to [0, 1].
+// of the luminance of the exposed colour clamped to [0, 1]. S is sanitized first: a NaN or
+// infinity from shading must not reach the metric (the frame checks count them).
 fn first_luma(pixel: vec2<i32>) -> f32 {
     let size = vec2<i32>(textureDimensions(first));
     let p = clamp(pixel, vec2<i32>(0), size - 1);
-    let linear = clamp(textureLoad(first, p, 0).rgb * frame.display.x, vec3<f32>(0.0), vec3<f32>(1.0));
+    let exposed = sanitize3(textureLoad(first, p, 0).rgb) * frame.display.x;
+    let linear = clamp(exposed, vec3<f32>(0.0), vec3<f32>(1.0));
     return sqrt(luminance(linear));
 }
 
@@ -98,6 +103,9 @@ fn first_luma(pixel: vec2<i32>) -> f32 {
 // geometry_metric in adaptive.rs for the cases. The variance is shifted by the window's first
 // depth: Σ(d − K)² − (Σ(d − K))²/n stays exact where E[d²] − E[d]² cancels at large depths, and
 // in one pass (a two-pass version over private arrays took 65% longer on lavapipe, measured).
+// Everything stays finite: depths lie in [near, far] ≤ 1e12 and the constants ≤ 1e12
+// (MAX_METRIC_CONSTANT), so no product reaches f32's range; a silhouette returns 1, which
+// alone takes every sample (k · M² ≥ M²) without an infinity to lean on.
 fn geometry_k(pixel: vec2<i32>) -> f32 {
     let n = M * M;
     let origin = pixel * i32(M);
@@ -121,9 +129,13 @@ fn geometry_k(pixel: vec2<i32>) -> f32 {
     }
     if covered < n {
         // A silhouette against the background.
-        return 3.0e38;
+        return 1.0;
     }
-    let variance = max(depth_square_sum - depth_sum * depth_sum / f32(n), 0.0) / f32(n);
+    var variance = max(depth_square_sum - depth_sum * depth_sum / f32(n), 0.0) / f32(n);
+    if RELATIVE_DEPTH {
+        let mean = shift + depth_sum / f32(n);
+        variance /= mean * mean;
+    }
     let sum_length = length(normal_sum);
     var cone = 1.0;
     if sum_length >= 1e-3 * f32(n) {
@@ -169,11 +181,8 @@ fn evaluate(@builtin(position) position: vec4<f32>) -> @location(0) u32 {
     if USE_SHADING {
         k = max(k, shading_k(pixel));
     }
-    // 1 + round(k · M²), clamped to the window. k is never NaN (each term is finite or, at a
-    // silhouette, 3e38 · M² = +inf); were it, the select would take every sample.
-    let max_extra = f32(total - 1u);
-    let scaled = k * f32(total);
-    let extra = select(max_extra, min(floor(scaled + 0.5), max_extra), scaled >= 0.0);
+    // 1 + round(k · M²), clamped to the window; k is finite and ≥ 0 (geometry_k, shading_k).
+    let extra = min(floor(k * f32(total) + 0.5), f32(total - 1u));
     return 1u + u32(extra);
 }
 

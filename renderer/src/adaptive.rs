@@ -42,6 +42,35 @@ pub enum ExtraSamples {
     Loop,
 }
 
+/// The depth statistic of the geometry metric.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DepthMetric {
+    /// The variance relative to the squared mean depth, Var(d) / E[d]²: free of the scene's
+    /// unit, so a scene and its copy scaled ×1000 take the same samples. The default.
+    Relative,
+    /// The variance in view-space units², the paper's literal metric: the same geometry
+    /// modelled in millimetres takes 10⁶ times the metric of its copy in metres.
+    World,
+}
+
+impl DepthMetric {
+    /// The default `c_depth` of each: tuned so that the generated metre-scale scenes take
+    /// about the samples they took under the world-unit metric (README, "Tuning").
+    pub fn default_c_depth(self) -> f32 {
+        match self {
+            DepthMetric::Relative => DEFAULT_C_DEPTH_RELATIVE,
+            DepthMetric::World => 100.0,
+        }
+    }
+}
+
+/// The relative metric's `c_depth` default (see [`DepthMetric::default_c_depth`]).
+pub const DEFAULT_C_DEPTH_RELATIVE: f32 = 10_000.0;
+
+/// The largest metric constant accepted: with depths ≤ 1e12 (the far plane's bound) every
+/// product the shader forms stays finite in f32.
+pub const MAX_METRIC_CONSTANT: f32 = 1e12;
+
 /// The metric constants (per scene, in the manifest) and test knobs.
 ///
 /// The paper writes k = c · metric with one c per scene. Here the metric is also scaled by the
@@ -49,7 +78,9 @@ pub enum ExtraSamples {
 /// 4×4 alike (the paper's c is this c times M²).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AdaptiveSettings {
-    /// Scales the depth variance (view-space units²).
+    /// Which depth variance the geometry metric takes.
+    pub depth_metric: DepthMetric,
+    /// Scales the depth variance (relative, or in view-space units²).
     pub c_depth: f32,
     /// Scales the normal cone sqrt(1 − min |n̄·n|).
     pub c_normal: f32,
@@ -67,7 +98,8 @@ impl Default for AdaptiveSettings {
     fn default() -> Self {
         AdaptiveSettings {
             // Tuned on the generated scenes at 1024×768 (README, "Tuning").
-            c_depth: 100.0,
+            depth_metric: DepthMetric::Relative,
+            c_depth: DepthMetric::Relative.default_c_depth(),
             c_normal: 1.0,
             c_shading: 2.0,
             t_min: 1.0 / 32.0,
@@ -95,9 +127,9 @@ pub type LumaCross = [f64; 5];
 
 /// The shading metric's perceptual luma of a linear HDR colour: the square root (a gamma-2
 /// stand-in for sRGB, without `pow`) of the Rec. 709 luminance of the exposed colour clamped
-/// to [0, 1].
+/// to [0, 1]. The colour is sanitized first ([`crate::color::sanitize`]), as on the GPU.
 pub fn metric_luma(rgb: [f64; 3], exposure: f64) -> f64 {
-    let c = rgb.map(|v| (v * exposure).clamp(0.0, 1.0));
+    let c = rgb.map(|v| (crate::color::sanitize(v) * exposure).clamp(0.0, 1.0));
     (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]).sqrt()
 }
 
@@ -132,8 +164,8 @@ pub fn sample_count(
 }
 
 /// k before rounding: the largest of the selected metrics, each scaled by its C and by M².
-/// Infinite on silhouettes against the background, whatever the constants (as on the GPU).
-/// Never NaN: every term is finite or +∞.
+/// Infinite on silhouettes against the background, whatever the constants: every sample, as
+/// the GPU's finite k = 1 also gives. Never NaN: every term is finite or +∞.
 pub fn metric_k(
     window: &[WindowSample],
     luma: &LumaCross,
@@ -144,7 +176,7 @@ pub fn metric_k(
     let scale = f64::from(m * m);
     let mut k: f64 = 0.0;
     if metrics.geometry {
-        let (variance, cone) = geometry_metric(window);
+        let (variance, cone) = geometry_metric(window, settings.depth_metric);
         if variance.is_infinite() {
             return f64::INFINITY;
         }
@@ -181,7 +213,9 @@ pub fn clamp_count(k: f64, total: u32) -> u32 {
 ///   equally stable shifted form, Σ(d − d₀)² − (Σ(d − d₀))²/n, in one pass.
 /// - The mean normal of opposite normals is zero: the cone is then the widest possible (1).
 /// - 1 − min |n̄·n| is clamped at zero before the square root.
-pub fn geometry_metric(window: &[WindowSample]) -> (f64, f64) {
+/// - [`DepthMetric::Relative`] divides the variance by the squared mean depth (which is at
+///   least the near plane, so never zero).
+pub fn geometry_metric(window: &[WindowSample], depth_metric: DepthMetric) -> (f64, f64) {
     let covered = window.iter().filter(|s| s.covered).count();
     if covered == 0 {
         return (0.0, 0.0);
@@ -192,6 +226,10 @@ pub fn geometry_metric(window: &[WindowSample]) -> (f64, f64) {
     let n = window.len() as f64;
     let mean = window.iter().map(|s| s.depth).sum::<f64>() / n;
     let variance = window.iter().map(|s| (s.depth - mean).powi(2)).sum::<f64>() / n;
+    let variance = match depth_metric {
+        DepthMetric::Relative => variance / (mean * mean),
+        DepthMetric::World => variance,
+    };
 
     let unit = |v: [f64; 3]| {
         let length = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
@@ -261,7 +299,7 @@ mod tests {
         window[1].depth += 0.5;
         window[2].depth -= 0.5;
         window[3].depth -= 0.5;
-        let (variance, _) = geometry_metric(&window);
+        let (variance, _) = geometry_metric(&window, DepthMetric::World);
         assert_eq!(variance, 0.25);
         let naive = window.iter().map(|s| s.depth * s.depth).sum::<f64>() / 4.0
             - (window.iter().map(|s| s.depth).sum::<f64>() / 4.0).powi(2);
@@ -272,11 +310,28 @@ mod tests {
     }
 
     #[test]
+    fn the_relative_depth_metric_ignores_the_scenes_unit() {
+        let window = |scale: f64| -> Vec<WindowSample> {
+            [4.0, 4.2, 5.0, 9.0]
+                .map(|d| WindowSample { depth: d * scale, normal: [0.0, 0.0, 1.0], covered: true })
+                .to_vec()
+        };
+        let metre = geometry_metric(&window(1.0), DepthMetric::Relative).0;
+        for scale in [1e-3, 1e3, 1e6] {
+            let scaled = geometry_metric(&window(scale), DepthMetric::Relative).0;
+            assert!((scaled / metre - 1.0).abs() < 1e-12, "×{scale}: {scaled} vs {metre}");
+            let world = geometry_metric(&window(scale), DepthMetric::World).0;
+            let world_metre = geometry_metric(&window(1.0), DepthMetric::World).0;
+            assert!((world / world_metre / (scale * scale) - 1.0).abs() < 1e-9);
+        }
+    }
+
+    #[test]
     fn opposite_normals_give_the_widest_cone_not_nan() {
         let mut window = flat(1.0, 2);
         window[1].normal = [0.0, 0.0, -1.0];
         window[3].normal = [0.0, 0.0, -1.0];
-        let (_, cone) = geometry_metric(&window);
+        let (_, cone) = geometry_metric(&window, DepthMetric::World);
         assert_eq!(cone, 1.0);
     }
 
@@ -285,12 +340,12 @@ mod tests {
         let mut window = flat(1.0, 2);
         window[0].normal = [0.0, 0.0, 0.0];
         window[1].normal = [0.0, 0.0, 1.0 + 1e-7];
-        let (variance, cone) = geometry_metric(&window);
+        let (variance, cone) = geometry_metric(&window, DepthMetric::World);
         assert!(variance.is_finite() && cone.is_finite(), "{variance} {cone}");
         // A normal a hair longer than 1 must not push 1 − |n̄·n| below zero into sqrt.
         let mut window = flat(1.0, 2);
         window[2].normal = [0.0, 1e-9, 1.0 + 1e-6];
-        assert!(geometry_metric(&window).1 >= 0.0);
+        assert!(geometry_metric(&window, DepthMetric::World).1 >= 0.0);
     }
 
     #[test]

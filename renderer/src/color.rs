@@ -169,6 +169,16 @@ impl Tonemap {
 /// largest hdr_max that means anything.
 pub const HALF_MAX: f64 = 65504.0;
 
+/// The twin of `sanitize` in shaders/lib/finite.wgsl: NaN and −Inf → 0, +Inf → [`HALF_MAX`],
+/// negatives → 0, the rest clamped to [0, HALF_MAX].
+pub fn sanitize(x: f64) -> f64 {
+    match x {
+        x if x.is_nan() => 0.0,
+        x if x == f64::INFINITY => HALF_MAX,
+        x => x.clamp(0.0, HALF_MAX),
+    }
+}
+
 /// The smallest colour ratio the tonemap raises to a power: pow(0, y) is exp2(y · log2(0)),
 /// which leans on an infinity the shader compiler may assume away.
 pub const RATIO_FLOOR: f64 = 1e-12;

@@ -127,6 +127,8 @@ pub struct SceneRenderer {
     settings: RenderSettings,
     pipelines: Pipelines,
     pool: Pool,
+    /// Bytes the pool may hold in all; `prepare` refuses a mode that would pass it.
+    memory_budget: Option<u64>,
     /// Kept to rewrite the frame uniforms for ground-truth tiles.
     camera: Camera,
     lighting: Lighting,
@@ -152,6 +154,7 @@ impl SceneRenderer {
             needs,
             settings,
             pool: Pool::default(),
+            memory_budget: None,
             camera: *camera,
             lighting: lighting.clone(),
         })
@@ -178,6 +181,7 @@ impl SceneRenderer {
     pub fn prepare(&mut self, mode: Mode) -> Result<PreparedMode, RenderError> {
         let graph = frame_graph(&self.needs, mode, &self.settings, &self.gpu.device.limits())?;
         let plan = graph.compile(frame::dims(&self.settings, mode))?;
+        self.check_fits(mode, &plan)?;
         let allocated = self.pool.acquire(&self.gpu.device, &plan)?;
         let passes = self.build(&graph, &plan, &allocated)?;
         self.gpu.check()?;
@@ -189,6 +193,63 @@ impl SceneRenderer {
             graph: GraphSummary::of(&plan),
             clip: (self.camera.near, self.camera.far),
         })
+    }
+
+    /// Limits the bytes of render targets and buffers that the scene's modes hold together
+    /// (lavapipe's textures are host memory); `None` lifts the limit.
+    pub fn set_memory_budget(&mut self, bytes: Option<u64>) {
+        self.memory_budget = bytes;
+    }
+
+    /// Refuses, before anything is allocated, a mode whose targets exceed the device's side
+    /// limit (naming the largest M that fits) or whose new allocations would take the pool past
+    /// the memory budget (with the estimate).
+    fn check_fits(&self, mode: Mode, plan: &Plan) -> Result<(), RenderError> {
+        let stall = self.settings.stall_iterations;
+        let looped = self.settings.adaptive.extra_samples == crate::ExtraSamples::Loop;
+        if looped && mode.stalled && matches!(mode.technique, Technique::Adaptive(_)) {
+            let limit = crate::loop_stall_limit(mode.m);
+            if stall > limit {
+                return Err(RenderError::Limit(format!(
+                    "{mode} with extra samples shaded in a loop honours at most {limit} stall iterations \
+                     (lavapipe ends an invocation after 65 535 loop iterations, and the loop shades up to \
+                     {} samples in one); {stall} were asked for: shade them compacted instead",
+                    mode.m * mode.m
+                )));
+            }
+        }
+        let limit = self.gpu.device.limits().max_texture_dimension_2d;
+        let widest = plan.allocation.physical.iter().find_map(|p| match p.desc {
+            Resolved::Texture { width, height, .. } if width.max(height) > limit => Some((width, height)),
+            _ => None,
+        });
+        if let Some((width, height)) = widest {
+            let side = self.settings.width.max(self.settings.height);
+            let fits = (limit / side.max(1)).min(4);
+            let largest =
+                if fits >= 1 { format!("the largest M that fits is {fits}") } else { "no M fits".into() };
+            return Err(RenderError::Limit(format!(
+                "{mode} at {}×{} needs {width}×{height} targets; the device allows {limit} texels per side, \
+                 so {largest}",
+                self.settings.width, self.settings.height
+            )));
+        }
+        if let Some(budget) = self.memory_budget {
+            let held = self.pool.bytes();
+            let new = self.pool.missing_bytes(plan);
+            if held + new > budget {
+                let mib = |bytes: u64| bytes as f64 / f64::from(1u32 << 20);
+                return Err(RenderError::Limit(format!(
+                    "{mode} needs an estimated {:.0} MiB of new render targets beside the {:.0} MiB held for \
+                     earlier modes: {:.0} MiB in all, over the memory limit of {:.0} MiB",
+                    mib(new),
+                    mib(held),
+                    mib(held + new),
+                    mib(budget)
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// Builds every pass of a compiled graph, in order, from its ports' allocations.
@@ -340,6 +401,16 @@ impl Pool {
     fn bytes(&self) -> u64 {
         self.entries.keys().map(|(desc, _, _)| desc.bytes()).sum()
     }
+
+    /// Bytes that acquiring `plan` would newly allocate.
+    fn missing_bytes(&self, plan: &Plan) -> u64 {
+        plan.allocation
+            .physical
+            .iter()
+            .filter(|p| !self.entries.contains_key(&(p.desc, p.usage, p.ordinal)))
+            .map(|p| p.desc.bytes())
+            .sum()
+    }
 }
 
 fn create(device: &wgpu::Device, physical: &Physical) -> Allocated {
@@ -468,6 +539,11 @@ impl PreparedMode {
         read_display(&self.gpu, self.output(Output::Display))
     }
 
+    /// Reads back the HDR image of the last frame: linear RGBA, alpha the stall's result.
+    pub fn read_hdr(&self) -> Result<Vec<[f32; 4]>, RenderError> {
+        Ok(half_texels(&self.gpu.read_texture(self.output(Output::Hdr))?))
+    }
+
     /// Reads back the sample counts of the last frame (adaptive modes).
     pub fn read_sample_counts(&self) -> Result<Option<Vec<u8>>, RenderError> {
         self.outputs.get(&Output::SampleCounts).map(|t| self.gpu.read_texture(t)).transpose()
@@ -513,8 +589,7 @@ impl PreparedMode {
     /// renders: modes share their allocations.
     pub fn read_images(&self) -> Result<FrameImages, RenderError> {
         let display = self.output(Output::Display);
-        let hdr =
-            half_texels(&self.gpu.read_texture(self.output(Output::Hdr))?).into_iter().flatten().collect();
+        let hdr = self.read_hdr()?.into_iter().flatten().collect();
         Ok(FrameImages {
             width: display.width(),
             height: display.height(),

@@ -20,6 +20,7 @@ macro_rules! sources {
 
 sources!(
     "lib/common.wgsl",
+    "lib/finite.wgsl",
     "lib/scene.wgsl",
     "lib/geometry.wgsl",
     "lib/gbuffer.wgsl",

@@ -7,7 +7,7 @@ use aabench_renderer::adaptive::{self, MetricSet, WindowSample};
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::{Camera, Lighting, PointLight};
 use aabench_renderer::{
-    AdaptiveSettings, ExtraSamples, FrameImages, GBufferImages, PreparedMode, SceneRenderer,
+    AdaptiveSettings, ExtraSamples, FrameImages, GBufferImages, Mode, PreparedMode, SceneRenderer,
 };
 use glam::{DVec3, Vec3};
 use support::*;
@@ -258,5 +258,52 @@ fn a_slightly_tilted_plane_five_kilometres_away_needs_no_extra_samples() {
         let image = render(&mut renderer, &format!("adaptive-{m}x{m}"));
         assert!(counts(&image).iter().all(|&n| n == 1), "{m}×{m}: far plane got extra samples");
         assert_eq!(colours(&image).len(), 1);
+    }
+}
+
+#[test]
+fn tiny_and_odd_resolutions_render_every_mode_finite_with_counts_in_the_window() {
+    // 1×1 (a single window), 2×3 (smaller than any 4×4 block), 317×211 (odd, prime-ish sides:
+    // the compact list's rows and blocks do not divide evenly).
+    let mut modes = Mode::baseline_modes();
+    modes.extend(Mode::adaptive_modes());
+    modes.extend(Mode::ablation_modes());
+    for (width, height) in [(1, 1), (2, 3), (317, 211)] {
+        let (mut renderer, _gpu) = renderer(Generator::Thin, &lit(), settings(width, height));
+        for &mode in &modes {
+            let prepared =
+                renderer.prepare(mode).unwrap_or_else(|e| panic!("{mode} at {width}×{height}: {e}"));
+            prepared.render().unwrap_or_else(|e| panic!("{mode} at {width}×{height}: {e}"));
+            let image = prepared.read_images().unwrap();
+            assert_eq!((image.width, image.height), (width, height), "{mode}");
+            let bad = image.hdr.iter().filter(|v| !v.is_finite()).count();
+            assert_eq!(bad, 0, "{mode} at {width}×{height}: non-finite HDR values");
+            if let Some(counts) = &image.sample_counts {
+                let full = (mode.m * mode.m) as u8;
+                assert!(
+                    counts.iter().all(|&n| (1..=full).contains(&n)),
+                    "{mode} at {width}×{height}: {counts:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_loop_strategy_refuses_a_stall_it_cannot_honour() {
+    // Its gather shades up to M² samples in one invocation: lavapipe's 65 535 loop
+    // iterations then cover M² stalls, so 4×4 honours at most loop_stall_limit(4).
+    let limit = aabench_renderer::loop_stall_limit(4);
+    for (stall, ok) in [(limit, true), (limit + 1, false)] {
+        let mut base = settings(16, 12);
+        base.stall_iterations = stall;
+        base.adaptive.extra_samples = ExtraSamples::Loop;
+        let (mut renderer, _gpu) = renderer(Generator::Edge, &lit(), base);
+        let prepared = renderer.prepare("adaptive-4x4-stalled".parse().unwrap());
+        assert_eq!(prepared.is_ok(), ok, "stall {stall}");
+        if let Err(error) = prepared {
+            assert!(error.to_string().contains(&format!("at most {limit} stall iterations")), "{error}");
+        }
+        assert!(renderer.prepare("adaptive-4x4".parse().unwrap()).is_ok(), "the unstalled mode runs");
     }
 }

@@ -195,3 +195,38 @@ fn the_8x8_truth_is_nearer_to_reference_4x4_than_reference_2x2_is() {
     assert!(m4 > 0.0, "the truth has more samples than reference-4x4, so it differs");
     assert!(m4 < m2 * 0.6, "reference-4x4 ({m4}) should be much nearer the truth than reference-2x2 ({m2})");
 }
+
+/// The stall's hash chain on the CPU: what `stall` in lib/shading.wgsl returns for `texel`.
+fn stall_twin(x: u32, y: u32, iterations: u32) -> f32 {
+    let mut h = x.wrapping_mul(0x8da6_b343) ^ y.wrapping_mul(0xd816_3841);
+    for _ in 0..iterations {
+        h = (h ^ (h >> 15)).wrapping_mul(0x2c1b_3c6d);
+    }
+    (h >> 8) as f32 / 16_777_216.0
+}
+
+#[test]
+fn stalls_beyond_lavapipes_loop_limit_are_honoured_step_for_step() {
+    // lavapipe ends a shader's loops after 65 535 iterations in all; a stall of 100 003 steps
+    // (16 per iteration, 3 alone) must still run every step: the alpha channel of a stalled
+    // deferred frame holds the chain's result, which differs at every step count.
+    let (width, height) = (8, 6);
+    let iterations = 100_003;
+    let settings = RenderSettings { stall_iterations: iterations, ..settings(width, height) };
+    let (mut renderer, _gpu) = renderer(Generator::Edge, &lit(), settings);
+    let image = render(&mut renderer, "deferred-1x1-stalled");
+    // The f16 target keeps 11 significant bits, rounded as the rasterizer rounds: a match is
+    // within one f16 step, far finer than the chain's jumps from one count to the next.
+    let matches = |stored: f32, value: f32| (stored - value).abs() <= value.abs() / 1024.0;
+    let mut truncated_would_differ = 0;
+    for y in 0..height {
+        for x in 0..width {
+            let alpha = image.hdr[((y * width + x) * 4 + 3) as usize];
+            let expected = stall_twin(x, y, iterations);
+            assert!(matches(alpha, expected), "pixel ({x}, {y}): {alpha} vs {expected}");
+            truncated_would_differ += usize::from(!matches(alpha, stall_twin(x, y, 65_535)));
+        }
+    }
+    // Pixel (0, 0) starts the chain at 0, a fixed point; every other one tells the counts apart.
+    assert_eq!(truncated_would_differ, (width * height - 1) as usize);
+}

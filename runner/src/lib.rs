@@ -20,11 +20,14 @@ pub mod stats;
 pub mod truth;
 pub mod worker;
 
-/// Exit codes: 0 success, 1 a regression was found, 2 an error (bad input, no device, a failed
-/// scene), 130 interrupted.
+/// Exit codes, one meaning each: 0 success; 1 `compare` found a regression; 2 the command could
+/// not do its work (bad arguments, as clap also reports them, unreadable input, no device); 3 a
+/// run finished, but some scene or mode failed (run.json says which and why); 130 interrupted
+/// by SIGINT, SIGTERM or SIGHUP (what was measured is recorded).
 pub mod exit {
     pub const OK: u8 = 0;
     pub const REGRESSION: u8 = 1;
     pub const ERROR: u8 = 2;
+    pub const SCENE_FAILED: u8 = 3;
     pub const INTERRUPTED: u8 = 130;
 }

@@ -14,6 +14,15 @@ use aabench::{baseline, compare, exit, run, scenes};
 use aabench_renderer::{ExtraSamples, Mode};
 use clap::{Parser, Subcommand};
 
+/// A line on stdout. A closed pipe (`aabench modes | head -1`) is no error: the reader took what
+/// it wanted, so the rest is dropped quietly.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
 #[derive(Debug, Parser)]
 #[command(
     name = "aabench",
@@ -127,11 +136,11 @@ struct RunArgs {
     /// Folder that receives the run's folder.
     #[arg(long, default_value = "reports")]
     out: PathBuf,
-    /// Timed repetitions per mode [default: the tier's].
-    #[arg(long)]
+    /// Timed repetitions per mode, 1 to 10 000 [default: the tier's].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     repetitions: Option<u32>,
-    /// Untimed rounds before timing (lavapipe compiles shaders at the first draw).
-    #[arg(long, default_value_t = 1)]
+    /// Untimed rounds before timing (lavapipe compiles shaders at the first draw); at most 100.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=100))]
     warmup: u32,
     /// How adaptive modes shade their extra samples: compact (a dense list, the default) or
     /// loop (inside each pixel's invocation, the paper's simplest variant).
@@ -144,6 +153,11 @@ struct RunArgs {
     /// Folder that caches ground truths [default: cache/truth/ beside each manifest].
     #[arg(long, value_name = "DIR")]
     truth_cache: Option<PathBuf>,
+    /// Memory the render targets of one scene's modes may take together, in GiB; a mode that
+    /// would pass it fails before allocating, with its estimate [default: 90% of the memory
+    /// available when the scene starts].
+    #[arg(long, value_name = "GIB")]
+    memory_limit: Option<f64>,
     /// Longest a single frame may take, in seconds.
     #[arg(long, value_name = "SECONDS", default_value_t = run::default_frame_timeout().as_secs_f64())]
     frame_timeout: f64,
@@ -207,13 +221,15 @@ fn run_command(args: RunArgs) -> u8 {
         let progress = Progress::new();
         let cancel = Arc::new(AtomicBool::new(false));
         let flag = Arc::clone(&cancel);
+        let hangup = !hangup_ignored();
         tokio::spawn(async move {
-            if tokio::signal::ctrl_c().await.is_ok() {
-                flag.store(true, Ordering::SeqCst);
-                progress.line("interrupted: finishing the current frame and writing what was measured (Ctrl-C again to quit now)");
-                if tokio::signal::ctrl_c().await.is_ok() {
-                    std::process::exit(i32::from(exit::INTERRUPTED));
-                }
+            let Some(signal) = interruption(hangup).await else { return };
+            flag.store(true, Ordering::SeqCst);
+            progress.line(&format!(
+                "{signal}: finishing the current frame and writing what was measured (a second signal quits now)"
+            ));
+            if interruption(hangup).await.is_some() {
+                std::process::exit(i32::from(exit::INTERRUPTED));
             }
         });
         match run::execute(&plan, progress, cancel).await {
@@ -224,7 +240,8 @@ fn run_command(args: RunArgs) -> u8 {
                     Status::Interrupted => exit::INTERRUPTED,
                     _ => {
                         let failed = outcome.record.scenes.iter().filter(|s| s.status != Status::Ok).count();
-                        fail(format!("{failed} scene(s) failed; see {}", outcome.run_json.display()))
+                        eprintln!("aabench: {failed} scene(s) failed; see {}", outcome.run_json.display());
+                        exit::SCENE_FAILED
                     }
                 }
             }
@@ -232,6 +249,38 @@ fn run_command(args: RunArgs) -> u8 {
             Err(error) => fail(format!("{error:#}")),
         }
     })
+}
+
+/// Waits for SIGINT, SIGTERM or (when `hangup`) SIGHUP: what a terminal, `kill` and a
+/// cancelled CI job send. Returns its name, or `None` if no handler could be installed.
+async fn interruption(hangup: bool) -> Option<&'static str> {
+    use tokio::signal::unix::{SignalKind, signal};
+    let mut terminate = signal(SignalKind::terminate()).ok()?;
+    let mut hung_up = if hangup { Some(signal(SignalKind::hangup()).ok()?) } else { None };
+    let hung_up = async {
+        match &mut hung_up {
+            Some(signal) => signal.recv().await,
+            None => std::future::pending().await,
+        }
+    };
+    tokio::select! {
+        result = tokio::signal::ctrl_c() => result.ok().map(|()| "SIGINT"),
+        _ = terminate.recv() => Some("SIGTERM"),
+        _ = hung_up => Some("SIGHUP"),
+    }
+}
+
+/// Whether SIGHUP was ignored when aabench started (`nohup aabench run …`): then it stays
+/// ignored, as the user asked, instead of interrupting the run when the terminal closes.
+#[allow(unsafe_code)]
+fn hangup_ignored() -> bool {
+    // SAFETY: sigaction with a null new action only reads the current disposition into a
+    // zero-initialized struct that outlives the call.
+    unsafe {
+        let mut current: libc::sigaction = std::mem::zeroed();
+        libc::sigaction(libc::SIGHUP, std::ptr::null(), &mut current) == 0
+            && current.sa_sigaction == libc::SIG_IGN
+    }
 }
 
 fn make_plan(args: &RunArgs) -> Result<RunPlan, String> {
@@ -250,12 +299,25 @@ fn make_plan(args: &RunArgs) -> Result<RunPlan, String> {
             )
         })?;
     let repetitions = args.repetitions.unwrap_or_else(|| args.tier.repetitions());
-    if repetitions == 0 {
-        return Err("--repetitions must be at least 1".into());
-    }
+    let memory_limit = args
+        .memory_limit
+        .map(|gib| {
+            (gib.is_finite() && gib > 0.0 && gib <= 1e6)
+                .then(|| (gib * f64::from(1u32 << 30)) as u64)
+                .ok_or_else(|| format!("--memory-limit {gib} must be a positive number of GiB"))
+        })
+        .transpose()?;
     let shard = args.shard.as_deref().map(plan::parse_shard).transpose()?;
     let manifests = plan::find_manifests(&args.paths)?;
-    let run_id = plan::new_run_id(&args.out, args.tier, shard);
+    // Temporaries of killed runs (run folder, scene folders) go before this run adds its own.
+    let stale = plan::remove_stale_temporaries(&args.out, 2);
+    if stale > 0 {
+        eprintln!(
+            "aabench: removed {stale} temporary file(s) that killed runs left in {}",
+            args.out.display()
+        );
+    }
+    let (run_id, run_dir) = plan::create_run_dir(&args.out, &plan::new_run_id(args.tier, shard))?;
     Ok(RunPlan {
         tier: args.tier,
         scenes: plan::select_shard(plan::load_scenes(&manifests), shard),
@@ -266,7 +328,8 @@ fn make_plan(args: &RunArgs) -> Result<RunPlan, String> {
         extra_samples: args.extra_samples.into(),
         truth_cache: args.truth_cache.clone(),
         shard,
-        run_dir: args.out.join(&run_id),
+        memory_limit,
+        run_dir,
         run_id,
     })
 }
@@ -296,7 +359,7 @@ fn gen_scenes(paths: &[PathBuf], force: bool) -> u8 {
             })
         });
         match result {
-            Ok(line) => println!("{line}"),
+            Ok(line) => say!("{line}"),
             Err(error) => code = fail(format!("{error:#}")),
         }
     }
@@ -314,7 +377,7 @@ fn bless(runs: &[PathBuf], root: &Path, force: bool) -> u8 {
     match baseline::bless(&records, root, force, &now) {
         Ok(blessed) => {
             for path in &blessed.written {
-                println!("blessed {}", path.display());
+                say!("blessed {}", path.display());
             }
             for (scene, reason) in &blessed.skipped {
                 eprintln!("aabench: {scene}: not blessed: {reason}");
@@ -338,7 +401,10 @@ fn compare(run: &Path, root: &Path, out: Option<&Path>, fail_on: compare::FailOn
     let out = out.map_or(run_dir, Path::to_path_buf);
     match compare::outputs::write_all(&verdict, &out) {
         Ok(files) => {
-            print!("{}", compare::outputs::summary(&verdict));
+            {
+                use std::io::Write as _;
+                let _ = write!(std::io::stdout().lock(), "{}", compare::outputs::summary(&verdict));
+            }
             for file in files {
                 eprintln!("wrote {}", file.display());
             }
@@ -377,7 +443,7 @@ fn report(runs: &[PathBuf], history: Option<&Path>, verdict: Option<&Path>) -> u
             None
         };
         match aabench::report::write(&dir, &record, verdict.as_ref(), &history) {
-            Ok(path) => println!("wrote {}", path.display()),
+            Ok(path) => say!("wrote {}", path.display()),
             Err(message) => return fail(message),
         }
     }
@@ -388,7 +454,7 @@ fn merge(runs: &[PathBuf], out: &Path) -> u8 {
     let shards: Result<Vec<_>, String> = runs.iter().map(|run| aabench::record::load_run(run)).collect();
     match shards.and_then(|shards| aabench::merge::merge(&shards, out)) {
         Ok(merged) => {
-            println!(
+            say!(
                 "merged {} scenes from {} shards into {}",
                 merged.scenes.len(),
                 runs.len(),
@@ -417,9 +483,12 @@ fn print_graph(
     let graph = aabench_renderer::frame::describe(&needs, mode, &settings, &limits, dot)?;
     if !dot {
         let [width, height] = [settings.width, settings.height];
-        println!("{} {mode} ({} tier, {width}×{height}; {needs})\n", manifest.name, tier.name());
+        say!("{} {mode} ({} tier, {width}×{height}; {needs})\n", manifest.name, tier.name());
     }
-    print!("{graph}");
+    {
+        use std::io::Write as _;
+        let _ = write!(std::io::stdout().lock(), "{graph}");
+    }
     Ok(())
 }
 
@@ -427,15 +496,15 @@ fn info() -> u8 {
     match aabench_renderer::Gpu::new() {
         Ok(gpu) => {
             let p = &gpu.platform;
-            println!("adapter      {} ({}, {})", p.adapter, p.backend, p.device_type);
-            println!("driver       {} {}", p.driver, p.driver_info);
-            println!("cpu          {} ({} cores)", p.cpu_model, p.cpu_cores);
-            println!(
+            say!("adapter      {} ({}, {})", p.adapter, p.backend, p.device_type);
+            say!("driver       {} {}", p.driver, p.driver_info);
+            say!("cpu          {} ({} cores)", p.cpu_model, p.cpu_cores);
+            say!(
                 "threads      LP_NUM_THREADS={}",
                 p.lp_num_threads.as_deref().unwrap_or("(unset: one per core)")
             );
-            println!("build        {}", p.build_profile);
-            println!("platform key {}", p.key());
+            say!("build        {}", p.build_profile);
+            say!("platform key {}", p.key());
             exit::OK
         }
         Err(error) => fail(error),
@@ -444,15 +513,15 @@ fn info() -> u8 {
 
 fn list_modes() {
     let group = |name: &str, modes: Vec<Mode>| {
-        println!("{name}:");
+        say!("{name}:");
         for mode in modes {
-            println!("  {mode}");
+            say!("  {mode}");
         }
     };
     group("baseline", Mode::baseline_modes());
     group("adaptive", Mode::adaptive_modes());
     group("ablation", Mode::ablation_modes());
-    println!("also: reference-1x1 (equals deferred-1x1; a self-check)");
+    say!("also: reference-1x1 (equals deferred-1x1; a self-check)");
 }
 
 /// Mesa's device-select Vulkan layer prints "error: XDG_RUNTIME_DIR is invalid" on machines

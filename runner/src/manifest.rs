@@ -5,9 +5,11 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use aabench_renderer::AdaptiveSettings;
+use aabench_renderer::adaptive::{DepthMetric, MAX_METRIC_CONSTANT};
 use aabench_renderer::color::{ColorSettings, Dither, Tonemap, Transfer};
-use aabench_renderer::scene::generate::Generator;
-use aabench_renderer::scene::{MAX_LIGHTS, MAX_SHADOW_LIGHTS, Shadow};
+use aabench_renderer::scene::generate::{Generated, Generator, Placement};
+use aabench_renderer::scene::{Camera, MAX_LIGHTS, MAX_SHADOW_LIGHTS, Shadow};
+use glam::DVec3;
 use serde::Deserialize;
 
 use crate::gate::Tolerances;
@@ -43,12 +45,22 @@ pub struct Resolutions {
 }
 
 /// How to make the glTF file when it is missing or stale.
-#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Generate {
     pub generator: String,
     #[serde(default)]
     pub seed: u64,
+    /// Uniform scale of the whole scene (1000: metres become millimetres), in [1e-6, 1e6].
+    #[serde(default = "unit_scale")]
+    pub scale: f64,
+    /// Where the scaled scene's origin goes, each coordinate within ±1e9.
+    #[serde(default)]
+    pub offset: [f64; 3],
+}
+
+fn unit_scale() -> f64 {
+    1.0
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
@@ -65,6 +77,20 @@ pub struct CameraSpec {
     pub far: Option<f64>,
 }
 
+impl CameraSpec {
+    /// The renderer's camera; an omitted far plane is infinite until the scene's bounds set it.
+    pub fn camera(&self) -> Camera {
+        Camera {
+            position: DVec3::from(self.position),
+            forward: DVec3::from(self.target) - DVec3::from(self.position),
+            up: DVec3::from(self.up),
+            fov_y: self.fov_y_degrees.to_radians(),
+            near: self.near,
+            far: self.far.unwrap_or(f64::INFINITY),
+        }
+    }
+}
+
 fn default_up() -> [f64; 3] {
     [0.0, 1.0, 0.0]
 }
@@ -76,7 +102,8 @@ fn default_near() -> f64 {
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightSpec {
-    pub position: [f32; 3],
+    /// In the file's coordinates (f64: a scene placed far out keeps its lights where they are).
+    pub position: [f64; 3],
     #[serde(default = "white")]
     pub color: [f32; 3],
     pub intensity: f32,
@@ -130,6 +157,9 @@ fn white() -> [f32; 3] {
 #[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AdaptiveSpec {
+    /// `relative` (the default: unit-free) or `world` (the paper's literal units²).
+    pub depth_metric: Option<DepthMetricSpec>,
+    /// Omitted: the default of the depth metric in use.
     pub c_depth: Option<f32>,
     pub c_normal: Option<f32>,
     pub c_shading: Option<f32>,
@@ -140,8 +170,13 @@ pub struct AdaptiveSpec {
 impl AdaptiveSpec {
     pub fn settings(&self) -> AdaptiveSettings {
         let d = AdaptiveSettings::default();
+        let depth_metric = match self.depth_metric {
+            Some(DepthMetricSpec::World) => DepthMetric::World,
+            Some(DepthMetricSpec::Relative) | None => DepthMetric::Relative,
+        };
         AdaptiveSettings {
-            c_depth: self.c_depth.unwrap_or(d.c_depth),
+            depth_metric,
+            c_depth: self.c_depth.unwrap_or(depth_metric.default_c_depth()),
             c_normal: self.c_normal.unwrap_or(d.c_normal),
             c_shading: self.c_shading.unwrap_or(d.c_shading),
             t_min: self.t_min.unwrap_or(d.t_min),
@@ -149,6 +184,13 @@ impl AdaptiveSpec {
             ..d
         }
     }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DepthMetricSpec {
+    Relative,
+    World,
 }
 
 /// Whether a scene's shading needs a tonemap: `hdr` (the default) goes through the tonemap
@@ -292,6 +334,10 @@ pub struct Manifest {
     pub background: [f32; 3],
     #[serde(default = "default_stall")]
     pub stall_iterations: u32,
+    /// The camera sees no geometry on purpose (a background-only test): without it, a scene
+    /// with no triangle in view fails.
+    #[serde(default)]
+    pub empty: bool,
     #[serde(default)]
     pub adaptive: AdaptiveSpec,
     #[serde(default)]
@@ -320,17 +366,24 @@ fn default_stall() -> u32 {
     256
 }
 
+/// The largest stall accepted: what the stall loop can run within lavapipe's loop limit
+/// (`shaders/lib/shading.wgsl`, `stall`).
+pub const MAX_STALL_ITERATIONS: u32 = aabench_renderer::MAX_STALL_ITERATIONS;
+
 /// The largest output side accepted: 4×4 supersampling must still fit lavapipe's 16384 limit.
 pub const MAX_RESOLUTION: u32 = 4096;
 
 impl Manifest {
     /// Reads and validates a manifest file.
     pub fn load(path: &Path) -> Result<Manifest, ManifestError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ManifestError {
+        let unreadable = |message: String| ManifestError {
             path: path.to_path_buf(),
             field: String::new(),
-            message: format!("cannot read: {e}"),
-        })?;
+            message: format!("cannot read: {message}"),
+        };
+        // A FIFO would block the run forever.
+        aabench_renderer::scene::regular_file(path).map_err(unreadable)?;
+        let text = std::fs::read_to_string(path).map_err(|e| unreadable(e.to_string()))?;
         Self::parse(path, &text)
     }
 
@@ -382,9 +435,14 @@ impl Manifest {
         self.path.parent().unwrap_or(Path::new(".")).join(&self.gltf)
     }
 
-    pub fn generator(&self) -> Option<(Generator, u64)> {
+    /// What generates the glTF file, if the manifest says.
+    pub fn generator(&self) -> Option<Generated> {
         let spec = self.generate.as_ref()?;
-        Some((spec.generator.parse().ok()?, spec.seed))
+        Some(Generated {
+            generator: spec.generator.parse().ok()?,
+            seed: spec.seed,
+            placement: Placement { scale: spec.scale, offset: spec.offset },
+        })
     }
 
     fn validate(&self) -> Result<(), (String, String)> {
@@ -411,6 +469,17 @@ impl Manifest {
         {
             return fail("generate.generator", message);
         }
+        if let Some(generate) = &self.generate {
+            if !(1e-6..=1e6).contains(&generate.scale) {
+                return fail("generate.scale", format!("{} must be within [1e-6, 1e6]", generate.scale));
+            }
+            if !generate.offset.iter().all(|c| c.abs() <= 1e9) {
+                return fail(
+                    "generate.offset",
+                    format!("{:?} must be finite, each within ±1e9", generate.offset),
+                );
+            }
+        }
         for (tier, [width, height]) in
             [("quick", self.resolution.quick), ("nightly", self.resolution.nightly)]
         {
@@ -421,26 +490,21 @@ impl Manifest {
                 );
             }
         }
+        if aabench_renderer::scene::escapes(&self.gltf) {
+            return fail(
+                "gltf",
+                format!("`{}` leaves the manifest's folder: give a path inside it", self.gltf.display()),
+            );
+        }
         if let Some(camera) = &self.camera {
-            let finite = |v: &[f64; 3]| v.iter().all(|c| c.is_finite());
-            if !finite(&camera.position) || !finite(&camera.target) || !finite(&camera.up) {
-                return fail("camera", "position, target and up must be finite".into());
-            }
-            if camera.position == camera.target {
-                return fail("camera.target", "must differ from camera.position".into());
-            }
-            if !(camera.fov_y_degrees > 0.0 && camera.fov_y_degrees < 180.0) {
-                return fail("camera.fov_y_degrees", format!("{} must be in (0, 180)", camera.fov_y_degrees));
-            }
-            // The GPU receives them as f32.
-            if !(camera.near >= 1e-6 && camera.near <= 1e9) {
-                return fail("camera.near", format!("{} must be in [1e-6, 1e9]", camera.near));
-            }
-            if let Some(far) = camera.far
-                && !(far > camera.near && far <= 1e12)
-            {
-                return fail("camera.far", format!("{far} must be > camera.near and at most 1e12"));
-            }
+            // The renderer's own check, on the camera as the manifest gives it.
+            camera.camera().validate().map_err(|e| {
+                let field = match e.field {
+                    "fov_y" => "fov_y_degrees",
+                    field => field,
+                };
+                (format!("camera.{field}"), e.message)
+            })?;
         }
         if self.lights.len() > MAX_LIGHTS {
             return fail(
@@ -517,8 +581,15 @@ impl Manifest {
                 return fail(name, "components must be finite and ≥ 0".into());
             }
         }
-        if self.stall_iterations > 1 << 20 {
-            return fail("stall_iterations", format!("{} exceeds {}", self.stall_iterations, 1 << 20));
+        if self.stall_iterations > MAX_STALL_ITERATIONS {
+            return fail(
+                "stall_iterations",
+                format!(
+                    "{} exceeds {MAX_STALL_ITERATIONS}, the most lavapipe honours (it ends any shader \
+                     invocation after 65 535 loop iterations; the stall loop takes 16 steps per iteration)",
+                    self.stall_iterations
+                ),
+            );
         }
         let adaptive = self.adaptive.settings();
         for (name, value) in [
@@ -526,8 +597,11 @@ impl Manifest {
             ("c_normal", adaptive.c_normal),
             ("c_shading", adaptive.c_shading),
         ] {
-            if !(value >= 0.0 && value.is_finite()) {
-                return fail(&format!("adaptive.{name}"), format!("{value} must be finite and ≥ 0"));
+            if !(0.0..=MAX_METRIC_CONSTANT).contains(&value) {
+                return fail(
+                    &format!("adaptive.{name}"),
+                    format!("{value} must be within [0, {MAX_METRIC_CONSTANT:e}]"),
+                );
             }
         }
         for (name, value) in [("t_min", adaptive.t_min), ("t_edge", adaptive.t_edge)] {
@@ -596,7 +670,10 @@ mod tests {
     fn a_valid_manifest_parses_with_defaults() {
         let manifest = Manifest::parse(Path::new("scenes/edge.json"), VALID).unwrap();
         assert_eq!(manifest.gltf_path(), Path::new("scenes/cache/edge.glb"));
-        assert_eq!(manifest.generator().map(|(g, seed)| (g.to_string(), seed)), Some(("edge".into(), 3)));
+        assert_eq!(
+            manifest.generator().map(|g| (g.generator.to_string(), g.seed, g.placement)),
+            Some(("edge".into(), 3, Placement::IDENTITY))
+        );
         assert_eq!(manifest.lights[0].color, [1.0; 3]);
         assert_eq!(manifest.stall_iterations, 256);
         assert_eq!(manifest.adaptive.settings(), AdaptiveSettings::default());
@@ -635,17 +712,17 @@ mod tests {
         check(
             |j| j["camera"] = json!({"position": [0, 0, 1], "target": [0, 0, 0], "fov_y_degrees": 200}),
             "camera.fov_y_degrees",
-            "(0, 180)",
+            "within [0.01°, 179°]",
         );
         check(
             |j| j["camera"] = json!({"position": [0, 0, 1], "target": [0, 0, 1], "fov_y_degrees": 60}),
             "camera.target",
-            "must differ",
+            "lies on the position",
         );
         check(
             |j| j["camera"] = json!({"position": [0, 0, 1], "target": [0, 0, 0], "fov_y_degrees": 60, "near": 1, "far": 0.5}),
             "camera.far",
-            "> camera.near",
+            "must be > near (1)",
         );
         check(
             |j| {
@@ -653,10 +730,31 @@ mod tests {
                     json!({"position": [0, 0, 1], "target": [0, 0, 0], "fov_y_degrees": 60, "near": 1e-50})
             },
             "camera.near",
-            "[1e-6, 1e9]",
+            "within [1e-6, 1e9]",
         );
         check(|j| j["adaptive"] = json!({"t_edge": 2}), "adaptive.t_edge", "[0, 1]");
-        check(|j| j["adaptive"] = json!({"c_depth": -1}), "adaptive.c_depth", "≥ 0");
+        check(|j| j["adaptive"] = json!({"c_depth": -1}), "adaptive.c_depth", "within [0, 1e12]");
+        check(|j| j["adaptive"] = json!({"c_normal": 1e13}), "adaptive.c_normal", "within [0, 1e12]");
+        check(
+            |j| j["adaptive"] = json!({"depth_metric": "linear"}),
+            "adaptive.depth_metric",
+            "unknown variant",
+        );
+        check(|j| j["stall_iterations"] = json!(1_000_001), "stall_iterations", "65 535 loop iterations");
+        check(|j| j["gltf"] = json!("../elsewhere.glb"), "gltf", "leaves the manifest's folder");
+        check(
+            |j| j["camera"] = json!({"position": [1e300, 0, 1], "target": [0, 0, 0], "fov_y_degrees": 60}),
+            "camera.position",
+            "within ±1e12",
+        );
+        check(
+            |j| {
+                j["camera"] =
+                    json!({"position": [0, 0, 1], "target": [0, 0, 0], "up": [0, 0, 2], "fov_y_degrees": 60})
+            },
+            "camera.up",
+            "parallel to the view direction",
+        );
         check(|j| j["adaptive"] = json!({"c_dept": 1}), "adaptive.c_dept", "unknown field `c_dept`");
         check(|j| j["tonemap"] = json!({"exposure": 0}), "tonemap.exposure", "> 0");
         check(|j| j["tonemap"] = json!({"hdr_max": 0.1}), "tonemap.hdr_max", "greater than mid_in");

@@ -185,3 +185,54 @@ mod tests {
         assert!(sample_stats(&[5], 2).is_err());
     }
 }
+
+/// What every frame of every mode is checked for: NaN and infinite values in the HDR output
+/// (the display passes sanitize them, so they would otherwise go unseen) and sample counts
+/// outside [1, M²].
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FrameChecks {
+    /// Frames checked.
+    pub frames: u32,
+    /// NaN channel values, all frames together.
+    pub nan: u64,
+    /// ±Inf channel values, all frames together.
+    pub inf: u64,
+    /// Pixels whose sample count is 0 or above M², all frames together.
+    pub counts_out_of_range: u64,
+}
+
+impl FrameChecks {
+    /// The checks of one frame: its HDR RGBA values and, for adaptive modes, its sample counts.
+    pub fn of(hdr: &[f32], counts: Option<&[u8]>, m: u32) -> FrameChecks {
+        let full = m * m;
+        FrameChecks {
+            frames: 1,
+            nan: hdr.iter().filter(|v| v.is_nan()).count() as u64,
+            inf: hdr.iter().filter(|v| v.is_infinite()).count() as u64,
+            counts_out_of_range: counts
+                .unwrap_or_default()
+                .iter()
+                .filter(|&&n| n == 0 || u32::from(n) > full)
+                .count() as u64,
+        }
+    }
+
+    pub fn add(&mut self, other: FrameChecks) {
+        self.frames += other.frames;
+        self.nan += other.nan;
+        self.inf += other.inf;
+        self.counts_out_of_range += other.counts_out_of_range;
+    }
+
+    /// What failed, in words, or `None`.
+    pub fn problem(&self, m: u32) -> Option<String> {
+        let mut problems = Vec::new();
+        if self.nan + self.inf > 0 {
+            problems.push(format!("{} NaN and {} infinite HDR values", self.nan, self.inf));
+        }
+        if self.counts_out_of_range > 0 {
+            problems.push(format!("{} sample counts outside [1, {}]", self.counts_out_of_range, m * m));
+        }
+        (!problems.is_empty()).then(|| format!("{} in {} frames", problems.join(" and "), self.frames))
+    }
+}

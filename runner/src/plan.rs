@@ -94,7 +94,10 @@ pub struct RunPlan {
     pub truth_cache: Option<PathBuf>,
     /// The slice of the scenes this run renders, if not all.
     pub shard: Option<Shard>,
-    /// reports/<run-id>
+    /// Bytes the render targets of one scene's modes may take together; `None`: 90% of the
+    /// memory available when the scene starts.
+    pub memory_limit: Option<u64>,
+    /// reports/<run-id>, created by [`create_run_dir`].
     pub run_dir: PathBuf,
     pub run_id: String,
 }
@@ -177,18 +180,60 @@ pub fn load_scenes(paths: &[PathBuf]) -> Vec<SceneEntry> {
 
 /// A run id that sorts by time: `20261122T101503Z-quick` (`…-quick-shard2of4` for a shard),
 /// with a suffix when taken.
-pub fn new_run_id(out: &Path, tier: Tier, shard: Option<Shard>) -> String {
+pub fn new_run_id(tier: Tier, shard: Option<Shard>) -> String {
     let stamp =
         humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string().replace(['-', ':'], "");
     let shard = shard.map_or(String::new(), |s| format!("-shard{}of{}", s.index, s.count));
-    let base = format!("{stamp}-{}{shard}", tier.name());
-    let mut id = base.clone();
-    let mut n = 2;
-    while out.join(&id).exists() {
-        id = format!("{base}-{n}");
-        n += 1;
+    format!("{stamp}-{}{shard}", tier.name())
+}
+
+/// Creates the run's folder `out/<id>`, or `out/<id>-2`, `-3`, … when another run holds the
+/// name: creation itself is the test, so two runs started in the same second never share one.
+/// Returns the id taken and the folder.
+pub fn create_run_dir(out: &Path, id: &str) -> Result<(String, PathBuf), String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("--out {}: cannot create: {e}", out.display()))?;
+    for n in 1..10_000 {
+        let candidate = if n == 1 { id.to_string() } else { format!("{id}-{n}") };
+        let dir = out.join(&candidate);
+        match std::fs::create_dir(&dir) {
+            Ok(()) => return Ok((candidate, dir)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(format!("--out {}: cannot create a run folder: {e}", out.display())),
+        }
     }
-    id
+    Err(format!("--out {}: 10 000 runs named {id} already", out.display()))
+}
+
+/// Removes the temporary files (`<name>.tmp-<pid>`) that killed processes left under `dir`,
+/// down to `depth` folders; those of live processes are left alone. Returns how many went.
+pub fn remove_stale_temporaries(dir: &Path, depth: u32) -> usize {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    let mut removed = 0;
+    for entry in entries.flatten() {
+        let path = entry.path();
+        let Ok(kind) = entry.file_type() else { continue };
+        if kind.is_dir() && depth > 0 {
+            removed += remove_stale_temporaries(&path, depth - 1);
+        } else if kind.is_file()
+            && let Some(pid) = temporary_owner(&path)
+            && !Path::new("/proc").join(pid.to_string()).exists()
+            && std::fs::remove_file(&path).is_ok()
+        {
+            removed += 1;
+        }
+    }
+    removed
+}
+
+/// The process id in a temporary file's name (`run.json.tmp-4242` → 4242, and
+/// `a.exr.tmp-4242.exr`: the EXR writer keeps the extension).
+fn temporary_owner(path: &Path) -> Option<u32> {
+    let name = path.file_name()?.to_str()?;
+    let (_, rest) = name.rsplit_once(".tmp-")?;
+    let digits = rest.split('.').next()?;
+    digits.parse().ok()
 }
 
 /// The scene name that a manifest path would have, for failed manifests.
@@ -199,6 +244,26 @@ pub fn fallback_name(path: &Path) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn run_folders_are_created_once_each() {
+        let out = std::env::temp_dir().join(format!("aabench-plan-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&out);
+        let (a, dir_a) = create_run_dir(&out, "20260101T000000Z-quick").unwrap();
+        let (b, dir_b) = create_run_dir(&out, "20260101T000000Z-quick").unwrap();
+        assert_eq!((a.as_str(), b.as_str()), ("20260101T000000Z-quick", "20260101T000000Z-quick-2"));
+        assert!(dir_a.is_dir() && dir_b.is_dir());
+
+        // A dead process's temporary goes, a live one's (ours) stays.
+        std::fs::write(dir_a.join("run.json.tmp-4294967295"), "x").unwrap();
+        std::fs::write(dir_a.join("mode.exr.tmp-4294967295.exr"), "x").unwrap();
+        let ours = dir_b.join(format!("run.json.tmp-{}", std::process::id()));
+        std::fs::write(&ours, "x").unwrap();
+        std::fs::write(dir_b.join("run.json"), "{}").unwrap();
+        assert_eq!(remove_stale_temporaries(&out, 2), 2);
+        assert!(ours.exists() && dir_b.join("run.json").exists());
+        std::fs::remove_dir_all(&out).unwrap();
+    }
 
     #[test]
     fn groups_and_ids_combine_without_duplicates() {

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::gate::Tolerances;
 use crate::inputs::SceneInputs;
-use crate::metrics::{Quality, SampleStats};
+use crate::metrics::{FrameChecks, Quality, SampleStats};
 use crate::plan::Tier;
 use crate::stats::Summary;
 use crate::truth::TruthRecord;
@@ -23,8 +23,24 @@ pub enum Status {
     Running,
     Ok,
     Failed,
-    /// Stopped by Ctrl-C before it finished.
+    /// Stopped by SIGINT, SIGTERM or SIGHUP before it finished.
     Interrupted,
+    /// Never started: the run was interrupted, or an earlier frame left the device unusable.
+    #[serde(rename = "not run")]
+    NotRun,
+}
+
+impl std::fmt::Display for Status {
+    /// As run.json writes it.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Status::Running => "running",
+            Status::Ok => "ok",
+            Status::Failed => "failed",
+            Status::Interrupted => "interrupted",
+            Status::NotRun => "not run",
+        })
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -111,6 +127,10 @@ pub struct SceneRecord {
     pub load_s: Option<f64>,
     /// Bytes of render targets once every mode was prepared.
     pub target_bytes: Option<u64>,
+    /// The memory limit its modes were prepared under (`--memory-limit`, or 90% of the memory
+    /// available after upload).
+    #[serde(default)]
+    pub memory_limit_bytes: Option<u64>,
     pub stall_iterations: u32,
     /// Content hashes of the manifest and glTF files (absent when they could not be read).
     pub inputs: Option<SceneInputs>,
@@ -182,6 +202,10 @@ pub struct ModeRecord {
     /// The mode's compiled pass graph: passes run and the allocations they share.
     #[serde(default)]
     pub graph: Option<GraphRecord>,
+    /// NaN and infinities in the HDR output and sample counts outside [1, M²], summed over
+    /// every frame rendered (warm-up included); any fails the mode.
+    #[serde(default)]
+    pub checks: Option<FrameChecks>,
 }
 
 /// A mode's pass graph as compiled for this scene: what ran and what it allocated, against

@@ -11,12 +11,11 @@ use std::time::{Duration, Instant, SystemTime};
 use aabench_renderer::{
     AdaptiveSettings, DisplayImage, ExtraSamples, FrameImages, FrameTiming, Mode, RenderSettings, Technique,
 };
-use anyhow::Context;
 
 use crate::images;
 use crate::inputs::SceneInputs;
 use crate::manifest::Manifest;
-use crate::metrics::{self, Quality};
+use crate::metrics::{self, FrameChecks, Quality};
 use crate::plan::{RunPlan, SceneEntry, Tier, fallback_name};
 use crate::progress::Progress;
 use crate::record::{
@@ -41,9 +40,14 @@ pub struct Outcome {
 /// Runs the plan. `cancel` is set by the first Ctrl-C: the current frame finishes, what was
 /// measured is recorded, and the run ends as interrupted.
 pub async fn execute(plan: &RunPlan, progress: Progress, cancel: Arc<AtomicBool>) -> anyhow::Result<Outcome> {
-    let mut worker = Worker::start().await?;
-    std::fs::create_dir_all(&plan.run_dir)
-        .with_context(|| format!("{}: cannot create", plan.run_dir.display()))?;
+    let mut worker = match Worker::start().await {
+        Ok(worker) => worker,
+        Err(error) => {
+            // The run folder `plan` created holds nothing yet.
+            let _ = std::fs::remove_dir(&plan.run_dir);
+            return Err(error.into());
+        }
+    };
     let run_json = plan.run_dir.join("run.json");
     let mut record = RunRecord {
         schema: RUN_SCHEMA.into(),
@@ -75,22 +79,27 @@ pub async fn execute(plan: &RunPlan, progress: Progress, cancel: Arc<AtomicBool>
     ));
     write_record(&run_json, &record)?;
 
-    for entry in &plan.scenes {
-        if cancel.load(Ordering::SeqCst) {
-            break;
+    // A failed write (a full disk) does not stop the run: later scenes still render, and each
+    // later write tries again; only the last one must succeed.
+    let save = |record: &RunRecord| {
+        if let Err(error) = write_record(&run_json, record) {
+            progress.line(&format!("warning: {error:#}; trying again after the next scene"));
         }
+    };
+    for entry in &plan.scenes {
         let scene = match entry {
+            _ if cancel.load(Ordering::SeqCst) => not_run(entry, "the run was interrupted before it"),
             // After a timeout the stuck frame may still be using every core: later timings
             // would be wrong, so the remaining scenes are recorded as not run.
             Ok(_) if worker.is_stuck() => {
-                failed_scene(entry, "not run: an earlier frame timed out or the GPU worker panicked".into())
+                not_run(entry, "an earlier frame timed out or the GPU worker panicked")
             }
             Ok(manifest) => run_scene(&mut worker, plan, manifest, &progress, &cancel).await,
             Err(error) => failed_scene(entry, error.to_string()),
         };
         report_scene(&progress, &scene);
         record.scenes.push(scene);
-        write_record(&run_json, &record)?;
+        save(&record);
     }
 
     record.finished_at = Some(now());
@@ -123,6 +132,11 @@ fn failed_scene(entry: &SceneEntry, error: String) -> SceneRecord {
     record
 }
 
+/// A scene that never started, and why.
+fn not_run(entry: &SceneEntry, why: &str) -> SceneRecord {
+    SceneRecord { status: Status::NotRun, ..failed_scene(entry, format!("not run: {why}")) }
+}
+
 /// A scene record before anything was measured.
 fn empty_scene(manifest: &Manifest) -> SceneRecord {
     SceneRecord {
@@ -145,6 +159,7 @@ fn empty_scene_at(manifest: &Path) -> SceneRecord {
         textures: None,
         load_s: None,
         target_bytes: None,
+        memory_limit_bytes: None,
         stall_iterations: 0,
         inputs: None,
         gate: Default::default(),
@@ -160,6 +175,7 @@ struct ModeRun {
     timings: Vec<FrameTiming>,
     hashes: Vec<String>,
     images: Option<FrameImages>,
+    checks: FrameChecks,
     error: Option<String>,
 }
 
@@ -205,24 +221,28 @@ async fn run_scene(
 
     let settings = render_settings(manifest, plan.tier, plan.extra_samples);
     progress.status(&format!("[{}] uploading", manifest.name));
+    let memory_limit = plan.memory_limit;
     let uploaded = worker
         .call(plan.frame_timeout, move |state| {
             let scenes::LoadedScene { scene, camera, lighting, .. } = loaded;
             state.modes.clear();
             state.renderer = None;
-            let renderer = aabench_renderer::SceneRenderer::new(
+            let mut renderer = aabench_renderer::SceneRenderer::new(
                 state.gpu.clone(),
                 &scene,
                 &camera,
                 &lighting,
                 settings,
             )?;
+            // After the upload, so that the scene's own memory is no longer available.
+            let budget = memory_limit.or_else(|| available_memory().map(|bytes| bytes / 10 * 9));
+            renderer.set_memory_budget(budget);
             state.renderer = Some(renderer);
-            Ok::<_, aabench_renderer::RenderError>(())
+            Ok::<_, aabench_renderer::RenderError>(budget)
         })
         .await;
     match uploaded {
-        Ok(Ok(())) => {}
+        Ok(Ok(budget)) => record.memory_limit_bytes = budget,
         Ok(Err(error)) => return fail(record, error.to_string()),
         Err(error) => return fail(record, error.to_string()),
     }
@@ -289,27 +309,42 @@ async fn run_scene(
                 format!("warm-up {}/{}", round + 1, plan.warmup)
             };
             progress.status(&format!("[{}] {mode} {label}", manifest.name));
+            let m = mode.m;
             let result = worker
                 .call(plan.frame_timeout, move |state| {
                     let prepared = state.modes[index].as_ref().expect("prepared mode");
                     let timing = prepared.render()?;
-                    // Read back between frames, never during one. Every timed frame's display
-                    // image and sample counts are fingerprinted; all must agree.
+                    // Read back between frames, never during one. Every frame is checked;
+                    // every timed frame's display image and sample counts are fingerprinted,
+                    // and all must agree.
                     let images = if first_timed { Some(prepared.read_images()?) } else { None };
-                    let hash = match &images {
-                        Some(images) => Some(fingerprint(&images.display, images.sample_counts.as_deref())),
-                        None if timed => Some(fingerprint(
-                            &prepared.read_display()?,
-                            prepared.read_sample_counts()?.as_deref(),
-                        )),
-                        None => None,
+                    let (hash, checks) = match &images {
+                        Some(images) => {
+                            let counts = images.sample_counts.as_deref();
+                            (
+                                Some(fingerprint(&images.display, counts)),
+                                FrameChecks::of(&images.hdr, counts, m),
+                            )
+                        }
+                        None => {
+                            let counts = prepared.read_sample_counts()?;
+                            let checks =
+                                FrameChecks::of(prepared.read_hdr()?.as_flattened(), counts.as_deref(), m);
+                            let hash = if timed {
+                                Some(fingerprint(&prepared.read_display()?, counts.as_deref()))
+                            } else {
+                                None
+                            };
+                            (hash, checks)
+                        }
                     };
-                    Ok::<_, aabench_renderer::RenderError>((timing, hash, images))
+                    Ok::<_, aabench_renderer::RenderError>((timing, hash, checks, images))
                 })
                 .await;
             let run = &mut runs[index];
             match result {
-                Ok(Ok((timing, hash, images))) => {
+                Ok(Ok((timing, hash, checks, images))) => {
+                    run.checks.add(checks);
                     if timed {
                         run.timings.push(timing);
                         run.hashes.extend(hash);
@@ -558,8 +593,11 @@ fn timing_record(mode: Mode, run: &ModeRun, repetitions: u32, interrupted: bool)
     });
     let deterministic = (!run.hashes.is_empty()).then(|| run.hashes.windows(2).all(|w| w[0] == w[1]));
     let complete = run.timings.len() == repetitions as usize;
+    let unstable = run.checks.problem(mode.m);
     let (status, error) = match (&run.error, run.images.is_some()) {
         (Some(error), _) => (Status::Failed, Some(error.clone())),
+        // Not a number is never a result: the display passes would hide it, so it fails here.
+        (None, _) if unstable.is_some() => (Status::Failed, unstable),
         // Same inputs must give the same bits: a difference is a bug, not noise.
         (None, true) if deterministic == Some(false) => {
             (Status::Failed, Some("not deterministic: repetitions produced different images".into()))
@@ -585,6 +623,7 @@ fn timing_record(mode: Mode, run: &ModeRun, repetitions: u32, interrupted: bool)
         vs_ground_truth: None,
         adaptive: None,
         graph: run.graph.clone(),
+        checks: (run.checks.frames > 0).then_some(run.checks),
     }
 }
 
@@ -706,6 +745,14 @@ fn truth_summary(truth: &TruthRecord) -> String {
         (None, false, Some(seconds)) => format!("{} (rendered in {seconds:.1} s)", truth.id),
         (None, false, None) => truth.id.clone(),
     }
+}
+
+/// `MemAvailable` of /proc/meminfo in bytes: what the kernel can give without swapping.
+fn available_memory() -> Option<u64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = meminfo.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
 }
 
 /// Frame timeout when none is given: generous, since a warm-up frame includes compilation.

@@ -259,7 +259,7 @@ fn a_failed_scene_fails_the_gate_with_or_without_a_baseline() {
     ws.manifest("a-edge", "edge", |_| {});
     ws.manifest("b-broken", "plane", |m| m["lights"][0]["range"] = json!(-3));
     let output = ws.run(&["run", "--modes", "deferred-1x1", "--repetitions", "2"]);
-    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
     let run_dir = run_in(&ws, "reports");
     let out = ws.dir.join("gate");
     let output = compare(&ws, &run_dir, &out);

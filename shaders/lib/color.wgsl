@@ -6,6 +6,8 @@
 // No function relies on infinities or NaN: WGSL lets the compiler assume finite floats, so a
 // `x != x` test may be folded away and `pow(0.0, y)` (exp2(y · log2(0))) is not promised to be 0.
 
+#include "lib/finite.wgsl"
+
 // Tonemap: y = z / (z^SHOULDER · CURVE_B + CURVE_C), z = x^CONTRAST, on the largest channel.
 override CONTRAST: f32 = 1.0;
 override SHOULDER: f32 = 1.0;
@@ -26,25 +28,9 @@ override DITHER_BLACK: f32 = 0.0;
 override DITHER_BIGGEST: f32 = 0.0;
 override DITHER_TOP: f32 = 1.0;
 
-// The largest finite value of the Rgba16Float HDR target: what +Inf stands for.
-const HALF_MAX: f32 = 65504.0;
 // Below this the tonemap returns black (its powers would underflow through log2(0)).
 const PEAK_FLOOR: f32 = 1e-20;
 const RATIO_FLOOR: f32 = 1e-12;
-
-// Radiance the display can use: NaN and −Inf become 0, +Inf the HDR target's largest value,
-// negatives 0. The tests are on the bits, which no finite-math assumption can fold away.
-fn sanitize(x: f32) -> f32 {
-    let bits = bitcast<u32>(x);
-    if (bits & 0x7f800000u) == 0x7f800000u {
-        return select(0.0, HALF_MAX, bits == 0x7f800000u);
-    }
-    return clamp(x, 0.0, HALF_MAX);
-}
-
-fn sanitize3(c: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(sanitize(c.r), sanitize(c.g), sanitize(c.b));
-}
 
 // Sanitized radiance times the exposure, kept finite however large the exposure.
 fn exposed(c: vec3<f32>, exposure: f32) -> vec3<f32> {

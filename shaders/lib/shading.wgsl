@@ -2,6 +2,7 @@
 // fetched here, shadows of shadow-casting lights, and an optional stall that simulates an
 // expensive shader.
 
+#include "lib/finite.wgsl"
 #include "lib/shadows.wgsl"
 
 const PI: f32 = 3.14159265358979;
@@ -12,10 +13,27 @@ override STALL_ITERATIONS: u32 = 0u;
 
 // A chain of STALL_ITERATIONS steps, each needing the one before. Its result is written to the
 // alpha channel of the HDR target, which keeps it live without touching the image.
+//
+// lavapipe ends a shader invocation's loops after 65 535 iterations in all (gallivm's
+// LP_MAX_TGSI_LOOP_ITERATIONS; a longer stall silently stopped growing), so the chain takes 16
+// steps per iteration, written out, and the rest one by one: up to MAX_STALL_ITERATIONS (renderer/src/lib.rs)
+// steps stay within the limit, with room for the shader's other loops.
+fn stall_step(h: u32) -> u32 {
+    return (h ^ (h >> 15u)) * 0x2c1b3c6du;
+}
+
+// Four steps, written out: an inner loop would count against the limit like the outer one.
+fn stall_step4(h: u32) -> u32 {
+    return stall_step(stall_step(stall_step(stall_step(h))));
+}
+
 fn stall(texel: vec2<i32>) -> f32 {
     var h = (u32(texel.x) * 0x8da6b343u) ^ (u32(texel.y) * 0xd8163841u);
-    for (var i = 0u; i < STALL_ITERATIONS; i += 1u) {
-        h = (h ^ (h >> 15u)) * 0x2c1b3c6du;
+    for (var i = 0u; i < STALL_ITERATIONS / 16u; i += 1u) {
+        h = stall_step4(stall_step4(stall_step4(stall_step4(h))));
+    }
+    for (var i = 0u; i < STALL_ITERATIONS % 16u; i += 1u) {
+        h = stall_step(h);
     }
     return f32(h >> 8u) * (1.0 / 16777216.0);
 }
@@ -45,8 +63,13 @@ fn brdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, n_l: f32, albedo: vec3<f32>, m
 fn attenuation(distance2: f32, inverse2: f32, range: f32) -> f32 {
     let ratio2 = distance2 / (range * range);
     let window = clamp(1.0 - ratio2 * ratio2, 0.0, 1.0);
-    return window * window * min(inverse2, 1e4);
+    return window * window * inverse2;
 }
+
+// A surface nearer a light than this fraction of the light's range is lit as if at that
+// distance: the inverse square stays finite for a light on a surface, in any unit (a fixed
+// floor in world units darkened a Cornell box modelled in kilometres).
+const NEAREST_LIGHT: f32 = 1e-4;
 
 #ifdef TEXTURED
 // Most taps of one anisotropic lookup.
@@ -100,7 +123,8 @@ fn shade(texel: vec2<i32>, footprint: f32) -> vec4<f32> {
     for (var i = 0u; i < LIGHT_COUNT; i += 1u) {
         let light = lights.entries[i];
         let to_light = light.position - position;
-        let distance2 = max(dot(to_light, to_light), 1e-12);
+        let nearest = NEAREST_LIGHT * light.range;
+        let distance2 = max(dot(to_light, to_light), nearest * nearest);
         let inverse = inverseSqrt(distance2);
         let l = to_light * inverse;
         let n_l = dot(s.normal, l);
@@ -115,5 +139,8 @@ fn shade(texel: vec2<i32>, footprint: f32) -> vec4<f32> {
             radiance += contribution;
         }
     }
-    return vec4<f32>(radiance, stalled);
+    // The HDR targets are f16: radiance past their largest value (a light 10⁵ times the others
+    // on a glossy highlight) would be stored as +Inf. It is kept at HALF_MAX instead, which
+    // the tonemap reads as "brighter than anything shown".
+    return vec4<f32>(min(radiance, vec3<f32>(HALF_MAX)), stalled);
 }

@@ -3,6 +3,7 @@
 use super::{
     BuildContext, Compute, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, gbuffer, shading_inputs,
 };
+use crate::adaptive::DepthMetric;
 use crate::bindings::Bound;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
 use crate::mode::Metrics;
@@ -125,6 +126,7 @@ impl Node for EvaluateNode {
         let s = self.settings;
         let constants = window(self.m)
             .with("C_DEPTH", s.c_depth)
+            .flag("RELATIVE_DEPTH", s.depth_metric == DepthMetric::Relative)
             .with("C_NORMAL", s.c_normal)
             .with("C_SHADING", s.c_shading)
             .with("T_MIN", s.t_min)

@@ -7,6 +7,26 @@ use glam::{DMat4, DVec2, DVec3, DVec4};
 
 use super::Lighting;
 
+/// The largest camera coordinate accepted: far beyond any scene, and far from f32's range once
+/// geometry is made camera-relative.
+pub const MAX_COORDINATE: f64 = 1e12;
+/// The vertical fields of view accepted, in degrees.
+pub const FOV_Y_DEGREES: [f64; 2] = [0.01, 179.0];
+
+/// What is wrong with a camera: the field (`position`, `target`, `up`, `fov_y`, `near`, `far`)
+/// and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraError {
+    pub field: &'static str,
+    pub message: String,
+}
+
+impl std::fmt::Display for CameraError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.field, self.message)
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Camera {
     pub position: DVec3,
@@ -29,6 +49,39 @@ impl Camera {
             near: 0.05,
             far: 500.0,
         }
+    }
+
+    /// Checks that the renderer can draw through this camera: finite coordinates within
+    /// ±[`MAX_COORDINATE`], a view direction that is neither zero (a target on top of the
+    /// position) nor parallel to `up`, a field of view within [`FOV_Y_DEGREES`], and
+    /// 1e-6 ≤ near < far ≤ 1e12 (they reach the GPU as f32). An infinite far plane passes: the
+    /// caller replaces it from the scene's bounds.
+    pub fn validate(&self) -> Result<(), CameraError> {
+        let fail = |field: &'static str, message: String| Err(CameraError { field, message });
+        for (field, v) in [("position", self.position), ("target", self.forward), ("up", self.up)] {
+            if !v.is_finite() || v.abs().max_element() > MAX_COORDINATE {
+                return fail(field, format!("{v} must be finite and within ±{MAX_COORDINATE:e}"));
+            }
+        }
+        // Relative to the position's magnitude: 1e-200 apart is "on top of it" at any scale.
+        if self.forward.length() <= 1e-9 * self.position.length().max(1.0) {
+            return fail("target", format!("lies on the position {} (no view direction)", self.position));
+        }
+        if self.up.length() == 0.0 || self.forward.normalize().cross(self.up.normalize()).length() < 1e-6 {
+            return fail("up", format!("{} is zero or parallel to the view direction", self.up));
+        }
+        let degrees = self.fov_y.to_degrees();
+        let [lowest, widest] = FOV_Y_DEGREES;
+        if !(lowest..=widest).contains(&degrees) {
+            return fail("fov_y", format!("{degrees}° must be within [{lowest}°, {widest}°]"));
+        }
+        if !(1e-6..=1e9).contains(&self.near) {
+            return fail("near", format!("{} must be within [1e-6, 1e9]", self.near));
+        }
+        if !(self.far > self.near && (self.far <= 1e12 || self.far == f64::INFINITY)) {
+            return fail("far", format!("{} must be > near ({}) and at most 1e12", self.far, self.near));
+        }
+        Ok(())
     }
 
     /// World to view: right-handed, the camera looks down −z.
@@ -201,6 +254,24 @@ mod tests {
         let [sx, sy, ox, oy] = part.tile.map(f64::from);
         let back = DVec2::new(ndc_tile.x * sx + ox, ndc_tile.y * sy + oy);
         assert!((back - project(&whole, point)).length() < 1e-5);
+    }
+
+    #[test]
+    fn degenerate_cameras_name_their_field() {
+        let good = Camera::look_at(DVec3::new(0.0, 1.0, 5.0), DVec3::ZERO, 60.0);
+        assert_eq!(good.validate(), Ok(()));
+        let field = |camera: Camera| camera.validate().unwrap_err().field;
+        assert_eq!(field(Camera { fov_y: 0.0, ..good }), "fov_y");
+        assert_eq!(field(Camera { fov_y: 1e-300, ..good }), "fov_y");
+        assert_eq!(field(Camera { fov_y: std::f64::consts::PI, ..good }), "fov_y");
+        assert_eq!(field(Camera { near: 0.0, ..good }), "near");
+        assert_eq!(field(Camera { near: 10.0, far: 5.0, ..good }), "far");
+        assert_eq!(field(Camera { position: DVec3::splat(1e308), ..good }), "position");
+        assert_eq!(field(Camera { position: DVec3::new(f64::NAN, 0.0, 0.0), ..good }), "position");
+        assert_eq!(field(Camera { forward: DVec3::new(0.0, 0.0, -1e-200), ..good }), "target");
+        assert_eq!(field(Camera { forward: DVec3::Y * 3.0, ..good }), "up");
+        assert_eq!(field(Camera { up: DVec3::ZERO, ..good }), "up");
+        assert_eq!(Camera { far: f64::INFINITY, ..good }.validate(), Ok(()), "the caller picks far");
     }
 
     #[test]

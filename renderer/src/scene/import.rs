@@ -3,19 +3,22 @@
 //! generated where a primitive has none), and the first camera.
 
 use std::collections::{BTreeMap, HashMap};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::{DMat3, DMat4, DVec3, Vec3};
 
 use super::{AlphaMode, Camera, DrawClass, Material, Scene, Texture, Vertex};
 use crate::RenderError;
 
-/// Reads a `.gltf` or `.glb` file and everything it references.
+/// Reads a `.gltf` or `.glb` file and everything it references. Every error names the part of
+/// the file at fault (`nodes[3]`, `accessors[2]`, `images[0] (uri textures/a.png)`, …).
 pub fn load_gltf(path: &Path) -> Result<Scene, RenderError> {
     let fail = |message: String| RenderError::Scene { path: path.to_path_buf(), message };
+    regular_file(path).map_err(|e| fail(format!("cannot read glTF: {e}")))?;
     let gltf::Gltf { document, blob } =
         gltf::Gltf::open(path).map_err(|e| fail(format!("cannot read glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
+    check_external_files(&document, base).map_err(fail)?;
     let buffers = gltf::import_buffers(&document, Some(base), blob)
         .map_err(|e| fail(format!("cannot read buffers: {e}")))?;
 
@@ -29,22 +32,100 @@ pub fn load_gltf(path: &Path) -> Result<Scene, RenderError> {
         )));
     }
     importer.scene.materials = materials;
-    let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next()) {
-        Some(scene) => scene.nodes().collect(),
-        None => document.nodes().collect(),
-    };
-    for node in roots {
-        importer.visit(&node, DMat4::IDENTITY, &buffers).map_err(fail)?;
-    }
+    importer.visit_scene(&document, &buffers).map_err(fail)?;
 
     let mut scene = importer.finish();
-    scene.textures = decode_textures(&document, base, &buffers, &image_of_texture)
-        .map_err(|e| fail(format!("cannot decode texture: {e}")))?;
+    scene.textures = decode_textures(&document, base, &buffers, &image_of_texture).map_err(fail)?;
     for material in &mut scene.materials {
         material.texture = material.texture.map(|image| image_of_texture[&image]);
     }
     scene.generator = document.as_json().asset.generator.clone();
     Ok(scene)
+}
+
+/// Ok if `path` is a regular file (after symlinks); else why not, in words: a FIFO or a device
+/// would block or never end, and a symlink loop is not "missing".
+pub fn regular_file(path: &Path) -> Result<(), String> {
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_file() => Ok(()),
+        Ok(meta) if meta.is_dir() => Err(format!("{} is a folder, not a file", path.display())),
+        Ok(_) => Err(format!("{} is not a regular file (a FIFO, socket or device)", path.display())),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            Err(format!("{} does not exist", path.display()))
+        }
+        Err(e) => Err(format!("{}: {e}", path.display())),
+    }
+}
+
+/// Checks every buffer and image the file names by URI before anything reads them: the URI
+/// stays inside the file's folder, and names a regular file that exists.
+fn check_external_files(document: &gltf::Document, base: &Path) -> Result<(), String> {
+    let buffers = document.buffers().filter_map(|b| match b.source() {
+        gltf::buffer::Source::Uri(uri) => Some((format!("buffers[{}]", b.index()), uri)),
+        gltf::buffer::Source::Bin => None,
+    });
+    let images = document.images().filter_map(|i| match i.source() {
+        gltf::image::Source::Uri { uri, .. } => Some((format!("images[{}]", i.index()), uri)),
+        gltf::image::Source::View { .. } => None,
+    });
+    for (what, uri) in buffers.chain(images) {
+        if uri.starts_with("data:") {
+            continue;
+        }
+        // `file:`, `http:` …: the gltf crate would follow them out of the folder.
+        if uri.split(['/', '?', '#']).next().is_some_and(|first| first.contains(':')) {
+            return Err(format!(
+                "{what}.uri: `{uri}` has a scheme; only relative paths and data: URIs are read"
+            ));
+        }
+        let relative = PathBuf::from(percent_decode(uri));
+        if escapes(&relative) {
+            return Err(format!("{what}.uri: `{uri}` leaves the glTF file's folder"));
+        }
+        regular_file(&base.join(&relative)).map_err(|e| format!("{what}.uri: {e}"))?;
+    }
+    Ok(())
+}
+
+/// Whether a relative path leaves the folder it is relative to: absolute, or more `..` than
+/// folders before them (judged on the text, as a URI is).
+pub fn escapes(path: &Path) -> bool {
+    use std::path::Component;
+    let mut depth = 0i64;
+    for component in path.components() {
+        match component {
+            Component::Prefix(_) | Component::RootDir => return true,
+            Component::ParentDir => depth -= 1,
+            Component::Normal(_) => depth += 1,
+            Component::CurDir => {}
+        }
+        if depth < 0 {
+            return true;
+        }
+    }
+    false
+}
+
+/// `%XX` escapes of a URI decoded (glTF URIs are RFC 3986 references); anything malformed is
+/// kept as it is.
+fn percent_decode(uri: &str) -> String {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = |b: u8| (b as char).to_digit(16);
+        match (bytes[i], bytes.get(i + 1).copied().and_then(hex), bytes.get(i + 2).copied().and_then(hex)) {
+            (b'%', Some(high), Some(low)) => {
+                out.push((high * 16 + low) as u8);
+                i += 3;
+            }
+            (byte, _, _) => {
+                out.push(byte);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
 }
 
 /// The `asset.generator` string of a glTF file, if it can be read.
@@ -95,22 +176,67 @@ fn import_materials(document: &gltf::Document) -> (Vec<Material>, HashMap<usize,
     (materials, image_of_texture)
 }
 
+/// The scene's origin is a multiple of this many units (see `Importer::finish`).
+pub const ORIGIN_GRID: f64 = 1024.0;
+
 #[derive(Default)]
 struct Importer {
     scene: Scene,
+    /// Each vertex's world position, in f64.
+    world: Vec<DVec3>,
     /// Triangles as vertex-index triples, by draw class.
     triangles: BTreeMap<DrawClass, Vec<[u32; 3]>>,
 }
 
 impl Importer {
+    /// Walks the default scene's node trees depth first (children in order), without recursion:
+    /// a hierarchy thousands of nodes deep must not overflow the stack. A node reached twice
+    /// is an error: glTF's nodes form disjoint trees, so it is a cycle or a second parent.
+    fn visit_scene(
+        &mut self,
+        document: &gltf::Document,
+        buffers: &[gltf::buffer::Data],
+    ) -> Result<(), String> {
+        let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next()) {
+            Some(scene) => scene.nodes().collect(),
+            None => {
+                // No scene: every node that is nobody's child is a root.
+                let mut is_child = vec![false; document.nodes().len()];
+                for child in document.nodes().flat_map(|n| n.children()) {
+                    is_child[child.index()] = true;
+                }
+                document.nodes().filter(|n| !is_child[n.index()]).collect()
+            }
+        };
+        let mut reached = vec![false; document.nodes().len()];
+        let mut stack: Vec<(gltf::Node, DMat4)> =
+            roots.into_iter().rev().map(|n| (n, DMat4::IDENTITY)).collect();
+        while let Some((node, parent)) = stack.pop() {
+            if std::mem::replace(&mut reached[node.index()], true) {
+                return Err(format!(
+                    "nodes[{}]: reached twice: the node hierarchy has a cycle or a node with two parents \
+                     (glTF nodes must form disjoint trees)",
+                    node.index()
+                ));
+            }
+            let world = self.visit(&node, parent, buffers)?;
+            stack.extend(node.children().map(|child| (child, world)).collect::<Vec<_>>().into_iter().rev());
+        }
+        Ok(())
+    }
+
+    /// Adds one node's mesh and camera; returns its world transform.
     fn visit(
         &mut self,
         node: &gltf::Node,
         parent: DMat4,
         buffers: &[gltf::buffer::Data],
-    ) -> Result<(), String> {
+    ) -> Result<DMat4, String> {
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent * local;
+        if !world.is_finite() {
+            return Err(format!("nodes[{}]: the transform is not finite", node.index()));
+        }
         if let Some(mesh) = node.mesh() {
             for primitive in mesh.primitives() {
                 self.add_primitive(&mesh, &primitive, world, buffers)?;
@@ -119,10 +245,7 @@ impl Importer {
         if let (Some(camera), None) = (node.camera(), &self.scene.camera) {
             self.scene.camera = camera_from_node(&camera, world);
         }
-        for child in node.children() {
-            self.visit(&child, world, buffers)?;
-        }
-        Ok(())
+        Ok(world)
     }
 
     fn add_primitive(
@@ -144,20 +267,44 @@ impl Importer {
             // Points and lines have no surface to shade; skipping them keeps the rest usable.
             return Ok(());
         }
+        for (semantic, accessor) in primitive.attributes() {
+            check_accessor(&accessor, buffers)
+                .map_err(|e| format!("{}: attributes.{semantic:?}: {e}", name()))?;
+        }
+        if let Some(accessor) = primitive.indices() {
+            check_accessor(&accessor, buffers).map_err(|e| format!("{}: indices: {e}", name()))?;
+        }
         let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(|d| &d.0[..]));
         let positions: Vec<[f32; 3]> = reader
             .read_positions()
             .ok_or_else(|| format!("{}: attributes.POSITION is missing", name()))?
             .collect();
+        if let Some(i) = positions.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+            return Err(format!(
+                "{}: attributes.POSITION: vertex {i} is {:?}, not finite",
+                name(),
+                positions[i]
+            ));
+        }
         let uvs: Vec<[f32; 2]> = match reader.read_tex_coords(0) {
             Some(uvs) => uvs.into_f32().collect(),
             None => vec![[0.0; 2]; positions.len()],
         };
+        if let Some(i) = uvs.iter().position(|uv| !uv.iter().all(|c| c.is_finite())) {
+            return Err(format!("{}: attributes.TEXCOORD_0: vertex {i} is {:?}, not finite", name(), uvs[i]));
+        }
         let normals: Option<Vec<[f32; 3]>> = reader.read_normals().map(Iterator::collect);
         let indices: Vec<u32> = match reader.read_indices() {
             Some(indices) => indices.into_u32().collect(),
             None => (0..positions.len() as u32).collect(),
         };
+        if !indices.len().is_multiple_of(3) {
+            return Err(format!(
+                "{}: {} indices, not a multiple of 3: triangles need three each",
+                name(),
+                indices.len()
+            ));
+        }
         if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
             return Err(format!(
                 "{}: indices: {bad} is out of range for {} vertices",
@@ -175,14 +322,16 @@ impl Importer {
         // A mirroring transform turns counter-clockwise front faces clockwise (glTF 2.0, 3.7.4).
         let mirrored = DMat3::from_mat4(world).determinant() < 0.0;
         let normal_matrix = DMat3::from_mat4(world).inverse().transpose();
-        let to_world = |p: [f32; 3]| world.transform_point3(DVec3::from(p.map(f64::from))).as_vec3();
-        let vertex = |position: Vec3, normal: Vec3, uv: [f32; 2]| Vertex {
-            position: position.to_array(),
+        // World positions stay f64 until `finish` knows the scene's origin.
+        let to_world = |p: [f32; 3]| world.transform_point3(DVec3::from(p.map(f64::from)));
+        let vertex = |normal: Vec3, uv: [f32; 2]| Vertex {
+            position: [0.0; 3],
             normal: normal.to_array(),
             uv,
             material: material as u32,
         };
         let vertices = &mut self.scene.vertices;
+        let positions_world = &mut self.world;
         let triangles = self.triangles.entry(class).or_default();
         let wind = |t: &[u32]| if mirrored { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] };
 
@@ -191,22 +340,27 @@ impl Importer {
                 let base = vertices.len() as u32;
                 for ((p, n), uv) in positions.iter().zip(&normals).zip(&uvs) {
                     let n = (normal_matrix * DVec3::from(n.map(f64::from))).normalize_or_zero();
-                    vertices.push(vertex(to_world(*p), n.as_vec3(), *uv));
+                    vertices.push(vertex(n.as_vec3(), *uv));
+                    positions_world.push(to_world(*p));
                 }
                 let added: Vec<[u32; 3]> =
                     indices.chunks_exact(3).map(|t| wind(t).map(|i| base + i)).collect();
-                repair_normals(&mut vertices[base as usize..], &added, base);
+                let from = base as usize;
+                repair_normals(&mut vertices[from..], &positions_world[from..], &added, base);
                 triangles.extend(added);
             }
             None => {
                 // Flat normals: every triangle gets its own three vertices.
                 for t in indices.chunks_exact(3) {
                     let corners = wind(t).map(|i| (to_world(positions[i as usize]), uvs[i as usize]));
-                    let normal =
-                        (corners[1].0 - corners[0].0).cross(corners[2].0 - corners[0].0).normalize_or_zero();
+                    let normal = (corners[1].0 - corners[0].0)
+                        .cross(corners[2].0 - corners[0].0)
+                        .normalize_or_zero()
+                        .as_vec3();
                     let base = vertices.len() as u32;
                     for (position, uv) in corners {
-                        vertices.push(vertex(position, normal, uv));
+                        vertices.push(vertex(normal, uv));
+                        positions_world.push(position);
                     }
                     triangles.push([base, base + 1, base + 2]);
                 }
@@ -215,7 +369,26 @@ impl Importer {
         Ok(())
     }
 
+    /// Sorts the triangles by draw class and makes positions relative to the scene's origin:
+    /// the centre of its bounds, rounded to a multiple of [`ORIGIN_GRID`] units, so geometry
+    /// far from the file's origin keeps f32 precision (and a scene near it keeps its bits).
     fn finish(mut self) -> Scene {
+        let (lo, hi) = self
+            .world
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        let origin = if self.world.is_empty() {
+            DVec3::ZERO
+        } else {
+            ((lo + hi) * 0.5 / ORIGIN_GRID).round() * ORIGIN_GRID
+        };
+        for (vertex, world) in self.scene.vertices.iter_mut().zip(&self.world) {
+            vertex.position = (*world - origin).as_vec3().to_array();
+        }
+        self.scene.origin = origin;
+        if let Some(camera) = &mut self.scene.camera {
+            camera.position -= origin;
+        }
         for (class, triangles) in self.triangles {
             let start = self.scene.indices.len() as u32;
             self.scene.indices.extend(triangles.into_iter().flatten());
@@ -225,9 +398,50 @@ impl Importer {
     }
 }
 
+/// Checks that an accessor's elements lie inside its buffer view and the view inside its
+/// buffer, so that a short file is reported as short rather than as a missing attribute.
+fn check_accessor(accessor: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<(), String> {
+    let Some(view) = accessor.view() else {
+        return Ok(());
+    };
+    let index = accessor.index();
+    let buffer = view.buffer().index();
+    let available = buffers.get(buffer).map_or(0, |data| data.0.len());
+    let end = view.offset().checked_add(view.length());
+    if end.is_none_or(|end| end > available) {
+        return Err(format!(
+            "bufferViews[{}] ends at byte {}, past the {available} bytes of buffers[{buffer}]",
+            view.index(),
+            end.map_or("beyond 2⁶⁴".into(), |end| end.to_string())
+        ));
+    }
+    let element = accessor.size();
+    let stride = view.stride().unwrap_or(element);
+    // Counts come from the file: overflow means "too long" like any other excess.
+    let needed = match accessor.count() {
+        0 => Some(0),
+        count => stride
+            .checked_mul(count - 1)
+            .and_then(|n| n.checked_add(accessor.offset()))
+            .and_then(|n| n.checked_add(element)),
+    };
+    let needed = needed.unwrap_or(usize::MAX);
+    if needed > view.length() {
+        return Err(format!(
+            "accessors[{index}]: {} elements of {element} bytes from offset {} need {needed} bytes, \
+             bufferViews[{}] holds {}",
+            accessor.count(),
+            accessor.offset(),
+            view.index(),
+            view.length()
+        ));
+    }
+    Ok(())
+}
+
 /// Replaces zero or non-finite vertex normals (which files do contain) with the area-weighted
 /// normal of the primitive's triangles around the vertex, so shaders can normalize without NaN.
-fn repair_normals(vertices: &mut [Vertex], triangles: &[[u32; 3]], base: u32) {
+fn repair_normals(vertices: &mut [Vertex], world: &[DVec3], triangles: &[[u32; 3]], base: u32) {
     let broken = |v: &Vertex| {
         let n = Vec3::from(v.normal);
         !(n.is_finite() && n.length_squared() > 1e-12)
@@ -238,9 +452,8 @@ fn repair_normals(vertices: &mut [Vertex], triangles: &[[u32; 3]], base: u32) {
     let mut sums = vec![Vec3::ZERO; vertices.len()];
     for t in triangles {
         let [a, b, c] = t.map(|i| (i - base) as usize);
-        let p = |i: usize| Vec3::from(vertices[i].position);
         // Unnormalized: the cross product's length weights by area.
-        let face = (p(b) - p(a)).cross(p(c) - p(a));
+        let face = ((world[b] - world[a]).cross(world[c] - world[a])).as_vec3();
         for i in [a, b, c] {
             sums[i] += face;
         }
@@ -267,6 +480,10 @@ fn camera_from_node(camera: &gltf::Camera, world: DMat4) -> Option<Camera> {
     })
 }
 
+/// The largest texture side decoded (the largest 2D texture Vulkan devices commonly allow);
+/// a larger image is refused from its header, before its pixels are read.
+pub const MAX_TEXTURE_SIDE: u32 = 16384;
+
 /// Decodes the images used as base-colour textures, in parallel: a Sponza-sized scene has
 /// dozens of PNG/JPEG files and decoding dominates its load time.
 fn decode_textures(
@@ -274,7 +491,7 @@ fn decode_textures(
     base: &Path,
     buffers: &[gltf::buffer::Data],
     image_of_texture: &HashMap<usize, usize>,
-) -> Result<Vec<Texture>, gltf::Error> {
+) -> Result<Vec<Texture>, String> {
     let images: Vec<gltf::Image> = document.images().collect();
     let mut wanted: Vec<(usize, usize)> = image_of_texture.iter().map(|(&i, &t)| (i, t)).collect();
     wanted.sort_by_key(|&(_, texture)| texture);
@@ -287,10 +504,7 @@ fn decode_textures(
                 let images = &images;
                 scope.spawn(move || {
                     part.iter()
-                        .map(|&(image, _)| {
-                            gltf::image::Data::from_source(images[image].source(), Some(base), buffers)
-                                .map(to_rgba8)
-                        })
+                        .map(|&(image, _)| decode_image(&images[image], base, buffers))
                         .collect::<Result<Vec<_>, _>>()
                 })
             })
@@ -301,6 +515,53 @@ fn decode_textures(
         }
         Ok(textures)
     })
+}
+
+/// One image to RGBA8. Errors name the image and where it comes from.
+fn decode_image(image: &gltf::Image, base: &Path, buffers: &[gltf::buffer::Data]) -> Result<Texture, String> {
+    let index = image.index();
+    let (bytes, what) = match image.source() {
+        gltf::image::Source::View { view, .. } => {
+            let range = view.offset()..view.offset() + view.length();
+            let what = format!("images[{index}] (bufferViews[{}])", view.index());
+            let bytes = buffers[view.buffer().index()]
+                .0
+                .get(range)
+                .ok_or_else(|| format!("{what}: the view runs past its buffer"))?;
+            (std::borrow::Cow::Borrowed(bytes), what)
+        }
+        gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
+            // Embedded base64: the gltf crate decodes it.
+            return gltf::image::Data::from_source(image.source(), None, buffers)
+                .map(to_rgba8)
+                .map_err(|e| format!("images[{index}] (data URI): {e}"));
+        }
+        gltf::image::Source::Uri { uri, .. } => {
+            let path = base.join(percent_decode(uri));
+            let what = format!("images[{index}] (uri {uri})");
+            let bytes = std::fs::read(&path).map_err(|e| format!("{what}: {}: {e}", path.display()))?;
+            (std::borrow::Cow::Owned(bytes), what)
+        }
+    };
+    let reader = || {
+        image::ImageReader::new(std::io::Cursor::new(&bytes[..]))
+            .with_guessed_format()
+            .map_err(|e| format!("{what}: {e}"))
+    };
+    let (width, height) = reader()?.into_dimensions().map_err(|e| format!("{what}: cannot decode: {e}"))?;
+    if width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
+        return Err(format!(
+            "{what}: {width}×{height} is larger than the {MAX_TEXTURE_SIDE}×{MAX_TEXTURE_SIDE} textures aabench decodes"
+        ));
+    }
+    let mut limits = image::Limits::default();
+    // The largest accepted image at 16 bits × 4 channels; the crate's default (512 MiB) would
+    // refuse images the renderer handles by scaling them down.
+    limits.max_alloc = Some(u64::from(MAX_TEXTURE_SIDE).pow(2) * 8);
+    let mut decoder = reader()?;
+    decoder.limits(limits);
+    let decoded = decoder.decode().map_err(|e| format!("{what}: cannot decode: {e}"))?;
+    Ok(Texture { width, height, rgba: decoded.into_rgba8().into_raw() })
 }
 
 fn to_rgba8(data: gltf::image::Data) -> Texture {

@@ -9,8 +9,8 @@ pub mod shadow;
 mod upload;
 pub mod write;
 
-pub use camera::{Camera, FrameUniforms, Tile};
-pub use import::{load_gltf, read_generator};
+pub use camera::{Camera, CameraError, FrameUniforms, Tile};
+pub use import::{MAX_TEXTURE_SIDE, escapes, load_gltf, read_generator, regular_file};
 pub use shadow::{MAX_SHADOW_LIGHTS, Shadow, ShadowCubes};
 pub use upload::{GpuScene, MAX_LIGHTS};
 
@@ -118,8 +118,12 @@ pub struct Scene {
     pub draws: Vec<(DrawClass, std::ops::Range<u32>)>,
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
-    /// The first camera found in the node hierarchy, if any.
+    /// The first camera found in the node hierarchy, if any (relative to `origin`).
     pub camera: Option<Camera>,
+    /// Where the scene's coordinates start, in the file's world space: vertices, bounds and
+    /// the camera are relative to it, so geometry far from the file's origin keeps f32
+    /// precision. Manifest cameras and lights are moved by it before rendering.
+    pub origin: glam::DVec3,
     /// The `asset.generator` string of the file, used to tell stale generated files.
     pub generator: Option<String>,
 }

@@ -92,6 +92,8 @@ pub struct GltfWriter {
     meshes: Vec<Value>,
     nodes: Vec<Value>,
     cameras: Vec<Value>,
+    /// A root node's uniform scale and translation over every node, if any.
+    placement: Option<(f64, [f64; 3])>,
 }
 
 const FLOAT: u32 = 5126;
@@ -113,6 +115,7 @@ impl GltfWriter {
             meshes: Vec::new(),
             nodes: Vec::new(),
             cameras: Vec::new(),
+            placement: None,
         }
     }
 
@@ -226,12 +229,32 @@ impl GltfWriter {
         }));
     }
 
+    /// Puts every node under one root node that scales by `scale` and then moves by
+    /// `translation`; the geometry keeps its coordinates.
+    pub fn place(&mut self, scale: f64, translation: [f64; 3]) {
+        self.placement = Some((scale, translation));
+    }
+
     fn document(&self) -> Value {
+        let mut nodes = self.nodes.clone();
+        let roots: Vec<usize> = match self.placement {
+            None => (0..nodes.len()).collect(),
+            Some((scale, translation)) => {
+                let children: Vec<usize> = (0..nodes.len()).collect();
+                nodes.push(json!({
+                    "name": "placement",
+                    "children": children,
+                    "scale": [scale, scale, scale],
+                    "translation": translation,
+                }));
+                vec![nodes.len() - 1]
+            }
+        };
         let mut document = json!({
             "asset": {"version": "2.0", "generator": self.generator},
             "scene": 0,
-            "scenes": [{"nodes": (0..self.nodes.len()).collect::<Vec<_>>()}],
-            "nodes": self.nodes,
+            "scenes": [{"nodes": roots}],
+            "nodes": nodes,
             "meshes": self.meshes,
             "materials": self.materials,
             "accessors": self.accessors,
@@ -246,7 +269,18 @@ impl GltfWriter {
                 json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}]);
         }
         if !self.cameras.is_empty() {
-            document["cameras"] = json!(self.cameras);
+            let mut cameras = self.cameras.clone();
+            // Clip planes are distances in the camera's space, which the root's scale does
+            // not reach: scale them with the scene.
+            if let Some((scale, _)) = self.placement {
+                for camera in &mut cameras {
+                    for plane in ["znear", "zfar"] {
+                        let distance = camera["perspective"][plane].as_f64().unwrap_or(0.0);
+                        camera["perspective"][plane] = json!(distance * scale);
+                    }
+                }
+            }
+            document["cameras"] = json!(cameras);
         }
         document
     }

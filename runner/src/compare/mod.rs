@@ -179,7 +179,7 @@ pub fn compare(run: &RunRecord, baselines: &BaselineSet, fail_on: FailOn) -> Ver
         // A scene that failed (to load, to render its truth, in a mode) or was interrupted
         // fails the gate, baseline or not.
         if scene.status != Status::Ok {
-            let status = format!("{:?}", scene.status).to_lowercase();
+            let status = scene.status.to_string();
             let detail = scene.error.clone().unwrap_or_else(|| format!("the scene's status is {status}"));
             checks.push(status_check(scene, "*", Outcome::Failed, &detail));
         }

@@ -67,7 +67,7 @@ fn summary(page: &mut String, run: &RunRecord, verdict: Option<&Verdict>) {
          LP_NUM_THREADS={} · {} build<br>platform key <code>{}</code><br>{} repetitions after {} warm-up round(s), \
          {}; extra samples: {}{}</p>",
         run.tier.name(),
-        format!("{:?}", run.status).to_lowercase(),
+        run.status,
         escape(&run.started_at),
         escape(run.finished_at.as_deref().unwrap_or("–")),
         escape(&p.adapter),
@@ -129,7 +129,7 @@ fn scene_section(
         "<p class=\"meta\">{resolution} · {} triangles · {} textures · status <b>{}</b>{} · ground truth: {truth}</p>",
         scene.triangles.unwrap_or(0),
         scene.textures.unwrap_or(0),
-        format!("{:?}", scene.status).to_lowercase(),
+        scene.status,
         scene.error.as_ref().map_or(String::new(), |e| format!(" — {}", escape(e)))
     );
     let checks: Vec<&Check> =

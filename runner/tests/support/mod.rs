@@ -4,8 +4,10 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output};
 use std::sync::Mutex;
+use std::sync::mpsc::Receiver;
+use std::time::Duration;
 
 use serde_json::{Value, json};
 
@@ -88,4 +90,29 @@ pub fn read_json(path: &Path) -> Value {
 /// Writes a JSON file.
 pub fn write_json(path: &Path, value: &Value) {
     std::fs::write(path, serde_json::to_vec_pretty(value).unwrap()).unwrap();
+}
+
+/// The lines a child writes to its piped stderr, as they come (read on a thread: an unread
+/// pipe would fill and block the child).
+pub fn stderr_lines(child: &mut Child) -> Receiver<String> {
+    let stderr = child.stderr.take().expect("stderr piped");
+    let (send, lines) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        use std::io::BufRead;
+        for line in std::io::BufReader::new(stderr).lines().map_while(Result::ok) {
+            let _ = send.send(line);
+        }
+    });
+    lines
+}
+
+/// Reads lines until one contains `text`; panics if the child goes quiet for two minutes.
+pub fn wait_for_line(lines: &Receiver<String>, text: &str) {
+    loop {
+        let line =
+            lines.recv_timeout(Duration::from_secs(120)).unwrap_or_else(|_| panic!("no line with `{text}`"));
+        if line.contains(text) {
+            return;
+        }
+    }
 }

@@ -17,6 +17,9 @@ use super::write::{GltfWriter, MaterialDesc};
 /// Bumped whenever any generator's output changes, so cached files are regenerated.
 pub const GENERATOR_VERSION: u32 = 3;
 
+/// How every generated file's `asset.generator` starts: what marks a file aabench may replace.
+pub const GENERATOR_STAMP: &str = "aabench-gen/";
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Generator {
     /// A Sponza-like court: two storeys of fluted columns and arches, balustrades, curtains,
@@ -32,40 +35,112 @@ pub enum Generator {
     Plane,
     /// A light plane in front of a dark one, split by one straight, slightly tilted edge.
     Edge,
+    /// A Cornell box, 0.55 m (34 triangles): the scale test, placed in mm, m or km.
+    Cornell,
+    /// Triangles far smaller than a sample, needles, and a dense fence at a grazing angle.
+    Subpixel,
+    /// Zero-area triangles, zero-length and non-unit normals, coincident vertices, UVs far
+    /// outside [0, 1].
+    Degenerate,
 }
 
 impl Generator {
-    pub const ALL: [Generator; 6] = [
+    pub const ALL: [Generator; 9] = [
         Generator::Atrium,
         Generator::Thin,
         Generator::Specular,
         Generator::ShadowRoom,
         Generator::Plane,
         Generator::Edge,
+        Generator::Cornell,
+        Generator::Subpixel,
+        Generator::Degenerate,
     ];
 
     /// The `asset.generator` string of a current file made by this generator and seed.
     pub fn signature(self, seed: u64) -> String {
-        format!("aabench-gen/{GENERATOR_VERSION} {self} seed={seed}")
+        Generated::new(self, seed).signature()
     }
 
     /// Builds the scene in memory.
     pub fn build(self, seed: u64) -> GltfWriter {
-        let mut builder = Builder::new(&self.signature(seed), seed);
-        match self {
+        Generated::new(self, seed).build()
+    }
+
+    /// Builds the scene and writes it as GLB to `path`, atomically.
+    pub fn write(self, seed: u64, path: &Path) -> std::io::Result<()> {
+        Generated::new(self, seed).write(path)
+    }
+}
+
+/// Where a generated scene sits in its file: uniformly scaled about the origin, then moved.
+/// The geometry keeps its own coordinates; a root node carries the transform, so a scene a
+/// long way from the origin loses no precision in the file (glTF positions are f32).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    pub scale: f64,
+    pub offset: [f64; 3],
+}
+
+impl Placement {
+    pub const IDENTITY: Placement = Placement { scale: 1.0, offset: [0.0; 3] };
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Placement::IDENTITY
+    }
+}
+
+/// A generator, its seed and the scene's placement: everything that decides a generated file.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Generated {
+    pub generator: Generator,
+    pub seed: u64,
+    pub placement: Placement,
+}
+
+impl Generated {
+    pub fn new(generator: Generator, seed: u64) -> Generated {
+        Generated { generator, seed, placement: Placement::IDENTITY }
+    }
+
+    /// The `asset.generator` string of a current file: generator, version, seed and (when not
+    /// the identity) placement.
+    pub fn signature(&self) -> String {
+        let Generated { generator, seed, placement } = *self;
+        let mut signature = format!("{GENERATOR_STAMP}{GENERATOR_VERSION} {generator} seed={seed}");
+        if placement != Placement::IDENTITY {
+            let [x, y, z] = placement.offset;
+            signature += &format!(" scale={} offset={x},{y},{z}", placement.scale);
+        }
+        signature
+    }
+
+    /// Builds the scene in memory.
+    pub fn build(&self) -> GltfWriter {
+        let mut builder = Builder::new(&self.signature(), self.seed);
+        match self.generator {
             Generator::Atrium => scenes::atrium(&mut builder),
             Generator::Thin => scenes::thin(&mut builder),
             Generator::Specular => scenes::specular(&mut builder),
             Generator::ShadowRoom => scenes::shadow_room(&mut builder),
             Generator::Plane => scenes::plane(&mut builder),
             Generator::Edge => scenes::edge(&mut builder),
+            Generator::Cornell => scenes::cornell(&mut builder),
+            Generator::Subpixel => scenes::subpixel(&mut builder),
+            Generator::Degenerate => scenes::degenerate(&mut builder),
         }
-        builder.finish()
+        let mut writer = builder.finish();
+        if self.placement != Placement::IDENTITY {
+            writer.place(self.placement.scale, self.placement.offset);
+        }
+        writer
     }
 
     /// Builds the scene and writes it as GLB to `path`, atomically.
-    pub fn write(self, seed: u64, path: &Path) -> std::io::Result<()> {
-        self.build(seed).write(path)
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        self.build().write(path)
     }
 }
 
@@ -78,6 +153,9 @@ impl fmt::Display for Generator {
             Generator::ShadowRoom => "shadow-room",
             Generator::Plane => "plane",
             Generator::Edge => "edge",
+            Generator::Cornell => "cornell",
+            Generator::Subpixel => "subpixel",
+            Generator::Degenerate => "degenerate",
         })
     }
 }

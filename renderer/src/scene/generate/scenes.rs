@@ -284,3 +284,105 @@ pub(super) fn edge(b: &mut Builder) {
     b.mesh(light).append(&mesh::wall(100.0, 100.0, 1, 1, 1.0), tilt);
     b.camera([0.0, 0.0, 4.0], [0.0, 0.0, 0.0], 60.0, 50.0);
 }
+
+/// The Cornell box, 0.55 m on a side: white floor, ceiling and back wall, a red and a green
+/// side wall, a tall and a short block (34 triangles). Placed in millimetres or kilometres by
+/// the manifest's `generate.scale`, it tests that sample maps do not depend on the unit.
+pub(super) fn cornell(b: &mut Builder) {
+    let white = b.material(MaterialDesc::new("white", [0.73, 0.73, 0.73], 0.9));
+    let red = b.material(MaterialDesc::new("red", [0.65, 0.05, 0.05], 0.9));
+    let green = b.material(MaterialDesc::new("green", [0.12, 0.45, 0.15], 0.9));
+    let size = 0.55f32;
+    let half = size / 2.0;
+    let panel = mesh::wall(size, size, 1, 1, 1.0);
+    let upside_down = Quat::from_rotation_x(std::f32::consts::PI);
+    b.mesh(white).append(&mesh::floor(size, size, 1, 1, 1.0), at(0.0, 0.0, -half));
+    b.mesh(white).append(
+        &mesh::floor(size, size, 1, 1, 1.0),
+        Affine3A::from_rotation_translation(upside_down, Vec3::new(0.0, size, -half)),
+    );
+    b.mesh(white).append(&panel, at(0.0, half, -size));
+    b.mesh(red).append(&panel, turned(std::f32::consts::FRAC_PI_2, -half, half, -half));
+    b.mesh(green).append(&panel, turned(-std::f32::consts::FRAC_PI_2, half, half, -half));
+    let tall = mesh::cuboid(Vec3::new(0.165, 0.33, 0.165), 1.0);
+    b.mesh(white).append(&tall, turned(0.3, -0.09, 0.165, -0.35));
+    let short = mesh::cuboid(Vec3::new(0.165, 0.165, 0.165), 1.0);
+    b.mesh(white).append(&short, turned(-0.3, 0.09, 0.0825, -0.17));
+    b.camera([0.0, 0.275, 1.0], [0.0, 0.275, 0.0], 40.0, 5.0);
+}
+
+/// Geometry far below the sampling rate: a 40 × 40 grid of 2 mm triangles, needles 1 mm
+/// thick, and a fence of 400 slats 4 mm wide seen at a grazing angle, over a floor.
+pub(super) fn subpixel(b: &mut Builder) {
+    let floor = b.material(MaterialDesc::new("floor", [0.5, 0.5, 0.5], 0.8));
+    let bright = b.material(MaterialDesc::new("bright", [0.95, 0.9, 0.8], 0.5).double_sided());
+    let dark = b.material(MaterialDesc::new("dark", [0.05, 0.05, 0.06], 0.4).double_sided());
+    b.mesh(floor).append(&mesh::floor(40.0, 40.0, 4, 4, 1.0), Affine3A::IDENTITY);
+    let mut dust = Mesh::default();
+    for i in 0..40 {
+        for j in 0..40 {
+            let (x, y) = (i as f32 * 0.025, j as f32 * 0.025);
+            let tiny = mesh::quad(0.002, 0.002);
+            dust.append(&tiny, at(x, y, 0.0));
+        }
+    }
+    b.mesh(bright).append(&dust, at(-2.0, 0.5, 0.0));
+    let needle = mesh::rod(0.0005, 2.0, 6);
+    for i in 0..24 {
+        let tilt = Quat::from_rotation_z(-0.6 + 0.05 * i as f32);
+        b.mesh(bright).append(
+            &needle,
+            Affine3A::from_rotation_translation(tilt, Vec3::new(0.2 * i as f32 - 1.0, 0.0, 0.5)),
+        );
+    }
+    let slat = mesh::quad(0.004, 1.5);
+    let mut fence = Mesh::default();
+    for i in 0..400 {
+        fence.append(&slat, at(i as f32 * 0.02, 0.75, 0.0));
+    }
+    // Nearly edge-on: the fence recedes from x = 1 m at 8° off the line of sight.
+    b.mesh(dark).append(&fence, turned(-1.43, 1.0, 0.0, 1.0));
+    b.camera([0.0, 1.6, 6.0], [0.0, 0.9, 0.0], 50.0, 60.0);
+}
+
+/// Input that is legal glTF but numerically hostile: zero-area triangles (collinear and
+/// coincident corners), normals of length zero and five, coincident duplicate vertices, and a
+/// textured quad whose UVs run to ±10⁶.
+pub(super) fn degenerate(b: &mut Builder) {
+    let checker = b.texture("checker", &textures::checker(64, 8));
+    let floor = b.material(MaterialDesc::new("floor", [0.6, 0.6, 0.6], 0.7));
+    let odd = b.material(MaterialDesc::new("odd", [0.8, 0.3, 0.2], 0.5).double_sided());
+    let far_uv = b.material(MaterialDesc::new("far-uv", [1.0; 3], 0.6).textured(checker));
+    b.mesh(floor).append(&mesh::floor(12.0, 12.0, 2, 2, 1.0), Affine3A::IDENTITY);
+
+    let mut odd_mesh = Mesh::default();
+    let corner = |m: &mut Mesh, p: [f32; 3], n: [f32; 3]| {
+        m.positions.push(p);
+        m.normals.push(n);
+        m.uvs.push([0.0, 0.0]);
+        (m.positions.len() - 1) as u32
+    };
+    // Collinear corners, then three coincident ones: no area at all.
+    let line = [[-1.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]]
+        .map(|p| corner(&mut odd_mesh, p, [0.0, 0.0, 1.0]));
+    let point = [[0.0, 1.5, 0.0]; 3].map(|p| corner(&mut odd_mesh, p, [0.0, 0.0, 1.0]));
+    odd_mesh.indices.extend(line);
+    odd_mesh.indices.extend(point);
+    // A quad with zero-length normals, one with normals five long, each with a duplicate of
+    // one corner (same position, its own index).
+    for (x, normal) in [(-1.5f32, [0.0, 0.0, 0.0]), (0.5, [0.0, 0.0, 5.0])] {
+        let q = [[x, 0.2, 0.0], [x + 1.0, 0.2, 0.0], [x, 1.2, 0.0], [x + 1.0, 1.2, 0.0], [x + 1.0, 0.2, 0.0]]
+            .map(|p| corner(&mut odd_mesh, p, normal));
+        odd_mesh.indices.extend([q[0], q[1], q[2], q[2], q[4], q[3]]);
+    }
+    b.mesh(odd).append(&odd_mesh, Affine3A::IDENTITY);
+
+    let mut far = mesh::quad(2.0, 2.0);
+    for uv in &mut far.uvs {
+        *uv = [uv[0] * 2e6 - 1e6, uv[1] * 2e6 - 1e6];
+    }
+    b.mesh(far_uv).append(&far, turned(0.4, 2.5, 1.2, -0.5));
+    // A box for a light to sit inside (the manifest puts one there).
+    b.mesh(floor).append(&mesh::cuboid(Vec3::splat(0.8), 1.0), at(-3.0, 0.4, -1.0));
+    b.camera([0.0, 1.4, 5.0], [0.0, 0.8, 0.0], 55.0, 40.0);
+}

@@ -1,0 +1,229 @@
+//! glTF import of broken and hostile files: every one is an error that names the file and the
+//! part at fault, never a panic, a hang or a stack overflow. No device needed.
+
+use std::path::{Path, PathBuf};
+
+use aabench_renderer::scene::load_gltf;
+use serde_json::{Value, json};
+
+/// A folder with one triangle's positions in `tri.bin` (36 bytes) and glTF files written into it.
+struct Folder {
+    dir: PathBuf,
+}
+
+impl Folder {
+    fn new(name: &str) -> Folder {
+        let dir = std::env::temp_dir().join(format!("aabench-import-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+        std::fs::write(dir.join("tri.bin"), bytemuck::cast_slice(&positions)).unwrap();
+        Folder { dir }
+    }
+
+    /// A document of one triangle mesh and `nodes`, with `edit` applied; returns its path.
+    fn gltf(&self, name: &str, nodes: Value, edit: impl Fn(&mut Value)) -> PathBuf {
+        let mut document = json!({
+            "asset": { "version": "2.0" },
+            "buffers": [{ "uri": "tri.bin", "byteLength": 36 }],
+            "bufferViews": [{ "buffer": 0, "byteLength": 36 }],
+            "accessors": [{
+                "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                "min": [0, 0, 0], "max": [1, 1, 0]
+            }],
+            "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
+            "nodes": nodes,
+            "scenes": [{ "nodes": [0] }],
+            "scene": 0
+        });
+        edit(&mut document);
+        let path = self.dir.join(name);
+        std::fs::write(&path, serde_json::to_vec(&document).unwrap()).unwrap();
+        path
+    }
+
+    fn one_node(&self, name: &str, edit: impl Fn(&mut Value)) -> PathBuf {
+        self.gltf(name, json!([{ "mesh": 0 }]), edit)
+    }
+}
+
+impl Drop for Folder {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+fn error(path: &Path) -> String {
+    let message = load_gltf(path).expect_err("the file is broken").to_string();
+    assert!(message.contains(&path.display().to_string()), "the error names the file: {message}");
+    message
+}
+
+#[test]
+fn the_test_triangle_loads() {
+    let folder = Folder::new("ok");
+    let scene = load_gltf(&folder.one_node("ok.gltf", |_| {})).unwrap();
+    assert_eq!(scene.triangle_count(), 1);
+}
+
+#[test]
+fn node_cycles_and_second_parents_are_errors_not_stack_overflows() {
+    let folder = Folder::new("cycles");
+    let own_child = folder.gltf("self.gltf", json!([{ "mesh": 0, "children": [0] }]), |_| {});
+    assert!(error(&own_child).contains("nodes[0]: reached twice"), "{}", error(&own_child));
+    let cycle =
+        folder.gltf("cycle.gltf", json!([{ "mesh": 0, "children": [1] }, { "children": [0] }]), |_| {});
+    assert!(error(&cycle).contains("cycle"), "{}", error(&cycle));
+    let two_parents = folder.gltf(
+        "parents.gltf",
+        json!([{ "children": [1, 2] }, { "children": [3] }, { "children": [3] }, { "mesh": 0 }]),
+        |_| {},
+    );
+    assert!(error(&two_parents).contains("nodes[3]: reached twice"), "{}", error(&two_parents));
+}
+
+#[test]
+fn a_chain_ten_thousand_nodes_deep_imports() {
+    let folder = Folder::new("deep");
+    let depth = 10_000;
+    let nodes: Vec<Value> = (0..depth)
+        .map(|i| if i + 1 < depth { json!({ "mesh": 0, "children": [i + 1] }) } else { json!({ "mesh": 0 }) })
+        .collect();
+    // Each level moves its subtree: the deepest triangle sits 10 000 steps away.
+    let path = folder.gltf("deep.gltf", Value::Array(nodes), |d| {
+        for node in d["nodes"].as_array_mut().unwrap() {
+            node["translation"] = json!([0.001, 0.0, 0.0]);
+        }
+    });
+    let scene = load_gltf(&path).unwrap();
+    assert_eq!(scene.triangle_count(), depth);
+    let (lo, hi) = scene.bounds();
+    assert!((hi.x - lo.x - 10.999).abs() < 1e-2, "{lo} {hi}");
+}
+
+#[test]
+fn missing_and_unreadable_external_files_are_named() {
+    let folder = Folder::new("files");
+    let missing_bin = folder.one_node("bin.gltf", |d| d["buffers"][0]["uri"] = json!("gone.bin"));
+    let message = error(&missing_bin);
+    assert!(
+        message.contains("buffers[0].uri")
+            && message.contains("gone.bin")
+            && message.contains("does not exist"),
+        "{message}"
+    );
+
+    let escaping = folder.one_node("escape.gltf", |d| d["buffers"][0]["uri"] = json!("../../etc/passwd"));
+    assert!(error(&escaping).contains("leaves the glTF file's folder"), "{}", error(&escaping));
+    let scheme = folder.one_node("scheme.gltf", |d| d["buffers"][0]["uri"] = json!("file:///etc/passwd"));
+    assert!(error(&scheme).contains("has a scheme"), "{}", error(&scheme));
+
+    let fifo = folder.dir.join("fifo.bin");
+    assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let blocked = folder.one_node("fifo.gltf", |d| d["buffers"][0]["uri"] = json!("fifo.bin"));
+    assert!(error(&blocked).contains("not a regular file"), "{}", error(&blocked));
+
+    let fifo_gltf = folder.dir.join("fifo.gltf.fifo");
+    assert!(std::process::Command::new("mkfifo").arg(&fifo_gltf).status().unwrap().success());
+    assert!(error(&fifo_gltf).contains("not a regular file"), "{}", error(&fifo_gltf));
+
+    let looped = folder.dir.join("loop.gltf");
+    std::os::unix::fs::symlink(&looped, &looped).unwrap();
+    let message = error(&looped);
+    assert!(
+        !message.contains("does not exist") && message.to_lowercase().contains("symbolic links"),
+        "{message}"
+    );
+}
+
+#[test]
+fn short_buffers_and_bad_geometry_say_what_is_wrong() {
+    let folder = Folder::new("geometry");
+    let long = folder.one_node("long.gltf", |d| d["accessors"][0]["count"] = json!(4));
+    let message = error(&long);
+    assert!(
+        message.contains("accessors[0]") && message.contains("need 48 bytes") && message.contains("holds 36"),
+        "{message}"
+    );
+    assert!(!message.contains("missing"), "{message}");
+
+    let view = folder.one_node("view.gltf", |d| d["bufferViews"][0]["byteLength"] = json!(48));
+    assert!(error(&view).contains("past the 36 bytes of buffers[0]"), "{}", error(&view));
+
+    // Two indices: not a whole triangle.
+    std::fs::write(folder.dir.join("indices.bin"), [0u8, 0, 1, 0]).unwrap();
+    let indices = folder.one_node("indices.gltf", |d| {
+        d["buffers"].as_array_mut().unwrap().push(json!({ "uri": "indices.bin", "byteLength": 4 }));
+        d["bufferViews"].as_array_mut().unwrap().push(json!({ "buffer": 1, "byteLength": 4 }));
+        d["accessors"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "bufferView": 1, "componentType": 5123, "count": 2, "type": "SCALAR" }));
+        d["meshes"][0]["primitives"][0]["indices"] = json!(1);
+    });
+    assert!(error(&indices).contains("2 indices, not a multiple of 3"), "{}", error(&indices));
+
+    let nan: [f32; 9] = [0.0, 0.0, 0.0, f32::NAN, 0.0, 0.0, 0.0, f32::INFINITY, 0.0];
+    std::fs::write(folder.dir.join("nan.bin"), bytemuck::cast_slice(&nan)).unwrap();
+    let not_finite = folder.one_node("nan.gltf", |d| d["buffers"][0]["uri"] = json!("nan.bin"));
+    assert!(error(&not_finite).contains("POSITION: vertex 1"), "{}", error(&not_finite));
+
+    let transform = folder.one_node("scale.gltf", |d| d["nodes"][0]["scale"] = json!([1e300, 1.0, 1.0]));
+    assert!(error(&transform).contains("nodes[0]: the transform is not finite"), "{}", error(&transform));
+    let truncated = folder.dir.join("truncated.gltf");
+    let whole = std::fs::read(folder.one_node("whole.gltf", |_| {})).unwrap();
+    std::fs::write(&truncated, &whole[..whole.len() / 2]).unwrap();
+    assert!(error(&truncated).contains("cannot read glTF"), "{}", error(&truncated));
+}
+
+#[test]
+fn images_are_named_and_oversized_ones_refused_from_their_header() {
+    let folder = Folder::new("images");
+    let textured = |name: &str, uri: &str| {
+        folder.one_node(name, |d| {
+            d["images"] = json!([{ "uri": uri }]);
+            d["textures"] = json!([{ "source": 0 }]);
+            d["materials"] = json!([{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }]);
+            d["meshes"][0]["primitives"][0]["material"] = json!(0);
+        })
+    };
+    let missing = textured("missing.gltf", "nope.png");
+    assert!(
+        error(&missing).contains("images[0].uri") && error(&missing).contains("nope.png"),
+        "{}",
+        error(&missing)
+    );
+
+    // A 20000×1 PNG: tiny on disk, too wide for any texture.
+    image::RgbaImage::new(20_000, 1).save(folder.dir.join("wide.png")).unwrap();
+    let wide = textured("wide.gltf", "wide.png");
+    let message = error(&wide);
+    assert!(
+        message.contains("images[0] (uri wide.png): 20000×1 is larger than the 16384×16384"),
+        "{message}"
+    );
+
+    std::fs::write(folder.dir.join("corrupt.png"), b"\x89PNG\r\n\x1a\nnot really").unwrap();
+    let corrupt = textured("corrupt.gltf", "corrupt.png");
+    assert!(error(&corrupt).contains("images[0] (uri corrupt.png)"), "{}", error(&corrupt));
+}
+
+#[test]
+fn a_placed_generated_scene_scales_its_camera_clip_planes_too() {
+    use aabench_renderer::scene::generate::{Generated, Generator, Placement};
+    let folder = Folder::new("placed");
+    let path = folder.dir.join("cornell-mm.glb");
+    let placed = Generated {
+        placement: Placement { scale: 1000.0, offset: [1.0e5, 0.0, 0.0] },
+        ..Generated::new(Generator::Cornell, 1)
+    };
+    placed.write(&path).unwrap();
+    let scene = load_gltf(&path).unwrap();
+    let camera = scene.camera.unwrap();
+    assert!((camera.near - 50.0).abs() < 1e-9 && (camera.far - 5000.0).abs() < 1e-6, "{camera:?}");
+    // Positions relative to the scene's origin, which sits on the 1024 grid near 10⁵.
+    assert_eq!(scene.origin.x % 1024.0, 0.0);
+    assert!((scene.origin.x - 1.0e5).abs() <= 512.0, "{}", scene.origin);
+    let (lo, hi) = scene.bounds();
+    assert!((hi.y - lo.y - 550.0).abs() < 1e-3, "{lo} {hi}");
+}

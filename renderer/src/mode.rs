@@ -111,6 +111,15 @@ impl FromStr for Mode {
 
     fn from_str(id: &str) -> Result<Mode, ModeError> {
         let fail = |reason: &str| ModeError { id: id.to_string(), reason: reason.to_string() };
+        if id.chars().any(|c| c.is_ascii_uppercase()) {
+            let lower = id.to_ascii_lowercase();
+            let hint = if lower.parse::<Mode>().is_ok() {
+                format!(": did you mean `{lower}`?")
+            } else {
+                String::new()
+            };
+            return Err(fail(&format!("mode ids are lowercase{hint}")));
+        }
         match id {
             "fxaa" => return Ok(Mode::new(Technique::Fxaa, 1, false)),
             "fxaa-stalled" => return Ok(Mode::new(Technique::Fxaa, 1, true)),
@@ -154,6 +163,14 @@ impl FromStr for Mode {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn uppercase_ids_are_named_as_such_not_as_a_size() {
+        let error = "Deferred-1X1".parse::<Mode>().unwrap_err().to_string();
+        assert!(error.contains("lowercase: did you mean `deferred-1x1`?"), "{error}");
+        let error = "SMAA-2X2".parse::<Mode>().unwrap_err().to_string();
+        assert!(error.contains("lowercase") && !error.contains("did you mean"), "{error}");
+    }
 
     #[test]
     fn every_listed_mode_round_trips_through_its_id() {

@@ -161,6 +161,46 @@ fn transfer_functions_match_their_twins_and_pq_its_published_values() {
     assert!((published[2][0] - 1.0).abs() < 1e-5, "{published:?}");
 }
 
+/// `count` inputs drawn by proptest (deterministically): log-uniform magnitudes from 10⁻³⁰ to
+/// 10³⁰ of both signs, with NaN, infinities, zeros and f32's extremes mixed in.
+fn sampled_inputs(count: usize) -> Vec<f32> {
+    use proptest::prelude::*;
+    use proptest::strategy::ValueTree;
+    let value = prop_oneof![
+        6 => (-30.0f32..30.0, any::<bool>()).prop_map(|(e, negative)| if negative { -(10f32.powf(e)) } else { 10f32.powf(e) }),
+        1 => prop_oneof![Just(0.0f32), Just(-0.0), Just(f32::NAN), Just(f32::INFINITY), Just(f32::NEG_INFINITY), Just(f32::MAX), Just(f32::MIN_POSITIVE)],
+    ];
+    let mut runner = proptest::test_runner::TestRunner::deterministic();
+    prop::collection::vec(value, count).new_tree(&mut runner).expect("inputs").current()
+}
+
+#[test]
+fn the_gpu_agrees_with_the_twins_on_sampled_hostile_inputs() {
+    let inputs = sampled_inputs(4096);
+    let tonemap = Tonemap::default();
+    let curve = tonemap.curve().unwrap();
+    // The tonemap pass's path: sanitize and expose, then the curve.
+    let out = evaluate(
+        "vec4<f32>(tonemap_rgb(exposed(vec3<f32>(x), 1.0)), 0.0)",
+        &inputs,
+        &tonemap_constants(&tonemap),
+    );
+    for (out, &x) in out.iter().zip(&inputs) {
+        let twin = tonemap.apply(&curve, [aabench_renderer::color::sanitize(f64::from(x)); 3]);
+        assert!((f64::from(out[0]) - twin[0]).abs() < 2e-6, "tonemap at {x}: {} vs {}", out[0], twin[0]);
+    }
+    // Transfer functions on the same draws folded into [0, 1] (the display pass clamps first).
+    let unit: Vec<f32> = inputs.iter().map(|x| if x.is_finite() { x.abs().fract() } else { 0.5 }).collect();
+    for transfer in [Transfer::Srgb, Transfer::Rec709, Transfer::Gamma22, Transfer::Pq { peak_nits: 400.0 }] {
+        let encoded =
+            evaluate("vec4<f32>(transfer_encode(x), 0.0, 0.0, 0.0)", &unit, &transfer_constants(transfer));
+        for (out, &l) in encoded.iter().zip(&unit) {
+            let twin = transfer.encode(f64::from(l));
+            assert!((f64::from(out[0]) - twin).abs() < 3e-5, "{transfer:?} at {l}: {} vs {twin}", out[0]);
+        }
+    }
+}
+
 #[test]
 fn sanitize_replaces_nan_infinities_and_negatives() {
     let inputs = [f32::NAN, -f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -1.0, -0.0, 2.5, 1e30];

@@ -399,7 +399,7 @@ impl Manifest {
         let mut manifest: Manifest = serde_path_to_error::deserialize(deserializer).map_err(|e| {
             let field = e.path().to_string();
             let inner = e.into_inner();
-            let field = if field == "." { String::new() } else { field };
+            let field = if field == "." || field == "?" { String::new() } else { field };
             // serde_json appends "at line L column C"; keep it: it finds the spot.
             fail(&field, inner.to_string())
         })?;

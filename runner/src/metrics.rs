@@ -71,16 +71,18 @@ pub fn quality(image: &DisplayImage, reference: &DisplayImage, against: &str) ->
     assert_eq!(image.rgba.len(), reference.rgba.len(), "images of different sizes");
     assert_eq!(image.bits, reference.bits, "images of different bit depths");
     let scale = f64::from(image.max_code());
-    let mut sum = 0.0f64;
+    // Squared code steps summed exactly in integers (at most 1023² × 3 per pixel, far from
+    // u64's range), divided once: a running f64 sum drifted by 3·10⁻¹⁰ over a 4096² image.
+    let mut sum = 0u64;
     let mut max_abs_diff = 0u16;
     for (a, b) in image.rgba.chunks_exact(4).zip(reference.rgba.chunks_exact(4)) {
         for c in 0..3 {
-            let d = (f64::from(a[c]) - f64::from(b[c])) / scale;
-            sum += d * d;
-            max_abs_diff = max_abs_diff.max(a[c].abs_diff(b[c]));
+            let step = a[c].abs_diff(b[c]);
+            sum += u64::from(step) * u64::from(step);
+            max_abs_diff = max_abs_diff.max(step);
         }
     }
-    let mse = sum / (image.rgba.len() / 4 * 3).max(1) as f64;
+    let mse = sum as f64 / (scale * scale) / (image.rgba.len() / 4 * 3).max(1) as f64;
     let psnr = -10.0 * mse.log10();
     Quality {
         against: against.to_string(),
@@ -137,6 +139,48 @@ pub fn sample_stats(counts: &[u8], m: u32) -> Result<SampleStats, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn mse_over_a_large_image_matches_exact_integer_arithmetic() {
+        // 4096² pixels: the f64 running sum against an exact integer sum of squared code steps,
+        // at both bit depths.
+        let pixels = 4096 * 4096;
+        let code = |i: usize, salt: u32, max: u32| {
+            (aabench_renderer::color::hash(i as u32 ^ salt.wrapping_mul(0x9e37_79b9)) % (max + 1)) as u16
+        };
+        for (bits, max) in [(8, 255u32), (10, 1023)] {
+            let a = DisplayImage { bits, rgba: (0..pixels * 4).map(|i| code(i, 1, max)).collect() };
+            let b = DisplayImage { bits, rgba: (0..pixels * 4).map(|i| code(i, 2, max)).collect() };
+            let exact: u64 = a
+                .rgba
+                .chunks_exact(4)
+                .zip(b.rgba.chunks_exact(4))
+                .flat_map(|(p, q)| (0..3).map(move |c| u64::from(p[c].abs_diff(q[c])).pow(2)))
+                .sum();
+            let expected = exact as f64 / f64::from(max * max) / (pixels * 3) as f64;
+            let q = quality(&a, &b, "x");
+            assert!((q.mse / expected - 1.0).abs() < 1e-12, "{bits} bits: {} vs {expected}", q.mse);
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn quality_is_symmetric_bounded_and_finite_or_infinite(
+            a in prop::collection::vec(any::<u8>(), 4..256),
+            b_seed in any::<u8>(),
+        ) {
+            let pixels = a.len() / 4 * 4;
+            let a = DisplayImage::from_rgba8(&a[..pixels]);
+            let b = DisplayImage::from_rgba8(&a.rgba.iter().map(|&v| (v as u8).wrapping_add(b_seed)).collect::<Vec<_>>());
+            let (ab, ba) = (quality(&a, &b, "b"), quality(&b, &a, "a"));
+            prop_assert_eq!(ab.mse, ba.mse);
+            prop_assert!((0.0..=1.0).contains(&ab.mse));
+            prop_assert!(ab.psnr_db.value() >= 0.0 && !ab.psnr_db.value().is_nan());
+            prop_assert_eq!(ab.psnr_db.value().is_infinite(), ab.mse == 0.0);
+            prop_assert!(ab.max_abs_diff <= 255);
+        }
+    }
 
     #[test]
     fn identical_images_have_infinite_psnr_written_as_inf() {

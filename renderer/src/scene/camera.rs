@@ -21,6 +21,20 @@ pub struct CameraError {
     pub message: String,
 }
 
+/// A number as a message shows it: plainly in everyday ranges, in exponent form when huge or
+/// tiny (1e-300 has 300 zeros in plain form).
+fn number(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-4..1e9).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+fn vector(v: DVec3) -> String {
+    format!("[{}, {}, {}]", number(v.x), number(v.y), number(v.z))
+}
+
 impl std::fmt::Display for CameraError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "{}: {}", self.field, self.message)
@@ -60,26 +74,32 @@ impl Camera {
         let fail = |field: &'static str, message: String| Err(CameraError { field, message });
         for (field, v) in [("position", self.position), ("target", self.forward), ("up", self.up)] {
             if !v.is_finite() || v.abs().max_element() > MAX_COORDINATE {
-                return fail(field, format!("{v} must be finite and within ±{MAX_COORDINATE:e}"));
+                return fail(field, format!("{} must be finite and within ±{MAX_COORDINATE:e}", vector(v)));
             }
         }
         // Relative to the position's magnitude: 1e-200 apart is "on top of it" at any scale.
         if self.forward.length() <= 1e-9 * self.position.length().max(1.0) {
-            return fail("target", format!("lies on the position {} (no view direction)", self.position));
+            return fail(
+                "target",
+                format!("lies on the position {} (no view direction)", vector(self.position)),
+            );
         }
         if self.up.length() == 0.0 || self.forward.normalize().cross(self.up.normalize()).length() < 1e-6 {
-            return fail("up", format!("{} is zero or parallel to the view direction", self.up));
+            return fail("up", format!("{} is zero or parallel to the view direction", vector(self.up)));
         }
         let degrees = self.fov_y.to_degrees();
         let [lowest, widest] = FOV_Y_DEGREES;
         if !(lowest..=widest).contains(&degrees) {
-            return fail("fov_y", format!("{degrees}° must be within [{lowest}°, {widest}°]"));
+            return fail("fov_y", format!("{}° must be within [{lowest}°, {widest}°]", number(degrees)));
         }
         if !(1e-6..=1e9).contains(&self.near) {
-            return fail("near", format!("{} must be within [1e-6, 1e9]", self.near));
+            return fail("near", format!("{} must be within [1e-6, 1e9]", number(self.near)));
         }
         if !(self.far > self.near && (self.far <= 1e12 || self.far == f64::INFINITY)) {
-            return fail("far", format!("{} must be > near ({}) and at most 1e12", self.far, self.near));
+            return fail(
+                "far",
+                format!("{} must be > near ({}) and at most 1e12", number(self.far), number(self.near)),
+            );
         }
         Ok(())
     }

@@ -269,7 +269,7 @@ impl Importer {
         }
         for (semantic, accessor) in primitive.attributes() {
             check_accessor(&accessor, buffers)
-                .map_err(|e| format!("{}: attributes.{semantic:?}: {e}", name()))?;
+                .map_err(|e| format!("{}: attributes.{}: {e}", name(), semantic.to_string()))?;
         }
         if let Some(accessor) = primitive.indices() {
             check_accessor(&accessor, buffers).map_err(|e| format!("{}: indices: {e}", name()))?;

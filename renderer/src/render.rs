@@ -201,55 +201,58 @@ impl SceneRenderer {
         self.memory_budget = bytes;
     }
 
-    /// Refuses, before anything is allocated, a mode whose targets exceed the device's side
-    /// limit (naming the largest M that fits) or whose new allocations would take the pool past
-    /// the memory budget (with the estimate).
+    /// Refuses, before anything is allocated, a mode that cannot run as asked: a stall the loop
+    /// strategy cannot honour, targets beyond the device's side limit (naming the largest M
+    /// that fits), or new allocations that would take the pool past the memory budget.
     fn check_fits(&self, mode: Mode, plan: &Plan) -> Result<(), RenderError> {
-        let stall = self.settings.stall_iterations;
-        let looped = self.settings.adaptive.extra_samples == crate::ExtraSamples::Loop;
-        if looped && mode.stalled && matches!(mode.technique, Technique::Adaptive(_)) {
-            let limit = crate::loop_stall_limit(mode.m);
-            if stall > limit {
-                return Err(RenderError::Limit(format!(
-                    "{mode} with extra samples shaded in a loop honours at most {limit} stall iterations \
-                     (lavapipe ends an invocation after 65 535 loop iterations, and the loop shades up to \
-                     {} samples in one); {stall} were asked for: shade them compacted instead",
-                    mode.m * mode.m
-                )));
-            }
-        }
-        let limit = self.gpu.device.limits().max_texture_dimension_2d;
-        let widest = plan.allocation.physical.iter().find_map(|p| match p.desc {
-            Resolved::Texture { width, height, .. } if width.max(height) > limit => Some((width, height)),
-            _ => None,
-        });
-        if let Some((width, height)) = widest {
-            let side = self.settings.width.max(self.settings.height);
-            let fits = (limit / side.max(1)).min(4);
+        self.check_stall(mode)?;
+        if let Some(oversized) = Oversized::find(plan, self.gpu.device.limits().max_texture_dimension_2d) {
+            let side = self.settings.width.max(self.settings.height).max(1);
+            let fits = (oversized.limit / side).min(4);
             let largest =
                 if fits >= 1 { format!("the largest M that fits is {fits}") } else { "no M fits".into() };
             return Err(RenderError::Limit(format!(
-                "{mode} at {}×{} needs {width}×{height} targets; the device allows {limit} texels per side, \
-                 so {largest}",
+                "{mode} at {}×{}: {oversized}, so {largest}",
                 self.settings.width, self.settings.height
             )));
         }
-        if let Some(budget) = self.memory_budget {
-            let held = self.pool.bytes();
-            let new = self.pool.missing_bytes(plan);
-            if held + new > budget {
-                let mib = |bytes: u64| bytes as f64 / f64::from(1u32 << 20);
-                return Err(RenderError::Limit(format!(
-                    "{mode} needs an estimated {:.0} MiB of new render targets beside the {:.0} MiB held for \
-                     earlier modes: {:.0} MiB in all, over the memory limit of {:.0} MiB",
-                    mib(new),
-                    mib(held),
-                    mib(held + new),
-                    mib(budget)
-                )));
-            }
+        self.check_memory(mode, plan)
+    }
+
+    /// The loop strategy shades up to M² samples in one invocation, all under lavapipe's loop
+    /// limit: a longer stall would silently stop short.
+    fn check_stall(&self, mode: Mode) -> Result<(), RenderError> {
+        let stall = self.settings.stall_iterations;
+        let looped = self.settings.adaptive.extra_samples == crate::ExtraSamples::Loop;
+        let limit = crate::loop_stall_limit(mode.m);
+        if looped && mode.stalled && matches!(mode.technique, Technique::Adaptive(_)) && stall > limit {
+            return Err(RenderError::Limit(format!(
+                "{mode} with extra samples shaded in a loop honours at most {limit} stall iterations \
+                 (lavapipe ends an invocation after 65 535 loop iterations, and the loop shades up to \
+                 {} samples in one); {stall} were asked for: shade them compacted instead",
+                mode.m * mode.m
+            )));
         }
         Ok(())
+    }
+
+    fn check_memory(&self, mode: Mode, plan: &Plan) -> Result<(), RenderError> {
+        let Some(budget) = self.memory_budget else {
+            return Ok(());
+        };
+        let (held, new) = (self.pool.bytes(), self.pool.missing_bytes(plan));
+        if held + new <= budget {
+            return Ok(());
+        }
+        let mib = |bytes: u64| bytes as f64 / f64::from(1u32 << 20);
+        Err(RenderError::Limit(format!(
+            "{mode} needs an estimated {:.0} MiB of new render targets beside the {:.0} MiB held for \
+             earlier modes: {:.0} MiB in all, over the memory limit of {:.0} MiB",
+            mib(new),
+            mib(held),
+            mib(held + new),
+            mib(budget)
+        )))
     }
 
     /// Builds every pass of a compiled graph, in order, from its ports' allocations.
@@ -369,13 +372,44 @@ struct Pool {
     entries: HashMap<(Resolved, Usage, usize), Allocated>,
 }
 
+/// A target of a plan wider or taller than the device allows, named by its writing port.
+#[derive(Debug)]
+struct Oversized {
+    port: String,
+    width: u32,
+    height: u32,
+    limit: u32,
+}
+
+impl Oversized {
+    fn find(plan: &Plan, limit: u32) -> Option<Oversized> {
+        plan.allocation.physical.iter().find_map(|physical| match physical.desc {
+            Resolved::Texture { width, height, .. } if width.max(height) > limit => {
+                let writer = plan.resources[physical.resources[0]].writer;
+                let port = format!("{}.{}", plan.names[writer.pass], writer.port);
+                Some(Oversized { port, width, height, limit })
+            }
+            _ => None,
+        })
+    }
+}
+
+impl std::fmt::Display for Oversized {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let Oversized { port, width, height, limit } = self;
+        write!(f, "{port}: a {width}×{height} target exceeds the device's limit of {limit} texels per side")
+    }
+}
+
 impl Pool {
     /// An allocation for each of the plan's, created where the pool has none yet, in the
     /// order the frame first writes them: lavapipe's textures are plain memory, and where they
     /// land relative to each other decides how the loads of one texel from several targets
     /// share the CPU's caches.
     fn acquire(&mut self, device: &wgpu::Device, plan: &Plan) -> Result<Vec<Allocated>, RenderError> {
-        let limit = device.limits().max_texture_dimension_2d;
+        if let Some(oversized) = Oversized::find(plan, device.limits().max_texture_dimension_2d) {
+            return Err(RenderError::Limit(oversized.to_string()));
+        }
         let physical = &plan.allocation.physical;
         let first_write = |p: usize| physical[p].resources.iter().map(|&r| plan.resources[r].first).min();
         let mut creation: Vec<usize> = (0..physical.len()).collect();
@@ -383,15 +417,6 @@ impl Pool {
         let mut allocated = vec![None; physical.len()];
         for p in creation {
             let physical = &physical[p];
-            if let Resolved::Texture { width, height, .. } = physical.desc
-                && (width > limit || height > limit)
-            {
-                let writer = plan.resources[physical.resources[0]].writer;
-                return Err(RenderError::Limit(format!(
-                    "{}.{}: a {width}×{height} target exceeds the device's limit of {limit} texels per side",
-                    plan.names[writer.pass], writer.port
-                )));
-            }
             let key = (physical.desc, physical.usage, physical.ordinal);
             allocated[p] = Some(self.entries.entry(key).or_insert_with(|| create(device, physical)).clone());
         }

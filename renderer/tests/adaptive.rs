@@ -307,3 +307,15 @@ fn the_loop_strategy_refuses_a_stall_it_cannot_honour() {
         assert!(renderer.prepare("adaptive-4x4".parse().unwrap()).is_ok(), "the unstalled mode runs");
     }
 }
+
+#[test]
+fn a_frame_too_wide_for_some_m_names_the_largest_m_that_fits_before_allocating() {
+    // 4097 × 4 = 16 388 texels, past lavapipe's 16 384; 3 × 4097 fits.
+    let (mut renderer, _gpu) = renderer(Generator::Edge, &lit(), settings(4097, 8));
+    let error = renderer.prepare("reference-4x4".parse().unwrap()).unwrap_err().to_string();
+    assert!(
+        error.contains("reference-4x4 at 4097×8") && error.contains("the largest M that fits is 3"),
+        "{error}"
+    );
+    assert_eq!(renderer.target_bytes(), 0, "nothing was allocated");
+}

@@ -89,10 +89,10 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
 fn camera(manifest: &Manifest, scene: &Scene) -> anyhow::Result<Camera> {
     let (mut camera, source) = match &manifest.camera {
         // Manifest coordinates are the file's; the scene's are relative to its origin.
-        Some(spec) => (
-            Camera { position: spec.camera().position - scene.origin, ..spec.camera() },
-            "camera".to_string(),
-        ),
+        Some(spec) => {
+            let camera = spec.camera();
+            (Camera { position: camera.position - scene.origin, ..camera }, "camera".to_string())
+        }
         None => {
             let camera = scene.camera.with_context(|| {
                 format!(

@@ -16,8 +16,8 @@ override STALL_ITERATIONS: u32 = 0u;
 //
 // lavapipe ends a shader invocation's loops after 65 535 iterations in all (gallivm's
 // LP_MAX_TGSI_LOOP_ITERATIONS; a longer stall silently stopped growing), so the chain takes 16
-// steps per iteration, written out, and the rest one by one: up to MAX_STALL_ITERATIONS (renderer/src/lib.rs)
-// steps stay within the limit, with room for the shader's other loops.
+// steps per iteration, written out, and the rest one by one: up to MAX_STALL_ITERATIONS
+// (renderer/src/lib.rs) steps stay within the limit, with room for the shader's other loops.
 fn stall_step(h: u32) -> u32 {
     return (h ^ (h >> 15u)) * 0x2c1b3c6du;
 }

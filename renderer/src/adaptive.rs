@@ -133,6 +133,18 @@ pub fn metric_luma(rgb: [f64; 3], exposure: f64) -> f64 {
     (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]).sqrt()
 }
 
+/// The luma cross of pixel (x, y) of a `width`×`height` linear HDR image (the shade-first
+/// image S), borders clamped.
+pub fn luma_cross(image: &[[f32; 4]], width: u32, height: u32, x: u32, y: u32, exposure: f64) -> LumaCross {
+    let luma = |dx: i64, dy: i64| {
+        let px = (i64::from(x) + dx).clamp(0, i64::from(width) - 1) as usize;
+        let py = (i64::from(y) + dy).clamp(0, i64::from(height) - 1) as usize;
+        let p = image[py * width as usize + px];
+        metric_luma([p[0], p[1], p[2]].map(f64::from), exposure)
+    };
+    [luma(0, 0), luma(-1, 0), luma(1, 0), luma(0, -1), luma(0, 1)]
+}
+
 /// A sample's texture footprint in G-buffer texels when n samples share an M×M window:
 /// sqrt((1 + M²/n) / 2). Spread over the window in dither order, n samples filtered this wide
 /// have together the same variance as the reference's M² samples of one texel each; it is 1 at

@@ -115,6 +115,23 @@ pub struct GBufferImages {
     pub depth: Vec<f64>,
 }
 
+impl GBufferImages {
+    /// The M×M window of samples of pixel (x, y), row by row, as the adaptive metric sees it.
+    pub fn window(&self, m: u32, x: u32, y: u32) -> Vec<crate::adaptive::WindowSample> {
+        (0..m * m)
+            .map(|i| {
+                let s = ((y * m + i / m) * self.width + x * m + i % m) as usize;
+                let [nx, ny, nz, material] = self.normal_material[s];
+                crate::adaptive::WindowSample {
+                    depth: self.depth[s],
+                    normal: [nx, ny, nz].map(f64::from),
+                    covered: material >= 0.0,
+                }
+            })
+            .collect()
+    }
+}
+
 /// One scene on the device, with the pipelines that its modes share and a pool of textures
 /// and buffers. Modes run one at a time, so allocation `k` of a descriptor and usage in one
 /// mode's graph is the same texture as allocation `k` of that descriptor and usage in

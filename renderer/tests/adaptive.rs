@@ -3,7 +3,7 @@
 
 mod support;
 
-use aabench_renderer::adaptive::{self, MetricSet, WindowSample};
+use aabench_renderer::adaptive::{self, MetricSet};
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::{Camera, Lighting, PointLight};
 use aabench_renderer::{
@@ -153,29 +153,14 @@ fn cpu_counts(
 ) -> (Vec<f64>, Vec<bool>) {
     let gbuffer = prepared.read_gbuffer().unwrap();
     let first = prepared.read_first().unwrap().expect("S");
-    let (gw, w, h) = (gbuffer.width as usize, (gbuffer.width / m) as usize, (gbuffer.height / m) as usize);
+    let (w, h) = (gbuffer.width / m, gbuffer.height / m);
     let metrics = MetricSet { geometry: true, shading: true };
-    let luma = |x: i64, y: i64| {
-        let p = &first[(y.clamp(0, h as i64 - 1) as usize) * w + x.clamp(0, w as i64 - 1) as usize];
-        adaptive::metric_luma([p[0], p[1], p[2]].map(f64::from), exposure)
-    };
     let mut ks = Vec::new();
     let mut ambiguous = Vec::new();
     for p in 0..w * h {
         let (x, y) = (p % w, p / w);
-        let window: Vec<WindowSample> = (0..(m * m) as usize)
-            .map(|i| {
-                let s = (y * m as usize + i / m as usize) * gw + x * m as usize + i % m as usize;
-                let [nx, ny, nz, material] = gbuffer.normal_material[s];
-                WindowSample {
-                    depth: gbuffer.depth[s],
-                    normal: [nx, ny, nz].map(f64::from),
-                    covered: material >= 0.0,
-                }
-            })
-            .collect();
-        let (xi, yi) = (x as i64, y as i64);
-        let cross = [luma(xi, yi), luma(xi - 1, yi), luma(xi + 1, yi), luma(xi, yi - 1), luma(xi, yi + 1)];
+        let window = gbuffer.window(m, x, y);
+        let cross = adaptive::luma_cross(&first, w, h, x, y, exposure);
         let k = adaptive::metric_k(&window, &cross, m, settings, metrics);
         // f32 on the GPU, f64 here: results within a hair of a rounding boundary or of the
         // shading threshold may fall either way.

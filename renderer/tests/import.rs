@@ -203,9 +203,50 @@ fn images_are_named_and_oversized_ones_refused_from_their_header() {
         "{message}"
     );
 
+    // The same image embedded as a data URI meets the same check.
+    let png = std::fs::read(folder.dir.join("wide.png")).unwrap();
+    let embedded = textured("embedded.gltf", &format!("data:image/png;base64,{}", base64::encode(png)));
+    let message = error(&embedded);
+    assert!(message.contains("images[0] (data URI): 20000×1 is larger than the 16384×16384"), "{message}");
+    let not_base64 = textured("plain.gltf", "data:image/png,rawbytes");
+    assert!(error(&not_base64).contains("only base64 data URIs are read"), "{}", error(&not_base64));
+
     std::fs::write(folder.dir.join("corrupt.png"), b"\x89PNG\r\n\x1a\nnot really").unwrap();
     let corrupt = textured("corrupt.gltf", "corrupt.png");
     assert!(error(&corrupt).contains("images[0] (uri corrupt.png)"), "{}", error(&corrupt));
+}
+
+/// Inputs on which the gltf crate itself panicked (found by `tests/fuzz.rs`).
+#[test]
+fn files_that_panicked_the_gltf_crate_are_errors() {
+    let folder = Folder::new("crate-panics");
+    let no_position = folder.one_node("position.gltf", |d| {
+        d["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(34962);
+    });
+    let message = error(&no_position);
+    assert!(
+        message.contains("meshes[0].primitives[0].attributes.POSITION: accessor 34962 does not exist"),
+        "{message}"
+    );
+
+    let png = folder.dir.join("tex.png");
+    image::RgbaImage::new(2, 2).save(&png).unwrap();
+    let png_bytes = std::fs::read(&png).unwrap();
+    let textured = |name: &str, image: Value| {
+        folder.one_node(name, |d| {
+            d["buffers"] = json!([{ "uri": "tri.bin", "byteLength": 36 }, { "uri": "tex.png", "byteLength": png_bytes.len() }]);
+            d["bufferViews"].as_array_mut().unwrap().push(json!({ "buffer": 1, "byteLength": png_bytes.len() }));
+            d["images"] = json!([image.clone()]);
+            d["textures"] = json!([{ "source": 0 }]);
+            d["materials"] = json!([{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }]);
+            d["meshes"][0]["primitives"][0]["material"] = json!(0);
+        })
+    };
+    // The spec wants a mimeType with a bufferView; the format is read from the bytes anyway.
+    let scene = load_gltf(&textured("no-mime.gltf", json!({ "bufferView": 1 }))).unwrap();
+    assert_eq!((scene.textures[0].width, scene.textures[0].height), (2, 2));
+    let nothing = textured("no-source.gltf", json!({ "name": "empty" }));
+    assert!(error(&nothing).contains("images[0]: has neither a bufferView nor a uri"), "{}", error(&nothing));
 }
 
 #[test]

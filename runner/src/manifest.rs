@@ -8,7 +8,7 @@ use aabench_renderer::AdaptiveSettings;
 use aabench_renderer::adaptive::{DepthMetric, MAX_METRIC_CONSTANT};
 use aabench_renderer::color::{ColorSettings, Dither, Tonemap, Transfer};
 use aabench_renderer::scene::generate::{Generated, Generator, Placement};
-use aabench_renderer::scene::{Camera, MAX_LIGHTS, MAX_SHADOW_LIGHTS, Shadow};
+use aabench_renderer::scene::{Camera, MAX_COORDINATE, MAX_LIGHTS, MAX_SHADOW_LIGHTS, Shadow};
 use glam::DVec3;
 use serde::Deserialize;
 
@@ -514,8 +514,8 @@ impl Manifest {
         }
         for (i, light) in self.lights.iter().enumerate() {
             let field = |name: &str| format!("lights[{i}].{name}");
-            if !light.position.iter().all(|c| c.is_finite()) {
-                return fail(&field("position"), "must be finite".into());
+            if !light.position.iter().all(|c| c.is_finite() && c.abs() <= MAX_COORDINATE) {
+                return fail(&field("position"), format!("must be finite and within ±{MAX_COORDINATE:e}"));
             }
             if !light.color.iter().all(|c| c.is_finite() && *c >= 0.0) {
                 return fail(&field("color"), "components must be finite and ≥ 0".into());
@@ -789,6 +789,8 @@ mod tests {
         check(|j| j["ambient"] = json!([0, -1, 0]), "ambient", "≥ 0");
         let light = json!({ "position": [0, 1, 2], "intensity": 5, "range": 10 });
         check(|j| j["lights"] = json!(vec![light.clone(); 65]), "lights", "at most 64");
+        // Finite in f64, infinite as the f32 the shader gets (found by tests/fuzz.rs).
+        check(|j| j["lights"][0]["position"] = json!([1e308, 0, 1]), "lights[0].position", "within ±1e12");
     }
 
     #[test]

@@ -204,8 +204,13 @@ pub fn create_run_dir(out: &Path, id: &str) -> Result<(String, PathBuf), String>
     Err(format!("--out {}: 10 000 runs named {id} already", out.display()))
 }
 
+/// A temporary file written to this recently is left alone even when its owner looks dead: a
+/// writer in another PID namespace (a container sharing the folder) is not in our /proc.
+const STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(60);
+
 /// Removes the temporary files (`<name>.tmp-<pid>`) that killed processes left under `dir`,
-/// down to `depth` folders; those of live processes are left alone. Returns how many went.
+/// down to `depth` folders; those of live processes, and any written to in the last
+/// [`STALE_AFTER`], are left alone. Returns how many went.
 pub fn remove_stale_temporaries(dir: &Path, depth: u32) -> usize {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return 0;
@@ -219,6 +224,10 @@ pub fn remove_stale_temporaries(dir: &Path, depth: u32) -> usize {
         } else if kind.is_file()
             && let Some(pid) = temporary_owner(&path)
             && !Path::new("/proc").join(pid.to_string()).exists()
+            && entry
+                .metadata()
+                .and_then(|m| m.modified())
+                .is_ok_and(|t| t.elapsed().unwrap_or_default() > STALE_AFTER)
             && std::fs::remove_file(&path).is_ok()
         {
             removed += 1;
@@ -254,14 +263,21 @@ mod tests {
         assert_eq!((a.as_str(), b.as_str()), ("20260101T000000Z-quick", "20260101T000000Z-quick-2"));
         assert!(dir_a.is_dir() && dir_b.is_dir());
 
-        // A dead process's temporary goes, a live one's (ours) stays.
-        std::fs::write(dir_a.join("run.json.tmp-4294967295"), "x").unwrap();
-        std::fs::write(dir_a.join("mode.exr.tmp-4294967295.exr"), "x").unwrap();
-        let ours = dir_b.join(format!("run.json.tmp-{}", std::process::id()));
-        std::fs::write(&ours, "x").unwrap();
+        // A dead process's old temporary goes; a live one's (ours) and a fresh one stay.
+        let old = |path: std::path::PathBuf| {
+            std::fs::write(&path, "x").unwrap();
+            let file = std::fs::File::options().write(true).open(&path).unwrap();
+            file.set_modified(std::time::SystemTime::now() - 2 * STALE_AFTER).unwrap();
+            path
+        };
+        old(dir_a.join("run.json.tmp-4294967295"));
+        old(dir_a.join("mode.exr.tmp-4294967295.exr"));
+        let ours = old(dir_b.join(format!("run.json.tmp-{}", std::process::id())));
+        let fresh = dir_b.join("other.json.tmp-4294967295");
+        std::fs::write(&fresh, "x").unwrap();
         std::fs::write(dir_b.join("run.json"), "{}").unwrap();
         assert_eq!(remove_stale_temporaries(&out, 2), 2);
-        assert!(ours.exists() && dir_b.join("run.json").exists());
+        assert!(ours.exists() && fresh.exists() && dir_b.join("run.json").exists());
         std::fs::remove_dir_all(&out).unwrap();
     }
 

@@ -538,20 +538,29 @@ async fn finish_modes(
                 Some((i, _)) => Some(&images[i].as_ref().expect("reference images").display),
                 None => truth.as_deref(),
             };
-            write_mode_images(&scene_dir, &scene_name, mode, own, diff_against)
-                .map(|(files, samples)| (files, samples, vs_reference, vs_truth))
+            let samples = own.sample_counts.as_ref().map(|counts| metrics::sample_stats(counts, mode.m));
+            let mut files = ImageFiles::default();
+            let written = write_mode_images(&scene_dir, &scene_name, mode, own, diff_against, &mut files);
+            (files, samples, vs_reference, vs_truth, written)
         })));
     }
+    // What was measured is kept when an image cannot be written (a full disk): the mode then
+    // fails with the write's error, its metrics and the images that were written recorded.
     for (record, task) in records.iter_mut().zip(tasks) {
         let Some(task) = task else { continue };
         match task.await {
-            Ok(Ok((files, samples, vs_reference, vs_truth))) => {
+            Ok((files, samples, vs_reference, vs_truth, written)) => {
                 record.images = files;
-                record.samples = samples;
                 record.vs_reference = vs_reference;
                 record.vs_ground_truth = vs_truth;
+                match samples.transpose() {
+                    Ok(samples) => record.samples = samples,
+                    Err(error) => fail_mode(record, format!("{}: {error}", record.mode)),
+                }
+                if let Err(error) = written {
+                    fail_mode(record, format!("{error:#}"));
+                }
             }
-            Ok(Err(error)) => fail_mode(record, format!("{error:#}")),
             Err(panic) => fail_mode(record, format!("image task panicked: {panic}")),
         }
     }
@@ -668,34 +677,33 @@ fn adaptive_cost(modes: &[Mode], runs: &[ModeRun], mode: Mode, run: &ModeRun) ->
     })
 }
 
-/// Writes a mode's images; returns their paths (relative to the run folder) and, for adaptive
-/// modes, the sample statistics.
+/// Writes a mode's images, recording in `files` each one written (paths relative to the run
+/// folder); stops at the first that cannot be written.
 fn write_mode_images(
     scene_dir: &Path,
     scene: &str,
     mode: Mode,
     images: &FrameImages,
     diff_against: Option<&DisplayImage>,
-) -> anyhow::Result<(ImageFiles, Option<metrics::SampleStats>)> {
+    files: &mut ImageFiles,
+) -> anyhow::Result<()> {
     let (w, h) = (images.width, images.height);
-    let relative = |suffix: &str| format!("{scene}/{mode}{suffix}");
+    let relative = |suffix: &str| Some(format!("{scene}/{mode}{suffix}"));
     let path = |suffix: &str| scene_dir.join(format!("{mode}{suffix}"));
     images::write_display_png(&path(".png"), w, h, &images.display)?;
+    files.display = relative(".png");
     images::write_exr(&path(".exr"), w, h, &images.hdr)?;
-    let mut files =
-        ImageFiles { display: Some(relative(".png")), hdr: Some(relative(".exr")), ..Default::default() };
-    let mut samples = None;
+    files.hdr = relative(".exr");
     if let Some(counts) = &images.sample_counts {
-        samples = Some(metrics::sample_stats(counts, mode.m).map_err(|e| anyhow::anyhow!("{mode}: {e}"))?);
         images::write_png(&path(".samples.png"), w, h, &images::sample_heatmap(counts, mode.m))?;
-        files.samples = Some(relative(".samples.png"));
+        files.samples = relative(".samples.png");
     }
     if let Some(other) = diff_against {
         let heatmap = images::difference_heatmap(&images.display, other, DIFFERENCE_FULL_SCALE);
         images::write_png(&path(".diff.png"), w, h, &heatmap)?;
-        files.difference = Some(relative(".diff.png"));
+        files.difference = relative(".diff.png");
     }
-    Ok((files, samples))
+    Ok(())
 }
 
 /// Prints a scene's results as a small table.
@@ -747,15 +755,75 @@ fn truth_summary(truth: &TruthRecord) -> String {
     }
 }
 
-/// `MemAvailable` of /proc/meminfo in bytes: what the kernel can give without swapping.
+/// What the kernel can give this process without swapping, in bytes: `MemAvailable` of
+/// /proc/meminfo, or less where the process's memory cgroup allows less.
 fn available_memory() -> Option<u64> {
-    let meminfo = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = meminfo.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok();
+    let host = meminfo.as_deref().and_then(|m| meminfo_field(m, "MemAvailable:")).map(|kib| kib * 1024);
+    match (host, cgroup_headroom(Path::new("/sys/fs/cgroup"))) {
+        (Some(host), Some(cgroup)) => Some(host.min(cgroup)),
+        (host, cgroup) => host.or(cgroup),
+    }
+}
+
+fn meminfo_field(text: &str, name: &str) -> Option<u64> {
+    text.lines().find(|l| l.starts_with(name))?.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// What this process's memory cgroup still allows (a container's limit, which MemAvailable
+/// does not show): the limit less the working set, usage without the inactive page cache the
+/// kernel reclaims first (as `docker stats` counts it). cgroup v2, else v1; None without a
+/// limit.
+fn cgroup_headroom(root: &Path) -> Option<u64> {
+    let read = |file: &str| std::fs::read_to_string(root.join(file)).ok();
+    let number = |file: &str| read(file)?.trim().parse::<u64>().ok();
+    let stat = |file: &str, field: &str| {
+        read(file)?.lines().find_map(|l| l.strip_prefix(field)?.trim().parse::<u64>().ok())
+    };
+    let (limit, usage, inactive) = match number("memory.max") {
+        Some(limit) => (limit, number("memory.current")?, stat("memory.stat", "inactive_file ").unwrap_or(0)),
+        None => (
+            number("memory/memory.limit_in_bytes")?,
+            number("memory/memory.usage_in_bytes")?,
+            stat("memory/memory.stat", "total_inactive_file ").unwrap_or(0),
+        ),
+    };
+    Some(limit.saturating_sub(usage.saturating_sub(inactive)))
 }
 
 /// Frame timeout when none is given: generous, since a warm-up frame includes compilation.
 pub fn default_frame_timeout() -> Duration {
     Duration::from_secs(120)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cgroup_limit_caps_the_memory_budget_v2_and_v1() {
+        let root = std::env::temp_dir().join(format!("aabench-cgroup-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        std::fs::create_dir_all(root.join("memory")).unwrap();
+        let write = |file: &str, text: &str| std::fs::write(root.join(file), text).unwrap();
+        assert_eq!(cgroup_headroom(&root), None, "no cgroup files: no limit");
+
+        // v1: 4 GiB limit, 3 GiB used of which 1 GiB is reclaimable page cache.
+        write("memory/memory.limit_in_bytes", "4294967296\n");
+        write("memory/memory.usage_in_bytes", "3221225472\n");
+        write("memory/memory.stat", "cache 2000\ntotal_inactive_file 1073741824\n");
+        assert_eq!(cgroup_headroom(&root), Some(2 << 30));
+
+        // v2 wins where present; "max" means no limit, so v1's files answer.
+        write("memory.max", "max\n");
+        assert_eq!(cgroup_headroom(&root), Some(2 << 30));
+        write("memory.max", "1073741824\n");
+        write("memory.current", "536870912\n");
+        write("memory.stat", "anon 1\ninactive_file 0\n");
+        assert_eq!(cgroup_headroom(&root), Some(512 << 20));
+        // Usage over the limit leaves nothing, without wrapping.
+        write("memory.current", "2147483648\n");
+        assert_eq!(cgroup_headroom(&root), Some(0));
+        std::fs::remove_dir_all(&root).unwrap();
+    }
 }

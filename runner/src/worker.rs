@@ -32,10 +32,25 @@ pub enum WorkerError {
 
 #[derive(Debug)]
 pub struct Worker {
-    jobs: std::sync::mpsc::Sender<Job>,
+    /// None once dropped: closing the channel ends the thread's loop.
+    jobs: Option<std::sync::mpsc::Sender<Job>>,
+    thread: Option<std::thread::JoinHandle<()>>,
     pub platform: PlatformInfo,
     /// Set after a timeout or a panic: the thread may still be busy, or its state broken.
     stuck: bool,
+}
+
+/// The thread releases the device before the process exits, so the driver is not torn down by
+/// `exit` and the worker at once (a run whose worker was still alive at exit crashed once in
+/// about seventy, SIGSEGV after its record was written). A stuck thread is not waited for: it
+/// may never finish.
+impl Drop for Worker {
+    fn drop(&mut self) {
+        drop(self.jobs.take());
+        if let Some(thread) = self.thread.take().filter(|_| !self.stuck) {
+            let _ = thread.join();
+        }
+    }
 }
 
 impl Worker {
@@ -43,7 +58,7 @@ impl Worker {
     pub async fn start() -> Result<Worker, RenderError> {
         let (jobs, queue) = std::sync::mpsc::channel::<Job>();
         let (ready, opened) = oneshot::channel();
-        std::thread::Builder::new()
+        let thread = std::thread::Builder::new()
             .name("aabench-gpu".into())
             .spawn(move || {
                 let gpu = match Gpu::new() {
@@ -63,7 +78,7 @@ impl Worker {
         let platform = opened
             .await
             .map_err(|_| RenderError::Device("the GPU thread stopped while opening the device".into()))??;
-        Ok(Worker { jobs, platform, stuck: false })
+        Ok(Worker { jobs: Some(jobs), thread: Some(thread), platform, stuck: false })
     }
 
     /// True once a job timed out or panicked: timings taken now would not be trustworthy.
@@ -86,7 +101,7 @@ impl Worker {
             let _ =
                 reply.send(std::panic::catch_unwind(AssertUnwindSafe(|| job(state))).map_err(panic_message));
         });
-        self.jobs.send(job).map_err(|_| WorkerError::Gone)?;
+        self.jobs.as_ref().ok_or(WorkerError::Gone)?.send(job).map_err(|_| WorkerError::Gone)?;
         match tokio::time::timeout(timeout, result).await {
             Ok(Ok(Ok(value))) => Ok(value),
             Ok(Ok(Err(message))) => {

@@ -129,6 +129,8 @@ fn sigterm_ends_the_run_like_ctrl_c_and_marks_later_scenes_not_run() {
     std::fs::create_dir_all(ws.dir.join("reports/old")).unwrap();
     let stale = ws.dir.join("reports/old/run.json.tmp-4294967294");
     std::fs::write(&stale, "half").unwrap();
+    let an_hour_ago = std::time::SystemTime::now() - std::time::Duration::from_secs(3600);
+    std::fs::File::options().write(true).open(&stale).unwrap().set_modified(an_hour_ago).unwrap();
     let mut child = ws
         .command(&["run", "--modes", "deferred-1x1", "--repetitions", "10000"])
         .stderr(Stdio::piped())
@@ -208,4 +210,92 @@ fn a_run_under_nohup_ignores_sighup_and_still_stops_on_sigterm() {
     wait_for_line(&lines, "rep 200/"); // still timing frames after the hang-up
     assert!(kill("-TERM").success());
     assert_eq!(child.wait().unwrap().code(), Some(130));
+}
+
+/// A tmpfs of `kib` KiB mounted at `dir` for the life of the value (root only).
+struct SmallDisk {
+    dir: std::path::PathBuf,
+}
+
+impl SmallDisk {
+    fn mount(dir: std::path::PathBuf, kib: u32) -> Option<SmallDisk> {
+        std::fs::create_dir_all(&dir).unwrap();
+        let mounted = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={kib}k"), "tmpfs"])
+            .arg(&dir)
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success());
+        mounted.then_some(SmallDisk { dir })
+    }
+}
+
+impl Drop for SmallDisk {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(&self.dir).status();
+    }
+}
+
+#[test]
+fn a_full_disk_is_reported_and_leaves_only_whole_files() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("full-disk");
+    ws.manifest("edge", "edge", |_| {});
+    ws.manifest("plane", "plane", |_| {});
+    // Room for run.json and a few images, not for all of them.
+    let Some(disk) = SmallDisk::mount(ws.dir.join("full"), 48) else {
+        eprintln!("skipped: mounting a small tmpfs needs root (CI runs as root)");
+        return;
+    };
+    let output = ws.run(&[
+        "run",
+        "--modes",
+        "deferred-1x1,adaptive-2x2",
+        "--repetitions",
+        "1",
+        "--out",
+        disk.dir.to_str().unwrap(),
+        "--truth-cache",
+        "truth",
+    ]);
+    let err = stderr(&output);
+    assert!(matches!(output.status.code(), Some(2 | 3)), "{err}");
+    assert!(err.contains("No space left on device"), "{err}");
+    // A mode whose images could not be written keeps its measurements: the table's last
+    // column, PSNR against the truth, still has a number before the write error.
+    let failed_writes: Vec<&str> =
+        err.lines().filter(|l| l.contains("(os error 28)") && l.contains("-1x1 ")).collect();
+    assert!(!failed_writes.is_empty(), "{err}");
+    for line in failed_writes {
+        let psnr = line.split(" (").next().unwrap().split_whitespace().last().unwrap();
+        assert!(psnr.parse::<f64>().is_ok(), "no PSNR kept: {line}");
+    }
+    eprintln!("DEBUG {err}");
+
+    let mut files = Vec::new();
+    let mut folders = vec![disk.dir.clone()];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(folder).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() { folders.push(path) } else { files.push(path) }
+        }
+    }
+    assert!(files.iter().any(|f| f.ends_with("run.json")), "{files:?}");
+    for file in &files {
+        let name = file.to_string_lossy();
+        assert!(!name.contains(".tmp-"), "a temporary file stayed: {name}");
+        match file.extension().and_then(|e| e.to_str()) {
+            Some("json") => drop(read_json(file)),
+            Some("png") => drop(image::open(file).unwrap_or_else(|e| panic!("{name}: {e}"))),
+            Some("exr") => drop(
+                exr::prelude::read_first_rgba_layer_from_file(
+                    file,
+                    |_, _| (),
+                    |_, _, _: (f32, f32, f32, f32)| (),
+                )
+                .unwrap_or_else(|e| panic!("{name}: {e}")),
+            ),
+            _ => {}
+        }
+    }
 }

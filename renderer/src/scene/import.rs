@@ -15,8 +15,7 @@ use crate::RenderError;
 pub fn load_gltf(path: &Path) -> Result<Scene, RenderError> {
     let fail = |message: String| RenderError::Scene { path: path.to_path_buf(), message };
     regular_file(path).map_err(|e| fail(format!("cannot read glTF: {e}")))?;
-    let gltf::Gltf { document, blob } =
-        gltf::Gltf::open(path).map_err(|e| fail(format!("cannot read glTF: {e}")))?;
+    let gltf::Gltf { document, blob } = open(path).map_err(|e| fail(format!("cannot read glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
     check_external_files(&document, base).map_err(fail)?;
     let buffers = gltf::import_buffers(&document, Some(base), blob)
@@ -64,10 +63,12 @@ fn check_external_files(document: &gltf::Document, base: &Path) -> Result<(), St
         gltf::buffer::Source::Uri(uri) => Some((format!("buffers[{}]", b.index()), uri)),
         gltf::buffer::Source::Bin => None,
     });
-    let images = document.images().filter_map(|i| match i.source() {
-        gltf::image::Source::Uri { uri, .. } => Some((format!("images[{}]", i.index()), uri)),
-        gltf::image::Source::View { .. } => None,
-    });
+    let mut images = Vec::new();
+    for index in 0..document.images().len() {
+        if let ImageSource::Uri(uri) = image_source(document, index)? {
+            images.push((format!("images[{index}]"), uri));
+        }
+    }
     for (what, uri) in buffers.chain(images) {
         if uri.starts_with("data:") {
             continue;
@@ -128,9 +129,35 @@ fn percent_decode(uri: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
+/// Reads and validates a glTF or GLB file. The gltf crate's validation (gltf-json 1.4.1) looks
+/// up each primitive's POSITION accessor before checking that it exists, and panics when it
+/// does not; that one reference is checked here first.
+fn open(path: &Path) -> Result<gltf::Gltf, String> {
+    use gltf::json::mesh::Semantic;
+    use gltf::json::validation::Checked;
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| e.to_string())?;
+    let json = document.into_json();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive.attributes.get(&Checked::Valid(Semantic::Positions));
+            if let Some(accessor) = position.filter(|a| a.value() >= json.accessors.len()) {
+                return Err(format!(
+                    "meshes[{m}].primitives[{p}].attributes.POSITION: accessor {} does not exist (the file has {})",
+                    accessor.value(),
+                    json.accessors.len()
+                ));
+            }
+        }
+    }
+    let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
+    Ok(gltf::Gltf { document, blob })
+}
+
 /// The `asset.generator` string of a glTF file, if it can be read.
 pub fn read_generator(path: &Path) -> Option<String> {
-    let gltf = gltf::Gltf::open(path).ok()?;
+    let gltf = open(path).ok()?;
     gltf.document.as_json().asset.generator.clone()
 }
 
@@ -219,7 +246,7 @@ impl Importer {
                     node.index()
                 ));
             }
-            let world = self.visit(&node, parent, buffers)?;
+            let world = self.visit(document, &node, parent, buffers)?;
             stack.extend(node.children().map(|child| (child, world)).collect::<Vec<_>>().into_iter().rev());
         }
         Ok(())
@@ -228,6 +255,7 @@ impl Importer {
     /// Adds one node's mesh and camera; returns its world transform.
     fn visit(
         &mut self,
+        document: &gltf::Document,
         node: &gltf::Node,
         parent: DMat4,
         buffers: &[gltf::buffer::Data],
@@ -243,7 +271,7 @@ impl Importer {
             }
         }
         if let (Some(camera), None) = (node.camera(), &self.scene.camera) {
-            self.scene.camera = camera_from_node(&camera, world);
+            self.scene.camera = camera_from_node(document, camera.index(), world)?;
         }
         Ok(world)
     }
@@ -268,11 +296,14 @@ impl Importer {
             return Ok(());
         }
         for (semantic, accessor) in primitive.attributes() {
-            check_accessor(&accessor, buffers)
+            check_format(Some(&semantic), &accessor)
+                .and_then(|()| check_accessor(&accessor, buffers))
                 .map_err(|e| format!("{}: attributes.{}: {e}", name(), semantic.to_string()))?;
         }
         if let Some(accessor) = primitive.indices() {
-            check_accessor(&accessor, buffers).map_err(|e| format!("{}: indices: {e}", name()))?;
+            check_format(None, &accessor)
+                .and_then(|()| check_accessor(&accessor, buffers))
+                .map_err(|e| format!("{}: indices: {e}", name()))?;
         }
         let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(|d| &d.0[..]));
         let positions: Vec<[f32; 3]> = reader
@@ -398,6 +429,35 @@ impl Importer {
     }
 }
 
+/// Checks that an accessor the importer reads has a format glTF allows for it (`None` for
+/// indices): the gltf crate's readers assume it and panic otherwise. Sparse accessors are
+/// refused rather than read: their indices and values are not bounds-checked by the crate.
+fn check_format(semantic: Option<&gltf::Semantic>, accessor: &gltf::Accessor) -> Result<(), String> {
+    use gltf::Semantic;
+    use gltf::accessor::{DataType, Dimensions};
+    let format = (accessor.data_type(), accessor.dimensions());
+    let allowed = match semantic {
+        None => matches!(format, (DataType::U8 | DataType::U16 | DataType::U32, Dimensions::Scalar)),
+        Some(Semantic::Positions | Semantic::Normals) => format == (DataType::F32, Dimensions::Vec3),
+        Some(Semantic::TexCoords(_)) => {
+            matches!(format, (DataType::F32 | DataType::U8 | DataType::U16, Dimensions::Vec2))
+        }
+        // Read by no one here.
+        Some(_) => return Ok(()),
+    };
+    let index = accessor.index();
+    if !allowed {
+        let (data_type, dimensions) = format;
+        return Err(format!(
+            "accessors[{index}]: {dimensions:?} of {data_type:?} is not a format glTF allows here"
+        ));
+    }
+    if accessor.sparse().is_some() {
+        return Err(format!("accessors[{index}]: sparse accessors are not supported"));
+    }
+    Ok(())
+}
+
 /// Checks that an accessor's elements lie inside its buffer view and the view inside its
 /// buffer, so that a short file is reported as short rather than as a missing attribute.
 fn check_accessor(accessor: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<(), String> {
@@ -465,19 +525,28 @@ fn repair_normals(vertices: &mut [Vertex], world: &[DVec3], triangles: &[[u32; 3
     }
 }
 
-fn camera_from_node(camera: &gltf::Camera, world: DMat4) -> Option<Camera> {
-    let gltf::camera::Projection::Perspective(perspective) = camera.projection() else {
-        return None;
-    };
-    Some(Camera {
+/// The camera of a node, if perspective (orthographic cameras are skipped). Read from the
+/// JSON: `gltf::Camera::projection` panics when the object its `type` names is missing.
+fn camera_from_node(document: &gltf::Document, index: usize, world: DMat4) -> Result<Option<Camera>, String> {
+    use gltf::json::camera::Type;
+    use gltf::json::validation::Checked;
+    let json = &document.as_json().cameras[index];
+    if json.type_ != Checked::Valid(Type::Perspective) {
+        return Ok(None);
+    }
+    let perspective = json
+        .perspective
+        .as_ref()
+        .ok_or_else(|| format!("cameras[{index}]: type is perspective, but `perspective` is missing"))?;
+    Ok(Some(Camera {
         position: world.transform_point3(DVec3::ZERO),
         forward: world.transform_vector3(-DVec3::Z),
         up: world.transform_vector3(DVec3::Y),
-        fov_y: f64::from(perspective.yfov()),
-        near: f64::from(perspective.znear()),
+        fov_y: f64::from(perspective.yfov),
+        near: f64::from(perspective.znear),
         // An infinite far plane gets a finite one from the scene bounds later.
-        far: perspective.zfar().map_or(f64::INFINITY, f64::from),
-    })
+        far: perspective.zfar.map_or(f64::INFINITY, f64::from),
+    }))
 }
 
 /// The largest texture side decoded (the largest 2D texture Vulkan devices commonly allow);
@@ -492,7 +561,6 @@ fn decode_textures(
     buffers: &[gltf::buffer::Data],
     image_of_texture: &HashMap<usize, usize>,
 ) -> Result<Vec<Texture>, String> {
-    let images: Vec<gltf::Image> = document.images().collect();
     let mut wanted: Vec<(usize, usize)> = image_of_texture.iter().map(|(&i, &t)| (i, t)).collect();
     wanted.sort_by_key(|&(_, texture)| texture);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
@@ -501,10 +569,9 @@ fn decode_textures(
         let workers: Vec<_> = wanted
             .chunks(chunk)
             .map(|part| {
-                let images = &images;
                 scope.spawn(move || {
                     part.iter()
-                        .map(|&(image, _)| decode_image(&images[image], base, buffers))
+                        .map(|&(image, _)| decode_image(document, image, base, buffers))
                         .collect::<Result<Vec<_>, _>>()
                 })
             })
@@ -517,26 +584,52 @@ fn decode_textures(
     })
 }
 
+/// Where an image's bytes are.
+enum ImageSource<'a> {
+    View(gltf::buffer::View<'a>),
+    Uri(&'a str),
+}
+
+/// An image's source, read from its JSON: `gltf::Image::source` panics on an image with a
+/// buffer view but no `mimeType`, or with neither a view nor a URI (gltf 1.4.1). The MIME type
+/// is not needed: decoding guesses the format from the bytes.
+fn image_source(document: &gltf::Document, index: usize) -> Result<ImageSource<'_>, String> {
+    let json = &document.as_json().images[index];
+    match (&json.buffer_view, &json.uri) {
+        (Some(view), _) => document
+            .views()
+            .nth(view.value())
+            .map(ImageSource::View)
+            .ok_or_else(|| format!("images[{index}].bufferView: view {} does not exist", view.value())),
+        (None, Some(uri)) => Ok(ImageSource::Uri(uri)),
+        (None, None) => Err(format!("images[{index}]: has neither a bufferView nor a uri")),
+    }
+}
+
 /// One image to RGBA8. Errors name the image and where it comes from.
-fn decode_image(image: &gltf::Image, base: &Path, buffers: &[gltf::buffer::Data]) -> Result<Texture, String> {
-    let index = image.index();
-    let (bytes, what) = match image.source() {
-        gltf::image::Source::View { view, .. } => {
-            let range = view.offset()..view.offset() + view.length();
+fn decode_image(
+    document: &gltf::Document,
+    index: usize,
+    base: &Path,
+    buffers: &[gltf::buffer::Data],
+) -> Result<Texture, String> {
+    let (bytes, what) = match image_source(document, index)? {
+        ImageSource::View(view) => {
             let what = format!("images[{index}] (bufferViews[{}])", view.index());
-            let bytes = buffers[view.buffer().index()]
-                .0
-                .get(range)
+            let bytes = view
+                .offset()
+                .checked_add(view.length())
+                .and_then(|end| buffers.get(view.buffer().index())?.0.get(view.offset()..end))
                 .ok_or_else(|| format!("{what}: the view runs past its buffer"))?;
             (std::borrow::Cow::Borrowed(bytes), what)
         }
-        gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
-            // Embedded base64: the gltf crate decodes it.
-            return gltf::image::Data::from_source(image.source(), None, buffers)
-                .map(to_rgba8)
-                .map_err(|e| format!("images[{index}] (data URI): {e}"));
+        ImageSource::Uri(uri) if uri.starts_with("data:") => {
+            // Decoded here rather than by the gltf crate, so an embedded image meets the same
+            // size check and limits as one in a file.
+            let what = format!("images[{index}] (data URI)");
+            (std::borrow::Cow::Owned(decode_data_uri(uri).map_err(|e| format!("{what}: {e}"))?), what)
         }
-        gltf::image::Source::Uri { uri, .. } => {
+        ImageSource::Uri(uri) => {
             let path = base.join(percent_decode(uri));
             let what = format!("images[{index}] (uri {uri})");
             let bytes = std::fs::read(&path).map_err(|e| format!("{what}: {}: {e}", path.display()))?;
@@ -564,38 +657,12 @@ fn decode_image(image: &gltf::Image, base: &Path, buffers: &[gltf::buffer::Data]
     Ok(Texture { width, height, rgba: decoded.into_rgba8().into_raw() })
 }
 
-fn to_rgba8(data: gltf::image::Data) -> Texture {
-    use gltf::image::Format;
-    let (channels, bytes) = match data.format {
-        Format::R8 => (1, 1),
-        Format::R8G8 => (2, 1),
-        Format::R8G8B8 => (3, 1),
-        Format::R8G8B8A8 => (4, 1),
-        Format::R16 => (1, 2),
-        Format::R16G16 => (2, 2),
-        Format::R16G16B16 => (3, 2),
-        Format::R16G16B16A16 => (4, 2),
-        Format::R32G32B32FLOAT => (3, 4),
-        Format::R32G32B32A32FLOAT => (4, 4),
-    };
-    // 16-bit channels keep their high byte (little-endian), float channels are clamped.
-    let byte = |texel: &[u8], c: usize| match bytes {
-        1 => texel[c],
-        2 => texel[2 * c + 1],
-        _ => {
-            let v = f32::from_le_bytes(texel[4 * c..4 * c + 4].try_into().expect("4 bytes"));
-            (v.clamp(0.0, 1.0) * 255.0).round() as u8
-        }
-    };
-    let rgba = data
-        .pixels
-        .chunks_exact(channels * bytes)
-        .flat_map(|t| match channels {
-            1 => [byte(t, 0), byte(t, 0), byte(t, 0), 255],
-            2 => [byte(t, 0), byte(t, 0), byte(t, 0), byte(t, 1)],
-            3 => [byte(t, 0), byte(t, 1), byte(t, 2), 255],
-            _ => [byte(t, 0), byte(t, 1), byte(t, 2), byte(t, 3)],
-        })
-        .collect();
-    Texture { width: data.width, height: data.height, rgba }
+/// The bytes of a base64 `data:` URI (`data:[<media type>];base64,<data>`).
+fn decode_data_uri(uri: &str) -> Result<Vec<u8>, String> {
+    let rest = uri.strip_prefix("data:").unwrap_or(uri);
+    let (header, data) = rest.split_once(',').ok_or("no `,` between the media type and the data")?;
+    if !header.ends_with(";base64") {
+        return Err(format!("`data:{header},…` is not base64; only base64 data URIs are read"));
+    }
+    base64::decode(data).map_err(|e| format!("bad base64: {e}"))
 }

@@ -285,34 +285,35 @@ impl GltfWriter {
         document
     }
 
-    /// The GLB container: a 12-byte header, the JSON chunk and the binary chunk, each padded
-    /// to four bytes (JSON with spaces, binary with zeros).
+    /// The scene as GLB.
     pub fn to_glb(&self) -> Vec<u8> {
-        let mut json = serde_json::to_vec(&self.document()).expect("JSON of plain values");
-        while !json.len().is_multiple_of(4) {
-            json.push(b' ');
-        }
-        let mut bin = self.bin.clone();
-        while !bin.len().is_multiple_of(4) {
-            bin.push(0);
-        }
-        let length = 12 + 8 + json.len() + 8 + bin.len();
-        let mut glb = Vec::with_capacity(length);
-        glb.extend_from_slice(b"glTF");
-        glb.extend_from_slice(&2u32.to_le_bytes());
-        glb.extend_from_slice(&(length as u32).to_le_bytes());
-        for (kind, chunk) in [(b"JSON", &json), (b"BIN\0", &bin)] {
-            glb.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
-            glb.extend_from_slice(kind);
-            glb.extend_from_slice(chunk);
-        }
-        glb
+        glb(&self.document(), &self.bin)
     }
 
     /// Writes the GLB atomically: a reader never sees half a file.
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         write_atomic(path, &self.to_glb())
     }
+}
+
+/// The GLB container of a document and its binary buffer: a 12-byte header, the JSON chunk and
+/// the binary chunk, each padded to four bytes (JSON with spaces, binary with zeros).
+pub fn glb(document: &Value, bin: &[u8]) -> Vec<u8> {
+    let mut json = serde_json::to_vec(document).expect("JSON of plain values");
+    json.resize(json.len().next_multiple_of(4), b' ');
+    let mut bin = bin.to_vec();
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let length = 12 + 8 + json.len() + 8 + bin.len();
+    let mut glb = Vec::with_capacity(length);
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&(length as u32).to_le_bytes());
+    for (kind, chunk) in [(b"JSON", &json), (b"BIN\0", &bin)] {
+        glb.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
+        glb.extend_from_slice(kind);
+        glb.extend_from_slice(chunk);
+    }
+    glb
 }
 
 /// Writes `bytes` to a temporary file beside `path`, then renames it into place.

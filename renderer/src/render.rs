@@ -116,11 +116,16 @@ pub struct GBufferImages {
 }
 
 impl GBufferImages {
+    /// The indices of pixel (x, y)'s M×M samples, row by row.
+    pub fn window_indices(&self, m: u32, x: u32, y: u32) -> impl Iterator<Item = usize> + use<> {
+        let width = self.width;
+        (0..m * m).map(move |i| ((y * m + i / m) * width + x * m + i % m) as usize)
+    }
+
     /// The M×M window of samples of pixel (x, y), row by row, as the adaptive metric sees it.
     pub fn window(&self, m: u32, x: u32, y: u32) -> Vec<crate::adaptive::WindowSample> {
-        (0..m * m)
-            .map(|i| {
-                let s = ((y * m + i / m) * self.width + x * m + i % m) as usize;
+        self.window_indices(m, x, y)
+            .map(|s| {
                 let [nx, ny, nz, material] = self.normal_material[s];
                 crate::adaptive::WindowSample {
                     depth: self.depth[s],

@@ -249,6 +249,99 @@ fn files_that_panicked_the_gltf_crate_are_errors() {
     assert!(error(&nothing).contains("images[0]: has neither a bufferView nor a uri"), "{}", error(&nothing));
 }
 
+/// Accessors and references the gltf crate's readers would panic on (found by
+/// `runner/tests/fuzz.rs` and its review): each is an error naming the part.
+#[test]
+fn accessors_the_gltf_crate_cannot_read_are_refused_by_name() {
+    let folder = Folder::new("formats");
+    type Edit = fn(&mut Value);
+    let cases: [(&str, Edit, &str); 6] = [
+        ("count0.gltf", |d| d["accessors"][0]["count"] = json!(0), "accessors[0]: count is 0"),
+        (
+            "stride.gltf",
+            |d| d["bufferViews"][0]["byteStride"] = json!(4),
+            "bufferViews[0].byteStride 4 is shorter than the 12-byte elements of accessors[0]",
+        ),
+        (
+            "float-indices.gltf",
+            |d| {
+                d["accessors"].as_array_mut().unwrap().push(json!({
+                    "bufferView": 0, "componentType": 5126, "count": 3, "type": "SCALAR"
+                }));
+                d["meshes"][0]["primitives"][0]["indices"] = json!(1);
+            },
+            "indices: accessors[1]: Scalar of F32 is not a format glTF allows here",
+        ),
+        (
+            "vec2-positions.gltf",
+            |d| d["accessors"][0]["type"] = json!("VEC2"),
+            "attributes.POSITION: accessors[0]: Vec2 of F32 is not a format glTF allows here",
+        ),
+        (
+            "sparse.gltf",
+            |d| {
+                d["accessors"][0]["sparse"] = json!({
+                    "count": 1,
+                    "indices": { "bufferView": 0, "componentType": 5125 },
+                    "values": { "bufferView": 0 }
+                });
+            },
+            "accessors[0]: sparse accessors are not supported",
+        ),
+        (
+            "escape.gltf",
+            |d| d["buffers"][0]["uri"] = json!("tri%FF.bin"),
+            "buffers[0].uri: `tri%FF.bin`: its %-escapes do not decode to UTF-8",
+        ),
+    ];
+    for (name, edit, expected) in cases {
+        let message = error(&folder.one_node(name, edit));
+        assert!(message.contains(expected), "{name}: {message}");
+    }
+}
+
+#[test]
+fn cameras_without_their_projection_and_positions_beyond_range_are_errors() {
+    let folder = Folder::new("projection");
+    let with_camera = |name: &str, camera: Value| {
+        folder.gltf(name, json!([{ "mesh": 0 }, { "camera": 0, "translation": [0, 0, 3] }]), move |d| {
+            d["cameras"] = json!([camera.clone()]);
+            d["scenes"][0]["nodes"] = json!([0, 1]);
+        })
+    };
+    // The type names an object the file lacks: an error, never the crate's unwrap.
+    for (name, camera) in
+        [("p.gltf", json!({ "type": "perspective" })), ("o.gltf", json!({ "type": "orthographic" }))]
+    {
+        let path = with_camera(name, camera);
+        let message = error(&path);
+        assert!(message.contains("cameras[0]"), "{name}: {message}");
+    }
+    // An orthographic camera is skipped (no perspective camera): the scene still loads.
+    let ortho = with_camera(
+        "ortho.gltf",
+        json!({ "type": "orthographic", "orthographic": { "xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 10 } }),
+    );
+    assert!(load_gltf(&ortho).unwrap().camera.is_none());
+
+    // Scales finite in f32 that multiply up past what a position may be.
+    let huge = folder.gltf(
+        "huge.gltf",
+        json!([{ "scale": [1e30, 1e30, 1e30], "children": [1] }, { "mesh": 0, "scale": [1e30, 1e30, 1e30] }]),
+        |_| {},
+    );
+    let message = error(&huge);
+    assert!(message.contains("vertex 1 lies at") && message.contains("beyond ±1e12"), "{message}");
+
+    // A GLB whose header states less than its own 12 bytes.
+    let glb = folder.dir.join("short.glb");
+    let mut bytes = b"glTF".to_vec();
+    bytes.extend_from_slice(&2u32.to_le_bytes());
+    bytes.extend_from_slice(&4u32.to_le_bytes());
+    std::fs::write(&glb, bytes).unwrap();
+    assert!(error(&glb).contains("less than the header itself"), "{}", error(&glb));
+}
+
 #[test]
 fn a_placed_generated_scene_scales_its_camera_clip_planes_too() {
     use aabench_renderer::scene::generate::{Generated, Generator, Placement};

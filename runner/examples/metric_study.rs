@@ -60,7 +60,8 @@ fn main() -> anyhow::Result<()> {
         for p in 0..w * h {
             let (x, y) = (p % w, p / w);
             let window = gbuffer.window(m, x, y);
-            let materials: Vec<f32> = window_materials(&gbuffer.normal_material, gbuffer.width, m, x, y);
+            let materials: Vec<f32> =
+                gbuffer.window_indices(m, x, y).map(|s| gbuffer.normal_material[s][3]).collect();
             let cross = adaptive::luma_cross(&first, w, h, x, y, exposure);
             let shading_only = MetricSet { geometry: false, shading: true };
             let n_shading = adaptive::sample_count(&window, &cross, m, &settings.adaptive, shading_only);
@@ -76,10 +77,6 @@ fn main() -> anyhow::Result<()> {
         study.print();
     }
     Ok(())
-}
-
-fn window_materials(normal_material: &[[f32; 4]], width: u32, m: u32, x: u32, y: u32) -> Vec<f32> {
-    (0..m * m).map(|i| normal_material[((y * m + i / m) * width + x * m + i % m) as usize][3]).collect()
 }
 
 /// All samples covered, one material, one normal, and depths on one plane.

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use aabench_renderer::scene::percent_decode;
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
@@ -61,34 +62,16 @@ fn external_resources(path: &Path, bytes: &[u8]) -> anyhow::Result<Vec<PathBuf>>
     let uris = ["buffers", "images"].into_iter().flat_map(|list| {
         document[list].as_array().into_iter().flatten().filter_map(|item| item["uri"].as_str())
     });
-    Ok(uris.filter(|uri| !uri.starts_with("data:")).map(|uri| folder.join(percent_decode(uri))).collect())
+    uris.filter(|uri| !uri.starts_with("data:"))
+        .map(|uri| percent_decode(uri).map(|relative| folder.join(relative)))
+        .collect::<Result<_, _>>()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }
 
 /// The JSON chunk of a GLB: a 12-byte header, then chunks of (length, type, data).
 fn glb_json_chunk(bytes: &[u8]) -> Option<&[u8]> {
     let length = u32::from_le_bytes(bytes.get(12..16)?.try_into().ok()?) as usize;
     (bytes.get(16..20)? == b"JSON").then(|| bytes.get(20..20 + length)).flatten()
-}
-
-/// URIs in glTF are percent-encoded (`my%20texture.png`).
-fn percent_decode(uri: &str) -> String {
-    let bytes = uri.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        let hex_pair = bytes.get(i + 1..i + 3).and_then(|h| std::str::from_utf8(h).ok());
-        match (bytes[i], hex_pair.and_then(|h| u8::from_str_radix(h, 16).ok())) {
-            (b'%', Some(byte)) => {
-                out.push(byte);
-                i += 3;
-            }
-            (byte, _) => {
-                out.push(byte);
-                i += 1;
-            }
-        }
-    }
-    String::from_utf8_lossy(&out).into_owned()
 }
 
 /// Lowercase hexadecimal.

@@ -567,9 +567,13 @@ async fn finish_modes(
     records
 }
 
+/// Fails a mode; a second error is added to the first, not written over it.
 fn fail_mode(record: &mut ModeRecord, error: String) {
     record.status = Status::Failed;
-    record.error = Some(error);
+    record.error = Some(match record.error.take() {
+        Some(first) => format!("{first}; {error}"),
+        None => error,
+    });
 }
 
 /// The image a mode is compared with, with the same stall if it ran, else the other (their
@@ -760,7 +764,8 @@ fn truth_summary(truth: &TruthRecord) -> String {
 fn available_memory() -> Option<u64> {
     let meminfo = std::fs::read_to_string("/proc/meminfo").ok();
     let host = meminfo.as_deref().and_then(|m| meminfo_field(m, "MemAvailable:")).map(|kib| kib * 1024);
-    match (host, cgroup_headroom(Path::new("/sys/fs/cgroup"))) {
+    let membership = std::fs::read_to_string("/proc/self/cgroup").unwrap_or_default();
+    match (host, cgroup_headroom(Path::new("/sys/fs/cgroup"), &membership)) {
         (Some(host), Some(cgroup)) => Some(host.min(cgroup)),
         (host, cgroup) => host.or(cgroup),
     }
@@ -770,25 +775,43 @@ fn meminfo_field(text: &str, name: &str) -> Option<u64> {
     text.lines().find(|l| l.starts_with(name))?.split_whitespace().nth(1)?.parse().ok()
 }
 
-/// What this process's memory cgroup still allows (a container's limit, which MemAvailable
-/// does not show): the limit less the working set, usage without the inactive page cache the
-/// kernel reclaims first (as `docker stats` counts it). cgroup v2, else v1; None without a
-/// limit.
-fn cgroup_headroom(root: &Path) -> Option<u64> {
-    let read = |file: &str| std::fs::read_to_string(root.join(file)).ok();
-    let number = |file: &str| read(file)?.trim().parse::<u64>().ok();
-    let stat = |file: &str, field: &str| {
-        read(file)?.lines().find_map(|l| l.strip_prefix(field)?.trim().parse::<u64>().ok())
+/// What this process's memory cgroups still allow (a container's limit, which MemAvailable
+/// does not show): the least, over the process's cgroup and its ancestors, of the limit less
+/// the working set (usage without the inactive page cache the kernel reclaims first, as
+/// `docker stats` counts it). `root` is the cgroup mount and `membership` the text of
+/// /proc/self/cgroup; cgroup v2 where the mount is unified, else v1's memory controller. None
+/// where no level sets a limit.
+fn cgroup_headroom(root: &Path, membership: &str) -> Option<u64> {
+    let unified = root.join("cgroup.controllers").exists();
+    let (base, own, files) = if unified {
+        let own = membership.lines().find_map(|l| l.strip_prefix("0::"));
+        (root.to_path_buf(), own, ["memory.max", "memory.current", "memory.stat", "inactive_file "])
+    } else {
+        let own = membership.lines().find_map(|l| {
+            let (controllers, path) = l.split_once(':')?.1.split_once(':')?;
+            controllers.split(',').any(|c| c == "memory").then_some(path)
+        });
+        let files = ["memory.limit_in_bytes", "memory.usage_in_bytes", "memory.stat", "total_inactive_file "];
+        (root.join("memory"), own, files)
     };
-    let (limit, usage, inactive) = match number("memory.max") {
-        Some(limit) => (limit, number("memory.current")?, stat("memory.stat", "inactive_file ").unwrap_or(0)),
-        None => (
-            number("memory/memory.limit_in_bytes")?,
-            number("memory/memory.usage_in_bytes")?,
-            stat("memory/memory.stat", "total_inactive_file ").unwrap_or(0),
-        ),
+    let [limit_file, usage_file, stat_file, inactive_field] = files;
+    let headroom = |dir: &Path| {
+        let read = |file: &str| std::fs::read_to_string(dir.join(file)).ok();
+        // "max" (v2) does not parse: no limit at this level.
+        let limit = read(limit_file)?.trim().parse::<u64>().ok()?;
+        let usage = read(usage_file)?.trim().parse::<u64>().ok()?;
+        let inactive = read(stat_file)
+            .and_then(|stat| {
+                stat.lines().find_map(|l| l.strip_prefix(inactive_field)?.trim().parse::<u64>().ok())
+            })
+            .unwrap_or(0);
+        Some(limit.saturating_sub(usage.saturating_sub(inactive)))
     };
-    Some(limit.saturating_sub(usage.saturating_sub(inactive)))
+    // In a cgroup namespace the own path may not exist under the mount: the mount's root is
+    // then the process's cgroup.
+    let leaf = own.map(|path| base.join(path.trim_start_matches('/'))).filter(|dir| dir.is_dir());
+    let levels = leaf.as_deref().unwrap_or(&base).ancestors().take_while(|dir| dir.starts_with(&base));
+    levels.filter_map(headroom).min()
 }
 
 /// Frame timeout when none is given: generous, since a warm-up frame includes compilation.
@@ -801,29 +824,44 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_cgroup_limit_caps_the_memory_budget_v2_and_v1() {
+    fn a_cgroup_limit_caps_the_memory_budget_at_the_tightest_level() {
         let root = std::env::temp_dir().join(format!("aabench-cgroup-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&root);
-        std::fs::create_dir_all(root.join("memory")).unwrap();
-        let write = |file: &str, text: &str| std::fs::write(root.join(file), text).unwrap();
-        assert_eq!(cgroup_headroom(&root), None, "no cgroup files: no limit");
+        let write = |file: &str, text: &str| {
+            let path = root.join(file);
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(path, text).unwrap();
+        };
+        const GIB: u64 = 1 << 30;
 
-        // v1: 4 GiB limit, 3 GiB used of which 1 GiB is reclaimable page cache.
-        write("memory/memory.limit_in_bytes", "4294967296\n");
-        write("memory/memory.usage_in_bytes", "3221225472\n");
-        write("memory/memory.stat", "cache 2000\ntotal_inactive_file 1073741824\n");
-        assert_eq!(cgroup_headroom(&root), Some(2 << 30));
-
-        // v2 wins where present; "max" means no limit, so v1's files answer.
-        write("memory.max", "max\n");
-        assert_eq!(cgroup_headroom(&root), Some(2 << 30));
-        write("memory.max", "1073741824\n");
-        write("memory.current", "536870912\n");
-        write("memory.stat", "anon 1\ninactive_file 0\n");
-        assert_eq!(cgroup_headroom(&root), Some(512 << 20));
+        // v1: the process in /ci/job; the job allows 4 GiB (3 used, 1 of it reclaimable
+        // cache), its parent 8 GiB with 7.5 used; the root sets no limit that matters.
+        let v1 = "4:memory:/ci/job\n1:cpu:/\n";
+        write("memory/memory.limit_in_bytes", "9223372036854771712\n");
+        write("memory/memory.usage_in_bytes", "0\n");
+        assert_eq!(cgroup_headroom(&root, v1), Some(9223372036854771712), "root level only");
+        write("memory/ci/job/memory.limit_in_bytes", &format!("{}\n", 4 * GIB));
+        write("memory/ci/job/memory.usage_in_bytes", &format!("{}\n", 3 * GIB));
+        write("memory/ci/job/memory.stat", &format!("cache 1\ntotal_inactive_file {GIB}\n"));
+        assert_eq!(cgroup_headroom(&root, v1), Some(2 * GIB), "the job's own limit");
+        write("memory/ci/memory.limit_in_bytes", &format!("{}\n", 8 * GIB));
+        write("memory/ci/memory.usage_in_bytes", &format!("{}\n", 15 * GIB / 2));
+        assert_eq!(cgroup_headroom(&root, v1), Some(GIB / 2), "the parent is tighter");
         // Usage over the limit leaves nothing, without wrapping.
-        write("memory.current", "2147483648\n");
-        assert_eq!(cgroup_headroom(&root), Some(0));
+        write("memory/ci/memory.usage_in_bytes", &format!("{}\n", 9 * GIB));
+        assert_eq!(cgroup_headroom(&root, v1), Some(0));
+
+        // v2 (a unified mount): "max" sets no limit; the process's own level does.
+        write("cgroup.controllers", "memory\n");
+        let v2 = "0::/user.slice/run\n";
+        write("memory.max", "max\n");
+        assert_eq!(cgroup_headroom(&root, v2), None, "no level sets a limit");
+        write("user.slice/run/memory.max", &format!("{GIB}\n"));
+        write("user.slice/run/memory.current", &format!("{}\n", GIB / 2));
+        write("user.slice/run/memory.stat", "anon 1\ninactive_file 0\n");
+        assert_eq!(cgroup_headroom(&root, v2), Some(GIB / 2));
+        // In a cgroup namespace the path is "/" and the mount's root is the process's cgroup.
+        assert_eq!(cgroup_headroom(&root, "0::/\n"), None);
         std::fs::remove_dir_all(&root).unwrap();
     }
 }

@@ -38,16 +38,18 @@ pub struct Worker {
     pub platform: PlatformInfo,
     /// Set after a timeout or a panic: the thread may still be busy, or its state broken.
     stuck: bool,
+    /// Set after a timeout: the thread may still be running the frame.
+    busy: bool,
 }
 
 /// The thread releases the device before the process exits, so the driver is not torn down by
 /// `exit` and the worker at once (a run whose worker was still alive at exit crashed once in
-/// about seventy, SIGSEGV after its record was written). A stuck thread is not waited for: it
-/// may never finish.
+/// about seventy, SIGSEGV after its record was written). A thread still running a timed-out
+/// frame is not waited for: it may never finish.
 impl Drop for Worker {
     fn drop(&mut self) {
         drop(self.jobs.take());
-        if let Some(thread) = self.thread.take().filter(|_| !self.stuck) {
+        if let Some(thread) = self.thread.take().filter(|_| !self.busy) {
             let _ = thread.join();
         }
     }
@@ -78,7 +80,7 @@ impl Worker {
         let platform = opened
             .await
             .map_err(|_| RenderError::Device("the GPU thread stopped while opening the device".into()))??;
-        Ok(Worker { jobs: Some(jobs), thread: Some(thread), platform, stuck: false })
+        Ok(Worker { jobs: Some(jobs), thread: Some(thread), platform, stuck: false, busy: false })
     }
 
     /// True once a job timed out or panicked: timings taken now would not be trustworthy.
@@ -114,6 +116,7 @@ impl Worker {
             }
             Err(_) => {
                 self.stuck = true;
+                self.busy = true;
                 Err(WorkerError::Timeout(timeout))
             }
         }

@@ -6,8 +6,8 @@
 //! that names the file: never a panic, never a hang, never a file written outside the
 //! manifest's folder. No device needed.
 //!
-//! `AABENCH_FUZZ_CASES` sets the number of inputs per loader (default 10 000, about ten seconds); the
-//! count tried is printed. A failing input stays in the temporary folder and proptest shrinks
+//! `AABENCH_FUZZ_CASES` sets the number of inputs per loader (default 10 000, about ten
+//! seconds) and `AABENCH_FUZZ_SEED` the random seed (default: the clock); both are printed. A failing input stays in the temporary folder and proptest shrinks
 //! it to the fewest mutations that still fail.
 
 use std::path::{Path, PathBuf};
@@ -24,7 +24,7 @@ use aabench_renderer::scene::write::{GltfWriter, MaterialDesc, MeshData, glb};
 use aabench_renderer::scene::{MAX_TEXTURE_SIDE, Scene, load_gltf};
 use glam::DVec3;
 use proptest::prelude::*;
-use proptest::test_runner::{Config, TestCaseError, TestRunner};
+use proptest::test_runner::{Config, RngAlgorithm, TestCaseError, TestRng, TestRunner};
 use serde_json::{Value, json};
 
 /// Longer than any honest load of these small files takes, by orders of magnitude.
@@ -90,6 +90,13 @@ fn interesting_value(pick: usize) -> Value {
         json!([0, 0, 0, 0]),
         json!([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0]),
         json!([0, 1, 2, 3, 4, 5, 6, 7]),
+        json!({ "count": 1, "indices": { "bufferView": 0, "componentType": 5125 }, "values": { "bufferView": 0 } }),
+        json!({ "KHR_texture_transform": { "offset": [0.5, 0], "scale": [2, 2], "rotation": 1e30 } }),
+        json!({ "KHR_lights_punctual": { "light": 0 } }),
+        json!(["KHR_draco_mesh_compression"]),
+        json!({ "xmag": 1, "ymag": 0, "znear": 0, "zfar": -1 }),
+        json!({ "yfov": 0, "znear": 0 }),
+        json!({ "index": 0, "texCoord": 7 }),
     ];
     values[pick % values.len()].clone()
 }
@@ -120,6 +127,8 @@ enum Mutation {
     Duplicate { node: usize },
     /// The `to`-th JSON value becomes a copy of the `from`-th.
     Splice { from: usize, to: usize },
+    /// A key the format knows, with an interesting value, is added to the `node`-th object.
+    Insert { node: usize, key: usize, value: usize },
     /// Four bytes of the binary buffer are overwritten with an interesting word.
     Word { offset: usize, word: usize },
     /// One bit of the written file is flipped.
@@ -134,6 +143,8 @@ fn mutation() -> impl Strategy<Value = Mutation> {
         2 => any::<usize>().prop_map(|node| Mutation::Remove { node }),
         1 => any::<usize>().prop_map(|node| Mutation::Duplicate { node }),
         1 => (any::<usize>(), any::<usize>()).prop_map(|(from, to)| Mutation::Splice { from, to }),
+        3 => (any::<usize>(), any::<usize>(), any::<usize>())
+            .prop_map(|(node, key, value)| Mutation::Insert { node, key, value }),
         2 => (any::<usize>(), any::<usize>()).prop_map(|(offset, word)| Mutation::Word { offset, word }),
         1 => (any::<usize>(), 0u8..8).prop_map(|(offset, bit)| Mutation::Bit { offset, bit }),
         1 => any::<usize>().prop_map(|keep| Mutation::Truncate { keep }),
@@ -245,11 +256,64 @@ fn at<'a>(root: &'a mut Value, path: &[Step]) -> &'a mut Value {
     })
 }
 
+fn at_ref<'a>(root: &'a Value, path: &[Step]) -> &'a Value {
+    path.iter().fold(root, |value, step| match step {
+        Step::Key(key) => &value[key.as_str()],
+        Step::Index(i) => &value[*i],
+    })
+}
+
+/// Keys of glTF and of manifests that seeds may lack: optional fields, extensions, the other
+/// projection, sparse storage.
+const KNOWN_KEYS: [&str; 32] = [
+    "byteStride",
+    "byteOffset",
+    "count",
+    "sparse",
+    "normalized",
+    "mimeType",
+    "uri",
+    "bufferView",
+    "extensions",
+    "extensionsRequired",
+    "extensionsUsed",
+    "orthographic",
+    "perspective",
+    "type",
+    "matrix",
+    "scale",
+    "rotation",
+    "translation",
+    "children",
+    "camera",
+    "mesh",
+    "indices",
+    "material",
+    "mode",
+    "NORMAL",
+    "TEXCOORD_0",
+    "TANGENT",
+    "baseColorTexture",
+    "texCoord",
+    "sampler",
+    "alphaMode",
+    "generate",
+];
+
 fn mutate_json(document: &mut Value, mutation: &Mutation) {
     let all = paths(document);
     let pick = |n: usize| &all[n % all.len()];
     match *mutation {
         Mutation::Replace { node, value } => *at(document, pick(node)) = interesting_value(value),
+        Mutation::Insert { node, key, value } => {
+            let objects: Vec<&Vec<Step>> = all.iter().filter(|p| at_ref(document, p).is_object()).collect();
+            if objects.is_empty() {
+                return;
+            }
+            if let Value::Object(map) = at(document, objects[node % objects.len()]) {
+                map.insert(KNOWN_KEYS[key % KNOWN_KEYS.len()].to_string(), interesting_value(value));
+            }
+        }
         Mutation::Splice { from, to } => {
             let copy = at(document, pick(from)).clone();
             *at(document, pick(to)) = copy;
@@ -413,8 +477,18 @@ fn fuzz<I: std::fmt::Debug>(
     load: impl Fn(&I) -> Result<bool, String>,
 ) {
     let cases = std::env::var("AABENCH_FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(10_000);
+    // A fresh seed each run explores new inputs; it is printed so any run can be repeated.
+    let seed: u64 =
+        std::env::var("AABENCH_FUZZ_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or_else(|| {
+            std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default().as_nanos()
+                as u64
+        });
+    let mut seed_bytes = [0u8; 32];
+    seed_bytes[..8].copy_from_slice(&seed.to_le_bytes());
+    let rng = TestRng::from_seed(RngAlgorithm::ChaCha, &seed_bytes);
     let counts = std::cell::Cell::new([0u32; 2]);
-    let mut runner = TestRunner::new(Config { cases, failure_persistence: None, ..Config::default() });
+    let config = Config { cases, failure_persistence: None, ..Config::default() };
+    let mut runner = TestRunner::new_with_rng(config, rng);
     let result = runner.run(&strategy, |input| {
         let loaded = load(&input).map_err(TestCaseError::fail)?;
         let mut count = counts.get();
@@ -423,10 +497,15 @@ fn fuzz<I: std::fmt::Debug>(
         Ok(())
     });
     if let Err(failure) = result {
-        panic!("{what}: {failure} (input left in {})", folder.display());
+        panic!(
+            "{what}: {failure} (input left in {}; repeat with AABENCH_FUZZ_SEED={seed})",
+            folder.display()
+        );
     }
     let [loaded, refused] = counts.get();
-    eprintln!("fuzzed {what} with {cases} inputs: {loaded} loaded, {refused} refused, 0 panics, 0 hangs");
+    eprintln!(
+        "fuzzed {what} with {cases} inputs (AABENCH_FUZZ_SEED={seed}): {loaded} loaded, {refused} refused, 0 panics, 0 hangs"
+    );
     // A harness whose mutations all broke the file would test only the parser's front door.
     assert!(loaded > cases / 20, "{what}: only {loaded} of {cases} mutated inputs loaded");
     assert!(refused > cases / 20, "{what}: only {refused} of {cases} mutated inputs were refused");

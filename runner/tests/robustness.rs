@@ -270,7 +270,6 @@ fn a_full_disk_is_reported_and_leaves_only_whole_files() {
         let psnr = line.split(" (").next().unwrap().split_whitespace().last().unwrap();
         assert!(psnr.parse::<f64>().is_ok(), "no PSNR kept: {line}");
     }
-    eprintln!("DEBUG {err}");
 
     let mut files = Vec::new();
     let mut folders = vec![disk.dir.clone()];

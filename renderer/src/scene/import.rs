@@ -79,7 +79,7 @@ fn check_external_files(document: &gltf::Document, base: &Path) -> Result<(), St
                 "{what}.uri: `{uri}` has a scheme; only relative paths and data: URIs are read"
             ));
         }
-        let relative = PathBuf::from(percent_decode(uri));
+        let relative = PathBuf::from(percent_decode(uri).map_err(|e| format!("{what}.uri: {e}"))?);
         if escapes(&relative) {
             return Err(format!("{what}.uri: `{uri}` leaves the glTF file's folder"));
         }
@@ -107,9 +107,10 @@ pub fn escapes(path: &Path) -> bool {
     false
 }
 
-/// `%XX` escapes of a URI decoded (glTF URIs are RFC 3986 references); anything malformed is
-/// kept as it is.
-fn percent_decode(uri: &str) -> String {
+/// `%XX` escapes of a URI decoded (glTF URIs are RFC 3986 references; a `%` not followed by
+/// two hex digits is kept as it is). Escapes that decode to bytes which are not UTF-8 are an
+/// error: the gltf crate would panic on them.
+pub fn percent_decode(uri: &str) -> Result<String, String> {
     let bytes = uri.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;
@@ -126,7 +127,7 @@ fn percent_decode(uri: &str) -> String {
             }
         }
     }
-    String::from_utf8_lossy(&out).into_owned()
+    String::from_utf8(out).map_err(|_| format!("`{uri}`: its %-escapes do not decode to UTF-8"))
 }
 
 /// Reads and validates a glTF or GLB file. The gltf crate's validation (gltf-json 1.4.1) looks
@@ -136,6 +137,15 @@ fn open(path: &Path) -> Result<gltf::Gltf, String> {
     use gltf::json::mesh::Semantic;
     use gltf::json::validation::Checked;
     let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    // The crate subtracts the 12-byte header from the stated length unchecked.
+    if let Some(length) = bytes.strip_prefix(b"glTF").and_then(|rest| rest.get(4..8)) {
+        let length = u32::from_le_bytes(length.try_into().expect("4 bytes"));
+        if length < 12 {
+            return Err(format!(
+                "the GLB header states a length of {length} bytes, less than the header itself"
+            ));
+        }
+    }
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| e.to_string())?;
     let json = document.into_json();
@@ -354,7 +364,18 @@ impl Importer {
         let mirrored = DMat3::from_mat4(world).determinant() < 0.0;
         let normal_matrix = DMat3::from_mat4(world).inverse().transpose();
         // World positions stay f64 until `finish` knows the scene's origin.
-        let to_world = |p: [f32; 3]| world.transform_point3(DVec3::from(p.map(f64::from)));
+        let world_positions: Vec<DVec3> =
+            positions.iter().map(|p| world.transform_point3(DVec3::from(p.map(f64::from)))).collect();
+        // Finite scales can multiply up to positions no f32 (nor camera) can hold.
+        let beyond = |p: &DVec3| !p.is_finite() || p.abs().max_element() > super::MAX_COORDINATE;
+        if let Some(i) = world_positions.iter().position(beyond) {
+            return Err(format!(
+                "{}: vertex {i} lies at {} in world space, beyond ±{:e} (the node transforms multiply up)",
+                name(),
+                world_positions[i],
+                super::MAX_COORDINATE
+            ));
+        }
         let vertex = |normal: Vec3, uv: [f32; 2]| Vertex {
             position: [0.0; 3],
             normal: normal.to_array(),
@@ -369,10 +390,10 @@ impl Importer {
         match normals {
             Some(normals) => {
                 let base = vertices.len() as u32;
-                for ((p, n), uv) in positions.iter().zip(&normals).zip(&uvs) {
+                for ((p, n), uv) in world_positions.iter().zip(&normals).zip(&uvs) {
                     let n = (normal_matrix * DVec3::from(n.map(f64::from))).normalize_or_zero();
                     vertices.push(vertex(n.as_vec3(), *uv));
-                    positions_world.push(to_world(*p));
+                    positions_world.push(*p);
                 }
                 let added: Vec<[u32; 3]> =
                     indices.chunks_exact(3).map(|t| wind(t).map(|i| base + i)).collect();
@@ -383,7 +404,7 @@ impl Importer {
             None => {
                 // Flat normals: every triangle gets its own three vertices.
                 for t in indices.chunks_exact(3) {
-                    let corners = wind(t).map(|i| (to_world(positions[i as usize]), uvs[i as usize]));
+                    let corners = wind(t).map(|i| (world_positions[i as usize], uvs[i as usize]));
                     let normal = (corners[1].0 - corners[0].0)
                         .cross(corners[2].0 - corners[0].0)
                         .normalize_or_zero()
@@ -461,42 +482,56 @@ fn check_format(semantic: Option<&gltf::Semantic>, accessor: &gltf::Accessor) ->
 /// Checks that an accessor's elements lie inside its buffer view and the view inside its
 /// buffer, so that a short file is reported as short rather than as a missing attribute.
 fn check_accessor(accessor: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<(), String> {
+    let index = accessor.index();
+    // glTF requires count ≥ 1; the crate's readers compute count − 1.
+    if accessor.count() == 0 {
+        return Err(format!("accessors[{index}]: count is 0"));
+    }
     let Some(view) = accessor.view() else {
         return Ok(());
     };
-    let index = accessor.index();
-    let buffer = view.buffer().index();
-    let available = buffers.get(buffer).map_or(0, |data| data.0.len());
-    let end = view.offset().checked_add(view.length());
-    if end.is_none_or(|end| end > available) {
-        return Err(format!(
-            "bufferViews[{}] ends at byte {}, past the {available} bytes of buffers[{buffer}]",
-            view.index(),
-            end.map_or("beyond 2⁶⁴".into(), |end| end.to_string())
-        ));
-    }
+    let bytes = view_bytes(&view, buffers)?;
     let element = accessor.size();
     let stride = view.stride().unwrap_or(element);
+    // The crate asserts that an element fits in its stride.
+    if stride < element {
+        return Err(format!(
+            "bufferViews[{}].byteStride {stride} is shorter than the {element}-byte elements of accessors[{index}]",
+            view.index()
+        ));
+    }
     // Counts come from the file: overflow means "too long" like any other excess.
-    let needed = match accessor.count() {
-        0 => Some(0),
-        count => stride
-            .checked_mul(count - 1)
-            .and_then(|n| n.checked_add(accessor.offset()))
-            .and_then(|n| n.checked_add(element)),
-    };
-    let needed = needed.unwrap_or(usize::MAX);
-    if needed > view.length() {
+    let needed = stride
+        .checked_mul(accessor.count() - 1)
+        .and_then(|n| n.checked_add(accessor.offset()))
+        .and_then(|n| n.checked_add(element))
+        .unwrap_or(usize::MAX);
+    if needed > bytes.len() {
         return Err(format!(
             "accessors[{index}]: {} elements of {element} bytes from offset {} need {needed} bytes, \
              bufferViews[{}] holds {}",
             accessor.count(),
             accessor.offset(),
             view.index(),
-            view.length()
+            bytes.len()
         ));
     }
     Ok(())
+}
+
+/// The bytes of a buffer view, or why it does not fit in its buffer.
+fn view_bytes<'a>(view: &gltf::buffer::View, buffers: &'a [gltf::buffer::Data]) -> Result<&'a [u8], String> {
+    let buffer = view.buffer().index();
+    let data = buffers.get(buffer).map_or(&[][..], |data| &data.0[..]);
+    let end = view.offset().checked_add(view.length());
+    end.and_then(|end| data.get(view.offset()..end)).ok_or_else(|| {
+        format!(
+            "bufferViews[{}] ends at byte {}, past the {} bytes of buffers[{buffer}]",
+            view.index(),
+            end.map_or("beyond 2⁶⁴".into(), |end| end.to_string()),
+            data.len()
+        )
+    })
 }
 
 /// Replaces zero or non-finite vertex normals (which files do contain) with the area-weighted
@@ -616,11 +651,7 @@ fn decode_image(
     let (bytes, what) = match image_source(document, index)? {
         ImageSource::View(view) => {
             let what = format!("images[{index}] (bufferViews[{}])", view.index());
-            let bytes = view
-                .offset()
-                .checked_add(view.length())
-                .and_then(|end| buffers.get(view.buffer().index())?.0.get(view.offset()..end))
-                .ok_or_else(|| format!("{what}: the view runs past its buffer"))?;
+            let bytes = view_bytes(&view, buffers).map_err(|e| format!("{what}: {e}"))?;
             (std::borrow::Cow::Borrowed(bytes), what)
         }
         ImageSource::Uri(uri) if uri.starts_with("data:") => {
@@ -630,7 +661,7 @@ fn decode_image(
             (std::borrow::Cow::Owned(decode_data_uri(uri).map_err(|e| format!("{what}: {e}"))?), what)
         }
         ImageSource::Uri(uri) => {
-            let path = base.join(percent_decode(uri));
+            let path = base.join(percent_decode(uri).map_err(|e| format!("images[{index}].uri: {e}"))?);
             let what = format!("images[{index}] (uri {uri})");
             let bytes = std::fs::read(&path).map_err(|e| format!("{what}: {}: {e}", path.display()))?;
             (std::borrow::Cow::Owned(bytes), what)

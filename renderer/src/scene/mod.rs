@@ -10,7 +10,7 @@ mod upload;
 pub mod write;
 
 pub use camera::{Camera, CameraError, FrameUniforms, MAX_COORDINATE, Tile};
-pub use import::{MAX_TEXTURE_SIDE, escapes, load_gltf, read_generator, regular_file};
+pub use import::{MAX_TEXTURE_SIDE, escapes, load_gltf, percent_decode, read_generator, regular_file};
 pub use shadow::{MAX_SHADOW_LIGHTS, Shadow, ShadowCubes};
 pub use upload::{GpuScene, MAX_LIGHTS};
 

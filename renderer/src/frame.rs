@@ -25,19 +25,23 @@ pub struct SceneNeeds {
     pub textured: bool,
     /// Shadow-casting lights: the shadow pass and its cube array exist.
     pub shadows: Option<ShadowCubes>,
+    /// Spot or directional lights: shading tells light kinds apart.
+    pub light_kinds: bool,
 }
 
 impl SceneNeeds {
     pub fn of(scene: &Scene, lighting: &Lighting) -> SceneNeeds {
+        let lights = &lighting.lights[..lighting.lights.len().min(crate::scene::MAX_LIGHTS)];
         SceneNeeds {
             textured: scene.is_textured(),
-            shadows: ShadowCubes::of(&lighting.lights[..lighting.lights.len().min(crate::scene::MAX_LIGHTS)]),
+            shadows: ShadowCubes::of(lights),
+            light_kinds: lights.iter().any(|l| l.kind != crate::scene::LightKind::Point),
         }
     }
 
     /// How the scene's shaders are composed.
     pub fn features(&self) -> Features {
-        Features { textured: self.textured, shadows: self.shadows.is_some() }
+        Features { textured: self.textured, shadows: self.shadows.is_some(), light_kinds: self.light_kinds }
     }
 }
 
@@ -47,7 +51,8 @@ impl std::fmt::Display for SceneNeeds {
         match self.shadows {
             Some(c) => write!(f, ", {} shadow cube(s) of {}²", c.lights, c.resolution),
             None => f.write_str(", no shadow-casting light"),
-        }
+        }?;
+        f.write_str(if self.light_kinds { ", spot or directional lights" } else { "" })
     }
 }
 

@@ -67,20 +67,28 @@ pub struct Features {
     pub textured: bool,
     /// `SHADOWS`: the shadow cube array, its sampler and the shadow test in shading.
     pub shadows: bool,
+    /// `LIGHT_KINDS`: spot and directional lights in shading; without it, every light is a
+    /// point light and shading skips the kind's arithmetic.
+    pub light_kinds: bool,
 }
 
 impl Features {
-    pub const ALL: Features = Features { textured: true, shadows: true };
+    pub const ALL: Features = Features { textured: true, shadows: true, light_kinds: true };
 
     /// Every combination, for tests that validate each variant of a shader.
     pub fn combinations() -> impl Iterator<Item = Features> {
-        (0..4).map(|bits| Features { textured: bits & 1 != 0, shadows: bits & 2 != 0 })
+        (0..8).map(|bits| Features {
+            textured: bits & 1 != 0,
+            shadows: bits & 2 != 0,
+            light_kinds: bits & 4 != 0,
+        })
     }
 
     fn defines(self, name: &str) -> Option<bool> {
         match name {
             "TEXTURED" => Some(self.textured),
             "SHADOWS" => Some(self.shadows),
+            "LIGHT_KINDS" => Some(self.light_kinds),
             _ => None,
         }
     }

@@ -5,7 +5,7 @@ mod support;
 
 use aabench_renderer::adaptive::{self, MetricSet};
 use aabench_renderer::scene::generate::Generator;
-use aabench_renderer::scene::{Camera, Lighting, PointLight};
+use aabench_renderer::scene::{Camera, Light, LightKind, Lighting};
 use aabench_renderer::{
     AdaptiveSettings, ExtraSamples, FrameImages, GBufferImages, Mode, PreparedMode, SceneRenderer,
 };
@@ -70,7 +70,8 @@ fn only_pixels_along_a_straight_edge_get_more_than_one_sample() {
 /// One point light in front of the plane: smooth shading across the image.
 fn softly_lit() -> Lighting {
     Lighting {
-        lights: vec![PointLight {
+        lights: vec![Light {
+            kind: LightKind::Point,
             position: Vec3::new(0.6, 0.4, 2.0),
             color: Vec3::ONE,
             intensity: 3.0,
@@ -120,7 +121,8 @@ fn forcing_every_sample_reproduces_the_reference_within_one_step() {
 #[test]
 fn sample_counts_stay_in_the_window_on_every_generated_scene() {
     let harsh = Lighting {
-        lights: vec![PointLight {
+        lights: vec![Light {
+            kind: LightKind::Point,
             position: Vec3::new(0.0, 1.0, 1.0),
             color: Vec3::ONE,
             intensity: 1e6,

@@ -5,7 +5,7 @@
 mod support;
 
 use aabench_renderer::scene::generate::Generator;
-use aabench_renderer::scene::{Lighting, PointLight, Shadow};
+use aabench_renderer::scene::{Light, LightKind, Lighting, Shadow};
 use aabench_renderer::{AdaptiveSettings, ColorSettings, ExtraSamples, Metrics, Mode, Technique};
 use glam::Vec3;
 use support::*;
@@ -113,7 +113,8 @@ fn an_untextured_scene_allocates_no_texture_array() {
 #[test]
 fn shadowed_frames_are_bit_identical_across_repetitions_and_renderers() {
     let lighting = Lighting {
-        lights: vec![PointLight {
+        lights: vec![Light {
+            kind: LightKind::Point,
             position: Vec3::new(0.0, 3.0, 0.0),
             color: Vec3::ONE,
             intensity: 25.0,

@@ -361,3 +361,93 @@ fn a_placed_generated_scene_scales_its_camera_clip_planes_too() {
     let (lo, hi) = scene.bounds();
     assert!((hi.y - lo.y - 550.0).abs() < 1e-3, "{lo} {hi}");
 }
+
+#[test]
+fn khr_lights_punctual_lights_come_with_their_node_transforms() {
+    use aabench_renderer::scene::LightKind;
+    let folder = Folder::new("lights");
+    // A quarter turn about +X takes the light's −Z to −Y: it shines straight down.
+    let down = [-std::f64::consts::FRAC_1_SQRT_2, 0.0, 0.0, std::f64::consts::FRAC_1_SQRT_2];
+    let nodes = json!([
+        { "mesh": 0 },
+        { "translation": [1, 2, 3], "extensions": { "KHR_lights_punctual": { "light": 0 } } },
+        { "translation": [0, 5, 0], "rotation": down, "extensions": { "KHR_lights_punctual": { "light": 1 } } },
+        { "rotation": down, "extensions": { "KHR_lights_punctual": { "light": 2 } } }
+    ]);
+    let path = folder.gltf("lights.gltf", nodes, |d| {
+        d["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_materials_sheen"]);
+        d["extensionsRequired"] = json!(["KHR_lights_punctual"]);
+        d["extensions"] = json!({ "KHR_lights_punctual": { "lights": [
+            { "type": "point", "color": [1, 0.5, 0.25], "intensity": 40, "range": 12 },
+            { "type": "spot", "intensity": 100, "spot": { "innerConeAngle": 0.2, "outerConeAngle": 0.5 } },
+            { "type": "directional", "intensity": 3 }
+        ] } });
+        d["scenes"][0]["nodes"] = json!([0, 1, 2, 3]);
+    });
+    let scene = load_gltf(&path).unwrap();
+    assert_eq!(scene.lights.len(), 3);
+    let [point, spot, sun] = [&scene.lights[0], &scene.lights[1], &scene.lights[2]];
+    assert_eq!(point.kind, LightKind::Point);
+    assert_eq!((point.intensity, point.range, point.color), (40.0, 12.0, glam::Vec3::new(1.0, 0.5, 0.25)));
+    assert!((point.position + scene.origin.as_vec3() - glam::Vec3::new(1.0, 2.0, 3.0)).length() < 1e-6);
+    let LightKind::Spot { direction, inner, outer } = spot.kind else { panic!("{:?}", spot.kind) };
+    assert!((direction - glam::Vec3::NEG_Y).length() < 1e-6, "{direction}");
+    assert_eq!((inner, outer, spot.intensity), (0.2, 0.5, 100.0));
+    // No range: the light reaches well beyond the scene (ten times its bounds' diagonal).
+    assert!(spot.range.is_finite() && spot.range >= 10.0 * 2f32.sqrt() - 1e-4, "{}", spot.range);
+    assert!(
+        matches!(sun.kind, LightKind::Directional { direction } if (direction - glam::Vec3::NEG_Y).length() < 1e-6)
+    );
+    // An optional extension aabench does not read is one warning, not an error.
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    assert!(scene.warnings[0].contains("KHR_materials_sheen"), "{:?}", scene.warnings);
+
+    // A required extension it does not read fails the scene, naming it.
+    let required = folder.one_node("required.gltf", |d| {
+        d["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
+        d["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+    });
+    let message = error(&required);
+    assert!(
+        message.contains("extensionsRequired: the file requires `KHR_draco_mesh_compression`"),
+        "{message}"
+    );
+
+    // A spot cone the renderer cannot draw is an error, never dropped.
+    let wide = folder.gltf(
+        "wide.gltf",
+        json!([{ "mesh": 0 }, { "extensions": { "KHR_lights_punctual": { "light": 0 } } }]),
+        |d| {
+            d["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+            d["extensions"] = json!({ "KHR_lights_punctual": { "lights": [
+            { "type": "spot", "spot": { "innerConeAngle": 0.6, "outerConeAngle": 0.5 } }
+        ] } });
+            d["scenes"][0]["nodes"] = json!([0, 1]);
+        },
+    );
+    assert!(error(&wide).contains("nodes[1]: KHR_lights_punctual light 0: cone angles"), "{}", error(&wide));
+}
+
+#[test]
+fn a_jpeg_texture_decodes_to_its_png_twin_within_jpeg_error() {
+    let folder = Folder::new("jpeg");
+    let image = image::RgbImage::from_fn(64, 64, |x, y| image::Rgb([(x * 4) as u8, (y * 4) as u8, 128]));
+    image.save(folder.dir.join("t.png")).unwrap();
+    let mut jpeg = std::fs::File::create(folder.dir.join("t.jpg")).unwrap();
+    image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, 95).encode_image(&image).unwrap();
+    let textured = |name: &str, uri: &str| {
+        let path = folder.one_node(name, |d| {
+            d["images"] = json!([{ "uri": uri }]);
+            d["textures"] = json!([{ "source": 0 }]);
+            d["materials"] = json!([{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }]);
+            d["meshes"][0]["primitives"][0]["material"] = json!(0);
+        });
+        load_gltf(&path).unwrap().textures.remove(0)
+    };
+    let (png, jpg) = (textured("png.gltf", "t.png"), textured("jpg.gltf", "t.jpg"));
+    assert_eq!((jpg.width, jpg.height), (64, 64));
+    let differences: Vec<u32> =
+        png.rgba.iter().zip(&jpg.rgba).map(|(a, b)| u32::from(a.abs_diff(*b))).collect();
+    let mean = differences.iter().sum::<u32>() as f64 / differences.len() as f64;
+    assert!(mean < 2.0 && *differences.iter().max().unwrap() < 24, "mean {mean}");
+}

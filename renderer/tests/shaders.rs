@@ -100,6 +100,12 @@ fn constants_shared_with_rust_agree() {
         constant("shadow.wgsl", "MAX_SHADOW_FACES"),
         naga::Literal::U32(6 * aabench_renderer::scene::MAX_SHADOW_LIGHTS as u32)
     );
+    use aabench_renderer::scene::{LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT};
+    for (name, value) in
+        [("LIGHT_POINT", LIGHT_POINT), ("LIGHT_SPOT", LIGHT_SPOT), ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL)]
+    {
+        assert_eq!(constant("shade.wgsl", name), naga::Literal::U32(value), "{name}");
+    }
     // A list entry packs a rank below M² ≤ 16 and the index of a pixel of up to 4096×4096.
     let naga::Literal::U32(rank_bits) = constant("adaptive.wgsl", "RANK_BITS") else { panic!("u32") };
     assert!(1u64 << rank_bits >= 16, "{rank_bits} bits cannot hold 16 ranks");

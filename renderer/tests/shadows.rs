@@ -5,7 +5,7 @@ mod support;
 
 use aabench_renderer::scene::shadow::face_and_coordinates;
 use aabench_renderer::scene::{
-    AlphaMode, Camera, DrawClass, Lighting, Material, PointLight, Scene, Shadow, Vertex,
+    AlphaMode, Camera, DrawClass, Light, LightKind, Lighting, Material, Scene, Shadow, Vertex,
 };
 use aabench_renderer::{FrameImages, Mode, SceneRenderer, Technique};
 use glam::{DVec3, Vec3};
@@ -44,7 +44,14 @@ fn quads(quads: &[(Vec3, Vec3, Vec3)], double_sided: bool) -> Scene {
 
 fn light(position: Vec3, shadow: Option<Shadow>) -> Lighting {
     Lighting {
-        lights: vec![PointLight { position, color: Vec3::ONE, intensity: 10.0, range: 10.0, shadow }],
+        lights: vec![Light {
+            kind: LightKind::Point,
+            position,
+            color: Vec3::ONE,
+            intensity: 10.0,
+            range: 10.0,
+            shadow,
+        }],
         ambient: Vec3::splat(0.02),
         background: Vec3::ZERO,
         exposure: 1.0,

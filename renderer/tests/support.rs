@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
 use aabench_renderer::scene::generate::Generator;
-use aabench_renderer::scene::{Camera, Lighting, PointLight, Scene, load_gltf};
+use aabench_renderer::scene::{Camera, Light, LightKind, Lighting, Scene, load_gltf};
 use aabench_renderer::{
     AdaptiveSettings, ColorSettings, FrameImages, Gpu, Mode, RenderSettings, SceneRenderer,
 };
@@ -44,7 +44,8 @@ pub fn ambient_only() -> Lighting {
 
 /// A few point lights around the camera.
 pub fn lit() -> Lighting {
-    let light = |position: Vec3, color: Vec3| PointLight {
+    let light = |position: Vec3, color: Vec3| Light {
+        kind: LightKind::Point,
         position,
         color,
         intensity: 12.0,

@@ -36,12 +36,39 @@ impl fmt::Display for ManifestError {
 
 impl std::error::Error for ManifestError {}
 
-/// Output resolution per tier.
+/// Output resolution per tier; omitted: 256×192 quick, 1024×768 nightly (the paper's).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Resolutions {
+    #[serde(default = "quick_resolution")]
     pub quick: [u32; 2],
+    #[serde(default = "nightly_resolution")]
     pub nightly: [u32; 2],
+}
+
+fn quick_resolution() -> [u32; 2] {
+    [256, 192]
+}
+
+fn nightly_resolution() -> [u32; 2] {
+    [1024, 768]
+}
+
+impl Default for Resolutions {
+    fn default() -> Self {
+        Resolutions { quick: quick_resolution(), nightly: nightly_resolution() }
+    }
+}
+
+/// What becomes of the glTF file's own (`KHR_lights_punctual`) lights.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FileLights {
+    /// The file's lights shine, and the manifest's `lights` are added to them.
+    #[default]
+    Keep,
+    /// Only the manifest's `lights` shine.
+    Replace,
 }
 
 /// How to make the glTF file when it is missing or stale.
@@ -323,11 +350,16 @@ pub struct Manifest {
     pub description: String,
     pub gltf: PathBuf,
     pub generate: Option<Generate>,
-    /// Omitted: the glTF file's first camera.
+    /// Omitted: the glTF file's first perspective camera, else one framing the scene
+    /// (`scenes.rs`, `framing_camera`).
     pub camera: Option<CameraSpec>,
+    #[serde(default)]
     pub resolution: Resolutions,
     #[serde(default)]
     pub lights: Vec<LightSpec>,
+    /// Whether the file's own lights shine beside `lights` (`keep`) or not (`replace`).
+    #[serde(default)]
+    pub file_lights: FileLights,
     #[serde(default = "default_ambient")]
     pub ambient: [f32; 3],
     #[serde(default = "default_background")]

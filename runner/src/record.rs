@@ -131,6 +131,9 @@ pub struct SceneRecord {
     /// available after upload).
     #[serde(default)]
     pub memory_limit_bytes: Option<u64>,
+    /// What the glTF file uses that aabench ignores (optional extensions), one line each.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     pub stall_iterations: u32,
     /// Content hashes of the manifest and glTF files (absent when they could not be read).
     pub inputs: Option<SceneInputs>,

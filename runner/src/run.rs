@@ -160,6 +160,7 @@ fn empty_scene_at(manifest: &Path) -> SceneRecord {
         load_s: None,
         target_bytes: None,
         memory_limit_bytes: None,
+        warnings: Vec::new(),
         stall_iterations: 0,
         inputs: None,
         gate: Default::default(),
@@ -218,6 +219,10 @@ async fn run_scene(
     record.triangles = Some(loaded.scene.triangle_count());
     record.textures = Some(loaded.scene.textures.len());
     record.inputs = Some(inputs.clone());
+    for warning in &loaded.scene.warnings {
+        progress.line(&format!("[{}] warning: {warning}", manifest.name));
+    }
+    record.warnings = loaded.scene.warnings.clone();
 
     let settings = render_settings(manifest, plan.tier, plan.extra_samples);
     progress.status(&format!("[{}] uploading", manifest.name));

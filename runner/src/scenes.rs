@@ -1,14 +1,17 @@
 //! From a manifest to a scene ready to upload: generate the glTF file when it is missing or
-//! stale, import it, and add the manifest's camera and lights.
+//! stale, import it, and settle its camera and lights (the manifest's, the file's, or
+//! defaults that frame and light any scene).
 
 use std::time::Instant;
 
 use aabench_renderer::scene::generate::GENERATOR_STAMP;
-use aabench_renderer::scene::{Camera, Lighting, PointLight, Scene, load_gltf, read_generator, regular_file};
+use aabench_renderer::scene::{
+    Camera, Light, LightKind, Lighting, MAX_LIGHTS, Scene, load_gltf, read_generator, regular_file,
+};
 use anyhow::{Context, bail};
 use glam::{DVec3, DVec4, Vec3};
 
-use crate::manifest::Manifest;
+use crate::manifest::{FileLights, Manifest};
 
 #[derive(Debug)]
 pub struct LoadedScene {
@@ -65,22 +68,56 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
     }
     let camera = camera(manifest, &scene)?;
     let lighting = Lighting {
-        lights: manifest
-            .lights
-            .iter()
-            .map(|l| PointLight {
-                position: (DVec3::from(l.position) - scene.origin).as_vec3(),
-                color: Vec3::from(l.color),
-                intensity: l.intensity,
-                range: l.range,
-                shadow: l.shadow(),
-            })
-            .collect(),
+        lights: lights(manifest, &scene)?,
         ambient: Vec3::from(manifest.ambient),
         background: Vec3::from(manifest.background),
         exposure: manifest.tonemap.exposure,
     };
     Ok(LoadedScene { scene, camera, lighting, seconds: start.elapsed().as_secs_f64() })
+}
+
+/// The file's lights (unless the manifest replaces them) and the manifest's; with neither,
+/// [`default_rig`]. More than the renderer's table holds is an error, not a silent cut.
+fn lights(manifest: &Manifest, scene: &Scene) -> anyhow::Result<Vec<Light>> {
+    let from_file = match manifest.file_lights {
+        FileLights::Keep => scene.lights.clone(),
+        FileLights::Replace => Vec::new(),
+    };
+    let from_manifest = manifest.lights.iter().map(|l| Light {
+        kind: LightKind::Point,
+        // Manifest coordinates are the file's; the scene's are relative to its origin.
+        position: (DVec3::from(l.position) - scene.origin).as_vec3(),
+        color: Vec3::from(l.color),
+        intensity: l.intensity,
+        range: l.range,
+        shadow: l.shadow(),
+    });
+    let lights: Vec<Light> = from_file.into_iter().chain(from_manifest).collect();
+    if lights.len() > MAX_LIGHTS {
+        bail!(
+            "{}: lights: the file's {} lights and the manifest's {} make {}, more than the {MAX_LIGHTS} the \
+             renderer draws; use \"file_lights\": \"replace\" or fewer lights",
+            manifest.path.display(),
+            scene.lights.len(),
+            manifest.lights.len(),
+            lights.len()
+        );
+    }
+    Ok(if lights.is_empty() { default_rig() } else { lights })
+}
+
+/// Lights for a scene that brings none: a key light from above front-left and a fill light
+/// from the right, both directional (lux), so they light a scene of any size and unit alike.
+pub fn default_rig() -> Vec<Light> {
+    let directional = |direction: Vec3, intensity: f32| Light {
+        kind: LightKind::Directional { direction: direction.normalize() },
+        position: Vec3::ZERO,
+        color: Vec3::new(1.0, 0.97, 0.92),
+        intensity,
+        range: 1.0,
+        shadow: None,
+    };
+    vec![directional(Vec3::new(0.4, -1.0, -0.6), 3.0), directional(Vec3::new(-0.7, -0.3, -0.4), 1.0)]
 }
 
 /// The manifest's camera, else the file's, checked by the renderer's rules. A missing far plane
@@ -93,16 +130,14 @@ fn camera(manifest: &Manifest, scene: &Scene) -> anyhow::Result<Camera> {
             let camera = spec.camera();
             (Camera { position: camera.position - scene.origin, ..camera }, "camera".to_string())
         }
-        None => {
-            let camera = scene.camera.with_context(|| {
-                format!(
-                    "{}: camera: omitted, and {} has no perspective camera node",
-                    manifest.path.display(),
-                    manifest.gltf_path().display()
-                )
-            })?;
-            (camera, format!("the camera of {}", manifest.gltf_path().display()))
-        }
+        None => match scene.camera {
+            Some(camera) => (camera, format!("the camera of {}", manifest.gltf_path().display())),
+            None => {
+                let [width, height] = manifest.resolution.quick;
+                let camera = framing_camera(scene, f64::from(width) / f64::from(height));
+                (camera, "the framing camera (the manifest and the file have none)".to_string())
+            }
+        },
     };
     if !camera.far.is_finite() {
         let (lo, hi) = scene.bounds();
@@ -129,6 +164,26 @@ fn camera(manifest: &Manifest, scene: &Scene) -> anyhow::Result<Camera> {
         );
     }
     Ok(camera)
+}
+
+/// A camera for a scene that brings none: looking at the centre of its bounds from the front,
+/// above and to the right (+Z, +Y, +X, glTF's front and up), far enough that the bounds'
+/// sphere fits the narrower field of view, with clip planes around that sphere.
+pub fn framing_camera(scene: &Scene, aspect: f64) -> Camera {
+    const FOV_Y_DEGREES: f64 = 45.0;
+    let (lo, hi) = scene.bounds();
+    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(1e-6);
+    let half_y = (FOV_Y_DEGREES.to_radians() * 0.5).tan();
+    let narrower = half_y.min(half_y * aspect).atan();
+    let distance = radius / narrower.sin() * 1.05;
+    let position = centre + DVec3::new(0.6, 0.45, 1.0).normalize() * distance;
+    Camera {
+        near: ((distance - radius) * 0.5).max(radius * 1e-4).max(1e-6),
+        far: distance + 2.0 * radius,
+        ..Camera::look_at(position, centre, FOV_Y_DEGREES)
+    }
 }
 
 /// Whether some triangle is not wholly outside one plane of the view frustum: conservative (a

@@ -1,4 +1,4 @@
-// The scene's bindings: materials, point lights and, in textured scenes, all textures in one 2D
+// The scene's bindings: materials, lights and, in textured scenes, all textures in one 2D
 // array with mipmaps. Bound by name from the scene's resources (scene/upload.rs).
 
 struct Material {
@@ -12,7 +12,12 @@ struct Material {
     alpha_cutoff: f32,
 }
 
-struct PointLight {
+// Light kinds (scene/upload.rs: LIGHT_*).
+const LIGHT_POINT: u32 = 0u;
+const LIGHT_SPOT: u32 = 1u;
+const LIGHT_DIRECTIONAL: u32 = 2u;
+
+struct Light {
     position: vec3<f32>,
     // Distance at which the contribution fades to zero.
     range: f32,
@@ -26,7 +31,12 @@ struct PointLight {
     shadow_radius: f32,
     // Near plane of the light's cube; its far plane is `range`.
     shadow_near: f32,
-    padding: f32,
+    kind: u32,
+    // Spot and directional lights: the unit direction the light shines in.
+    direction: vec3<f32>,
+    // Spot lights: the cone's fade is clamp(cos θ · spot_scale + spot_offset, 0, 1)².
+    spot_scale: f32,
+    spot_offset: f32,
 }
 
 // The number of lights is an override constant, not a uniform: lavapipe recompiles a shader
@@ -37,7 +47,7 @@ override LIGHT_COUNT: u32 = 0u;
 const MAX_LIGHTS: u32 = 64u;
 
 struct Lights {
-    entries: array<PointLight, MAX_LIGHTS>,
+    entries: array<Light, MAX_LIGHTS>,
 }
 
 @group(0) @binding(1) var<storage, read> materials: array<Material>;

@@ -27,7 +27,7 @@ const PCF_OFFSETS = array<vec3<f32>, 20>(
 
 // The fraction of the PCF taps that see `position` (with unit `normal` facing the light) lit by
 // `light`, seen from `view_distance`.
-fn shadow_visibility(light: PointLight, position: vec3<f32>, normal: vec3<f32>, view_distance: f32) -> f32 {
+fn shadow_visibility(light: Light, position: vec3<f32>, normal: vec3<f32>, view_distance: f32) -> f32 {
     let to_surface = position - light.position;
     let distance = length(to_surface);
     let radius = light.shadow_radius * (1.0 + view_distance / light.range);

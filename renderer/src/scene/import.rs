@@ -1,13 +1,13 @@
 //! glTF 2.0 import through the `gltf` crate: meshes with baked node transforms, base-colour
 //! textures and factors, metallic/roughness factors, alpha MASK, UVs and normals (flat normals
-//! generated where a primitive has none), and the first camera.
+//! generated where a primitive has none), the first camera, and `KHR_lights_punctual` lights.
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 use glam::{DMat3, DMat4, DVec3, Vec3};
 
-use super::{AlphaMode, Camera, DrawClass, Material, Scene, Texture, Vertex};
+use super::{AlphaMode, Camera, DrawClass, Light, LightKind, Material, Scene, Texture, Vertex};
 use crate::RenderError;
 
 /// Reads a `.gltf` or `.glb` file and everything it references. Every error names the part of
@@ -39,6 +39,7 @@ pub fn load_gltf(path: &Path) -> Result<Scene, RenderError> {
         material.texture = material.texture.map(|image| image_of_texture[&image]);
     }
     scene.generator = document.as_json().asset.generator.clone();
+    scene.warnings = ignored_extensions(&document);
     Ok(scene)
 }
 
@@ -149,6 +150,14 @@ fn open(path: &Path) -> Result<gltf::Gltf, String> {
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| e.to_string())?;
     let json = document.into_json();
+    // Before the crate's validation, which refuses required extensions it was not built with
+    // in words that do not say what aabench reads.
+    if let Some(unknown) = json.extensions_required.iter().find(|e| !EXTENSIONS.contains(&e.as_str())) {
+        return Err(format!(
+            "extensionsRequired: the file requires `{unknown}`, which aabench does not support (it reads {})",
+            EXTENSIONS.join(", ")
+        ));
+    }
     for (m, mesh) in json.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             let position = primitive.attributes.get(&Checked::Valid(Semantic::Positions));
@@ -163,6 +172,20 @@ fn open(path: &Path) -> Result<gltf::Gltf, String> {
     }
     let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
     Ok(gltf::Gltf { document, blob })
+}
+
+/// The glTF extensions the importer reads. A file may require only these; others it merely
+/// uses are ignored with a warning each.
+pub const EXTENSIONS: [&str; 1] = ["KHR_lights_punctual"];
+
+/// One line per extension the file uses that aabench ignores.
+fn ignored_extensions(document: &gltf::Document) -> Vec<String> {
+    let json = document.as_json();
+    json.extensions_used
+        .iter()
+        .filter(|e| !EXTENSIONS.contains(&e.as_str()))
+        .map(|e| format!("extension `{e}` is not supported and is ignored (the file marks it optional)"))
+        .collect()
 }
 
 /// The `asset.generator` string of a glTF file, if it can be read.
@@ -221,6 +244,8 @@ struct Importer {
     scene: Scene,
     /// Each vertex's world position, in f64.
     world: Vec<DVec3>,
+    /// The file's lights with their world positions, in f64.
+    lights: Vec<(Light, DVec3)>,
     /// Triangles as vertex-index triples, by draw class.
     triangles: BTreeMap<DrawClass, Vec<[u32; 3]>>,
 }
@@ -282,6 +307,10 @@ impl Importer {
         }
         if let (Some(camera), None) = (node.camera(), &self.scene.camera) {
             self.scene.camera = camera_from_node(document, camera.index(), world)?;
+        }
+        if let Some(light) = node.light() {
+            self.lights
+                .push(light_from_node(&light, world).map_err(|e| format!("nodes[{}]: {e}", node.index()))?);
         }
         Ok(world)
     }
@@ -441,6 +470,18 @@ impl Importer {
         if let Some(camera) = &mut self.scene.camera {
             camera.position -= origin;
         }
+        // A light without a range reaches everywhere (KHR_lights_punctual); the shader's
+        // smooth window then sits far beyond the scene: ten times its bounds' diagonal.
+        let reach = if self.world.is_empty() { 1.0 } else { 10.0 * (hi - lo).length().max(1e-6) };
+        self.scene.lights = self
+            .lights
+            .into_iter()
+            .map(|(light, world)| Light {
+                position: (world - origin).as_vec3(),
+                range: if light.range.is_finite() { light.range } else { reach as f32 },
+                ..light
+            })
+            .collect();
         for (class, triangles) in self.triangles {
             let start = self.scene.indices.len() as u32;
             self.scene.indices.extend(triangles.into_iter().flatten());
@@ -558,6 +599,49 @@ fn repair_normals(vertices: &mut [Vertex], world: &[DVec3], triangles: &[[u32; 3
             vertex.normal = sum.normalize_or(Vec3::Y).to_array();
         }
     }
+}
+
+/// A `KHR_lights_punctual` light placed by its node: at the node's origin, shining along its
+/// −Z. Every value is checked: a light the renderer cannot draw is an error, never dropped.
+fn light_from_node(light: &gltf::khr_lights_punctual::Light, world: DMat4) -> Result<(Light, DVec3), String> {
+    use gltf::khr_lights_punctual::Kind;
+    let what = format!("KHR_lights_punctual light {}", light.index());
+    let position = world.transform_point3(DVec3::ZERO);
+    let direction = world.transform_vector3(-DVec3::Z).normalize_or_zero().as_vec3();
+    if direction == glam::Vec3::ZERO && !matches!(light.kind(), Kind::Point) {
+        return Err(format!("{what}: the node's transform collapses the light's direction"));
+    }
+    let kind = match light.kind() {
+        Kind::Point => LightKind::Point,
+        Kind::Directional => LightKind::Directional { direction },
+        Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+            let quarter = std::f32::consts::FRAC_PI_2;
+            let valid = (0.0..outer_cone_angle).contains(&inner_cone_angle)
+                && (..=quarter).contains(&outer_cone_angle);
+            if !valid {
+                return Err(format!(
+                    "{what}: cone angles {inner_cone_angle} and {outer_cone_angle} must satisfy 0 ≤ inner < outer ≤ π/2"
+                ));
+            }
+            LightKind::Spot { direction, inner: inner_cone_angle, outer: outer_cone_angle }
+        }
+    };
+    let color = glam::Vec3::from(light.color());
+    let intensity = light.intensity();
+    let range = light.range().unwrap_or(f32::INFINITY);
+    if !(color.is_finite() && color.min_element() >= 0.0) {
+        return Err(format!("{what}: color {color} must be finite and ≥ 0"));
+    }
+    if !(intensity.is_finite() && intensity >= 0.0) {
+        return Err(format!("{what}: intensity {intensity} must be finite and ≥ 0"));
+    }
+    if range.is_nan() || range <= 0.0 {
+        return Err(format!("{what}: range {range} must be > 0"));
+    }
+    if position.abs().max_element() > super::MAX_COORDINATE {
+        return Err(format!("{what}: its node places it at {position}, beyond ±{:e}", super::MAX_COORDINATE));
+    }
+    Ok((Light { kind, position: glam::Vec3::ZERO, color, intensity, range, shadow: None }, position))
 }
 
 /// The camera of a node, if perspective (orthographic cameras are skipped). Read from the

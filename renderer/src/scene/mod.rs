@@ -12,7 +12,7 @@ pub mod write;
 pub use camera::{Camera, CameraError, FrameUniforms, MAX_COORDINATE, Tile};
 pub use import::{MAX_TEXTURE_SIDE, escapes, load_gltf, percent_decode, read_generator, regular_file};
 pub use shadow::{MAX_SHADOW_LIGHTS, Shadow, ShadowCubes};
-pub use upload::{GpuScene, MAX_LIGHTS};
+pub use upload::{GpuScene, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MAX_LIGHTS};
 
 use glam::Vec3;
 
@@ -84,23 +84,40 @@ pub struct Texture {
     pub rgba: Vec<u8>,
 }
 
-/// A point light from the manifest.
+/// A light, from the manifest or from the file's `KHR_lights_punctual`. Intensities are in
+/// the extension's photometric units: candela for point and spot lights (the illuminance at
+/// distance d is intensity / d²), lux for directional ones.
 #[derive(Debug, Clone, PartialEq)]
-pub struct PointLight {
+pub struct Light {
+    pub kind: LightKind,
+    /// Unused by directional lights.
     pub position: Vec3,
     pub color: Vec3,
     pub intensity: f32,
     /// Distance at which the light's contribution fades to zero; also the far plane of its
-    /// shadow cube.
+    /// shadow cube. Unused by directional lights.
     pub range: f32,
-    /// An omnidirectional shadow, when the light casts one.
+    /// An omnidirectional shadow, when the light casts one (point lights only).
     pub shadow: Option<Shadow>,
+}
+
+/// How a light spreads.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LightKind {
+    /// Equally in every direction from its position.
+    Point,
+    /// In a cone along `direction` (unit, pointing away from the light): full strength within
+    /// `inner` radians of the axis, fading (smoothly, as KHR_lights_punctual defines) to zero at
+    /// `outer`.
+    Spot { direction: Vec3, inner: f32, outer: f32 },
+    /// Parallel rays along `direction` (unit), as from the sun: no position, no falloff.
+    Directional { direction: Vec3 },
 }
 
 /// Lighting and display settings that a manifest gives a scene.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Lighting {
-    pub lights: Vec<PointLight>,
+    pub lights: Vec<Light>,
     pub ambient: Vec3,
     /// Radiance where no geometry covers a sample.
     pub background: Vec3,
@@ -126,6 +143,10 @@ pub struct Scene {
     pub origin: glam::DVec3,
     /// The `asset.generator` string of the file, used to tell stale generated files.
     pub generator: Option<String>,
+    /// The file's `KHR_lights_punctual` lights, relative to `origin`.
+    pub lights: Vec<Light>,
+    /// What the file uses that aabench ignores (optional extensions), one line each.
+    pub warnings: Vec<String>,
 }
 
 impl Scene {

@@ -8,7 +8,7 @@
 
 use glam::{DMat4, DVec3, DVec4, Vec3};
 
-use super::PointLight;
+use super::Light;
 
 /// Shadow-casting lights a scene may have: their cubes are layers of one array.
 pub const MAX_SHADOW_LIGHTS: usize = 8;
@@ -45,7 +45,7 @@ pub struct ShadowCubes {
 
 impl ShadowCubes {
     /// None when no light casts a shadow: no shadow pass, no cube.
-    pub fn of(lights: &[PointLight]) -> Option<ShadowCubes> {
+    pub fn of(lights: &[Light]) -> Option<ShadowCubes> {
         let shadows: Vec<&Shadow> =
             lights.iter().filter_map(|l| l.shadow.as_ref()).take(MAX_SHADOW_LIGHTS).collect();
         let resolution = shadows.iter().map(|s| s.resolution).max()?;

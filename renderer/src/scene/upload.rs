@@ -8,7 +8,7 @@ use bytemuck::Zeroable;
 use wgpu::util::DeviceExt;
 
 use super::shadow::{self, MAX_SHADOW_LIGHTS, ShadowCubes};
-use super::{AlphaMode, DrawClass, FrameUniforms, Lighting, Scene, Texture};
+use super::{AlphaMode, DrawClass, FrameUniforms, LightKind, Lighting, Scene, Texture};
 use crate::bindings::Bound;
 
 /// Lights a scene may have: the size of the shaders' uniform light table.
@@ -28,7 +28,7 @@ struct GpuMaterial {
     alpha_cutoff: f32,
 }
 
-/// `PointLight` in `shaders/lib/scene.wgsl`.
+/// `Light` in `shaders/lib/scene.wgsl`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct GpuLight {
@@ -40,7 +40,33 @@ struct GpuLight {
     shadow_bias: f32,
     shadow_radius: f32,
     shadow_near: f32,
-    padding: f32,
+    /// [`LIGHT_POINT`], [`LIGHT_SPOT`] or [`LIGHT_DIRECTIONAL`].
+    kind: u32,
+    /// Spot and directional lights: the unit direction the light shines in.
+    direction: [f32; 3],
+    /// Spot lights: the cone's fade, `clamp(cos θ · scale + offset, 0, 1)²`.
+    spot_scale: f32,
+    spot_offset: f32,
+    padding: [f32; 3],
+}
+
+/// `LIGHT_*` in `shaders/lib/scene.wgsl`.
+pub const LIGHT_POINT: u32 = 0;
+pub const LIGHT_SPOT: u32 = 1;
+pub const LIGHT_DIRECTIONAL: u32 = 2;
+
+/// A light's kind, direction and cone as the shader reads them. The cone fade is
+/// KHR_lights_punctual's: scale = 1 / max(0.001, cos inner − cos outer), offset = −cos outer ·
+/// scale.
+fn light_shape(kind: LightKind) -> (u32, [f32; 3], f32, f32) {
+    match kind {
+        LightKind::Point => (LIGHT_POINT, [0.0; 3], 0.0, 1.0),
+        LightKind::Spot { direction, inner, outer } => {
+            let scale = 1.0 / (inner.cos() - outer.cos()).max(0.001);
+            (LIGHT_SPOT, direction.to_array(), scale, -outer.cos() * scale)
+        }
+        LightKind::Directional { direction } => (LIGHT_DIRECTIONAL, direction.to_array(), 0.0, 1.0),
+    }
 }
 
 /// A scene on the device. Cheap to clone: wgpu handles are reference counted.
@@ -100,6 +126,7 @@ impl GpuScene {
                 _ => -1,
             };
             let settings = light.shadow.unwrap_or_default();
+            let (kind, direction, spot_scale, spot_offset) = light_shape(light.kind);
             table.push(GpuLight {
                 position: light.position.to_array(),
                 range: light.range,
@@ -108,7 +135,11 @@ impl GpuScene {
                 shadow_bias: settings.bias,
                 shadow_radius: settings.radius,
                 shadow_near: near as f32,
-                padding: 0.0,
+                kind,
+                direction,
+                spot_scale,
+                spot_offset,
+                padding: [0.0; 3],
             });
         }
         // A fixed-size uniform array: unused entries stay zero.

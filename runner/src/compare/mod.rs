@@ -531,18 +531,15 @@ impl ModeContext<'_> {
                 samples.iter().zip(anchor).map(|(s, a)| s.ln() - a).collect()
             };
             let now_log = relative(&now.samples, &now_anchor);
-            let then_log: Vec<f64> = then
-                .iter()
-                .zip(&then_anchors)
-                .flat_map(|(samples, anchor)| relative(samples, anchor))
-                .collect();
+            let then_logs: Vec<Vec<f64>> =
+                then.iter().zip(&then_anchors).map(|(samples, anchor)| relative(samples, anchor)).collect();
             checks.extend(self.time_check(
                 "relative_time",
                 &now_log,
-                &then_log,
+                &then_logs,
                 threshold,
                 "frame time over the geometric mean of the round's other unstalled modes",
-                (median_exp(&then_log), median_exp(&now_log)),
+                (median_exp(&then_logs.concat()), median_exp(&now_log)),
                 "×",
             ));
         }
@@ -551,15 +548,15 @@ impl ModeContext<'_> {
         }
         if self.same_platform {
             let log = |samples: &[f64]| samples.iter().map(|s| s.ln()).collect::<Vec<_>>();
-            let then_log: Vec<f64> = then.iter().flat_map(|samples| log(samples)).collect();
+            let then_logs: Vec<Vec<f64>> = then.iter().map(|samples| log(samples)).collect();
             let now_log = log(&now.samples);
             checks.extend(self.time_check(
                 "frame_time",
                 &now_log,
-                &then_log,
+                &then_logs,
                 self.tolerances.absolute_time,
                 "absolute frame time (wide threshold: processes drift)",
-                (median_exp(&then_log), median_exp(&now_log)),
+                (median_exp(&then_logs.concat()), median_exp(&now_log)),
                 "ms",
             ));
         }
@@ -573,34 +570,37 @@ impl ModeContext<'_> {
         let now = log(self.scene.paired_ratios(&self.mode.mode, anchor)?);
         let then: Option<Vec<Vec<f64>>> =
             self.baselines.iter().map(|record| record.paired_ratios(&self.mode.mode, anchor)).collect();
-        let then = log(then?.concat());
+        let then: Vec<Vec<f64>> = then?.into_iter().map(log).collect();
         self.time_check(
             metric,
             &now,
             &then,
             threshold,
             &format!("frame time over {anchor}'s in the same round"),
-            (median_exp(&then), median_exp(&now)),
+            (median_exp(&then.concat()), median_exp(&now)),
             "×",
         )
     }
 
-    /// Decides a time metric from log samples: the Hodges–Lehmann shift with its Moses
-    /// interval, as relative changes.
+    /// Decides a time metric from log samples (the baseline's per process): the
+    /// Hodges–Lehmann shift with its Moses interval, as relative changes, against the
+    /// threshold widened by how far the baseline's own processes disagree ([`process_spread`]).
     #[allow(clippy::too_many_arguments)]
     fn time_check(
         &self,
         metric: &str,
         now: &[f64],
-        then: &[f64],
+        then_per_process: &[Vec<f64>],
         threshold: f64,
         what: &str,
         (then_value, now_value): (f64, f64),
         unit: &str,
     ) -> Option<Check> {
-        let shift = Shift::between(now, then, CONFIDENCE)?;
+        let then = then_per_process.concat();
+        let shift = Shift::between(now, &then, CONFIDENCE)?;
         let relative = |log: f64| log.exp() - 1.0;
-        let bound = (1.0 + threshold).ln();
+        let spread = process_spread(then_per_process);
+        let bound = (1.0 + threshold).ln() + spread;
         let outcome = if shift.low > bound {
             Outcome::Regressed
         } else if shift.high < -bound {
@@ -617,13 +617,13 @@ impl ModeContext<'_> {
             current: Some(now_value),
             change: Some(change),
             interval: Some([low, high]),
-            threshold: Some(threshold),
+            threshold: Some(relative(bound)),
             ..self.check(
                 metric,
                 outcome,
                 "relative",
                 format!(
-                    "{what}: {} → {} ({}, {:.0}% interval {} … {}; thresholds {} and {})",
+                    "{what}: {} → {} ({}, {:.0}% interval {} … {}; thresholds {} and {}{})",
                     value(then_value),
                     value(now_value),
                     show_percent(change),
@@ -631,7 +631,16 @@ impl ModeContext<'_> {
                     show_percent(low),
                     show_percent(high),
                     show_percent(relative(-bound)),
-                    show_percent(threshold)
+                    show_percent(relative(bound)),
+                    if spread > 0.0 {
+                        format!(
+                            ": the tolerance {} widened by the baseline processes' own spread, {}",
+                            show_percent(threshold),
+                            show_percent(relative(spread))
+                        )
+                    } else {
+                        String::new()
+                    }
                 ),
             )
         })
@@ -661,6 +670,21 @@ fn total_variation(a: &[u64], b: &[u64]) -> f64 {
 }
 
 /// exp of the median of log values: the median ratio.
+/// How far the baseline's processes disagree with one another: the largest distance (in log)
+/// of one process's median from the pooled median; 0 for a baseline of one process. Frames of
+/// one process vary less than processes do (a stalled mode's ratio moved 2.31–2.57× across the
+/// three blessed processes of one build), and the shift's interval only covers the former: a
+/// shift within this spread is no evidence of a change.
+fn process_spread(per_process: &[Vec<f64>]) -> f64 {
+    let median = |logs: &[f64]| crate::stats::Summary::new(logs.to_vec()).map(|s| s.median);
+    match (per_process.len(), median(&per_process.concat())) {
+        (2.., Some(pooled)) => {
+            per_process.iter().filter_map(|p| median(p)).map(|m| (m - pooled).abs()).fold(0.0, f64::max)
+        }
+        _ => 0.0,
+    }
+}
+
 fn median_exp(logs: &[f64]) -> f64 {
     crate::stats::Summary::new(logs.to_vec()).map_or(f64::NAN, |s| s.median.exp())
 }
@@ -688,6 +712,16 @@ mod tests {
         assert_eq!(beyond(0.1, 0.25, true), Outcome::Unchanged);
         assert_eq!(beyond(0.5, 0.25, false), Outcome::Regressed, "more MSE is worse");
         assert_eq!(beyond(f64::INFINITY, 0.25, false), Outcome::Regressed);
+    }
+
+    #[test]
+    fn the_process_spread_is_the_farthest_process_median_from_the_pooled_one() {
+        let process = |median: f64| vec![median.ln() - 0.01, median.ln(), median.ln() + 0.01];
+        assert_eq!(process_spread(&[process(2.4)]), 0.0, "one process: no spread to measure");
+        // The baseline of specular's reference-4x4-stalled: 2.305, 2.416 and 2.57 × its anchor.
+        let spread = process_spread(&[process(2.305), process(2.416), process(2.57)]);
+        assert!((spread - (2.57f64 / 2.416).ln()).abs() < 1e-12, "{spread}");
+        assert_eq!(process_spread(&[process(2.0), process(2.0)]), 0.0);
     }
 
     #[test]

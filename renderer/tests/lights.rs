@@ -13,11 +13,17 @@ use support::*;
 /// The plane scene (a large grey wall facing the camera 3 units away, 60° field of view)
 /// under `lights` alone: no ambient, black background.
 fn plane_under(lights: Vec<Light>) -> FrameImages {
+    plane_and_needs(lights).0
+}
+
+/// The image, and whether the scene's shaders were composed with the light-kind arithmetic.
+fn plane_and_needs(lights: Vec<Light>) -> (FrameImages, bool) {
     let (gpu, _guard) = gpu();
     let (scene, camera) = generated(Generator::Plane);
     let lighting = Lighting { lights, ambient: Vec3::ZERO, background: Vec3::ZERO, exposure: 1.0 };
     let mut renderer = SceneRenderer::new(gpu, &scene, &camera, &lighting, settings(64, 48)).unwrap();
-    render(&mut renderer, "deferred-1x1")
+    let kinds = renderer.needs().light_kinds;
+    (render(&mut renderer, "deferred-1x1"), kinds)
 }
 
 /// The display image's green code at (x, y).
@@ -64,4 +70,18 @@ fn a_directional_light_lights_a_plane_evenly() {
         green(&point, 32, 24),
         green(&point, 2, 2)
     );
+}
+
+#[test]
+fn point_lights_shade_to_the_same_bits_with_or_without_the_light_kind_arithmetic() {
+    let point = light(LightKind::Point, Vec3::new(0.5, 0.5, 2.0), 20.0);
+    let (plain, plain_kinds) = plane_and_needs(vec![point.clone()]);
+    assert!(!plain_kinds, "point lights alone compile without LIGHT_KINDS");
+    // A spot aimed away from the plane adds nothing, but turns the arithmetic on.
+    let away =
+        light(LightKind::Spot { direction: Vec3::Z, inner: 0.1, outer: 0.2 }, Vec3::new(0.0, 0.0, 3.0), 20.0);
+    let (mixed, mixed_kinds) = plane_and_needs(vec![point, away]);
+    assert!(mixed_kinds);
+    assert_eq!(plain.hdr, mixed.hdr, "the point light's radiance, bit for bit");
+    assert!(plain.display.rgba.iter().any(|&v| v > 0), "something is lit");
 }

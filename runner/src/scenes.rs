@@ -133,8 +133,12 @@ fn camera(manifest: &Manifest, scene: &Scene) -> anyhow::Result<Camera> {
         None => match scene.camera {
             Some(camera) => (camera, format!("the camera of {}", manifest.gltf_path().display())),
             None => {
-                let [width, height] = manifest.resolution.quick;
-                let camera = framing_camera(scene, f64::from(width) / f64::from(height));
+                // The narrower of the tiers' frames, so that both show the whole scene.
+                let aspect = [manifest.resolution.quick, manifest.resolution.nightly]
+                    .iter()
+                    .map(|&[width, height]| f64::from(width) / f64::from(height))
+                    .fold(f64::INFINITY, f64::min);
+                let camera = framing_camera(scene, aspect);
                 (camera, "the framing camera (the manifest and the file have none)".to_string())
             }
         },
@@ -179,9 +183,10 @@ pub fn framing_camera(scene: &Scene, aspect: f64) -> Camera {
     let narrower = half_y.min(half_y * aspect).atan();
     let distance = radius / narrower.sin() * 1.05;
     let position = centre + DVec3::new(0.6, 0.45, 1.0).normalize() * distance;
+    // Within what `Camera::validate` accepts (near ≤ 1e9, far ≤ 1e12), however large the scene.
     Camera {
-        near: ((distance - radius) * 0.5).max(radius * 1e-4).max(1e-6),
-        far: distance + 2.0 * radius,
+        near: ((distance - radius) * 0.5).max(radius * 1e-4).clamp(1e-6, 1e9),
+        far: (distance + 2.0 * radius).min(1e12),
         ..Camera::look_at(position, centre, FOV_Y_DEGREES)
     }
 }

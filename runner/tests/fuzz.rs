@@ -21,7 +21,7 @@ use aabench::scenes;
 use aabench_renderer::ExtraSamples;
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::write::{GltfWriter, MaterialDesc, MeshData, glb};
-use aabench_renderer::scene::{MAX_TEXTURE_SIDE, Scene, load_gltf};
+use aabench_renderer::scene::{LightKind, MAX_TEXTURE_SIDE, Scene, load_gltf};
 use glam::DVec3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestCaseError, TestRng, TestRunner};
@@ -216,11 +216,34 @@ fn seeds() -> Vec<Seed> {
     writer.add_mesh("plain", &quad, plain);
     writer.add_camera(DVec3::new(0.5, 0.5, 3.0), DVec3::new(0.5, 0.5, 0.0), 45.0, 0.1, 100.0);
     writer.place(2.0, [1e5, 0.0, -3.0]);
-    let mut seeds = vec![Seed::from_glb(&writer.to_glb())];
+    let mut textured = Seed::from_glb(&writer.to_glb());
+    add_lights(&mut textured.document);
+    let mut seeds = vec![textured];
     for generator in [Generator::Cornell, Generator::Degenerate] {
         seeds.push(Seed::from_glb(&generator.build(1).to_glb()));
     }
     seeds
+}
+
+/// KHR_lights_punctual's three kinds on nodes of their own, so mutations reach the lights.
+fn add_lights(document: &mut Value) {
+    document["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    document["extensions"] = json!({ "KHR_lights_punctual": { "lights": [
+        { "type": "point", "color": [1, 0.8, 0.6], "intensity": 20, "range": 30 },
+        { "type": "spot", "intensity": 50, "spot": { "innerConeAngle": 0.2, "outerConeAngle": 0.6 } },
+        { "type": "directional", "intensity": 2 }
+    ] } });
+    let nodes = document["nodes"].as_array_mut().expect("nodes");
+    let first = nodes.len();
+    for light in 0..3 {
+        nodes.push(json!({
+            "translation": [0.5, 2.0, 1.0],
+            "rotation": [-0.5, 0.0, 0.0, 0.866],
+            "extensions": { "KHR_lights_punctual": { "light": light } }
+        }));
+    }
+    let roots = document["scenes"][0]["nodes"].as_array_mut().expect("scene nodes");
+    roots.extend((first..first + 3).map(|n| json!(n)));
 }
 
 /// Every JSON value in pre-order, as a path of keys and indices from the root.
@@ -440,6 +463,26 @@ fn check_scene(scene: &Scene) -> Result<(), String> {
     }
     if !scene.origin.is_finite() {
         return Err(format!("origin {}", scene.origin));
+    }
+    for light in &scene.lights {
+        let sound = light.position.is_finite()
+            && light.color.is_finite()
+            && light.intensity.is_finite()
+            && light.range.is_finite()
+            && light.range > 0.0
+            && match light.kind {
+                LightKind::Point => true,
+                LightKind::Spot { direction, inner, outer } => {
+                    direction.is_normalized()
+                        && 0.0 <= inner
+                        && inner < outer
+                        && outer <= std::f32::consts::FRAC_PI_2
+                }
+                LightKind::Directional { direction } => direction.is_normalized(),
+            };
+        if !sound {
+            return Err(format!("light {light:?}"));
+        }
     }
     Ok(())
 }

@@ -471,14 +471,23 @@ impl Importer {
             camera.position -= origin;
         }
         // A light without a range reaches everywhere (KHR_lights_punctual); the shader's
-        // smooth window then sits far beyond the scene: ten times its bounds' diagonal.
-        let reach = if self.world.is_empty() { 1.0 } else { 10.0 * (hi - lo).length().max(1e-6) };
+        // smooth window then sits far beyond the scene as seen from the light: ten times the
+        // bounds' diagonal plus the light's distance from their centre.
+        let (diagonal, centre) = if self.world.is_empty() {
+            (1.0, DVec3::ZERO)
+        } else {
+            ((hi - lo).length().max(1e-6), (lo + hi) * 0.5)
+        };
         self.scene.lights = self
             .lights
             .into_iter()
             .map(|(light, world)| Light {
                 position: (world - origin).as_vec3(),
-                range: if light.range.is_finite() { light.range } else { reach as f32 },
+                range: if light.range.is_finite() {
+                    light.range
+                } else {
+                    (10.0 * (diagonal + (world - centre).length())) as f32
+                },
                 ..light
             })
             .collect();
@@ -606,7 +615,11 @@ fn repair_normals(vertices: &mut [Vertex], world: &[DVec3], triangles: &[[u32; 3
 fn light_from_node(light: &gltf::khr_lights_punctual::Light, world: DMat4) -> Result<(Light, DVec3), String> {
     use gltf::khr_lights_punctual::Kind;
     let what = format!("KHR_lights_punctual light {}", light.index());
-    let position = world.transform_point3(DVec3::ZERO);
+    // A directional light has no position (one far out would not even fit an f32).
+    let position = match light.kind() {
+        Kind::Directional => DVec3::ZERO,
+        _ => world.transform_point3(DVec3::ZERO),
+    };
     let direction = world.transform_vector3(-DVec3::Z).normalize_or_zero().as_vec3();
     if direction == glam::Vec3::ZERO && !matches!(light.kind(), Kind::Point) {
         return Err(format!("{what}: the node's transform collapses the light's direction"));

@@ -101,6 +101,13 @@ pub struct Light {
     pub shadow: Option<Shadow>,
 }
 
+impl Light {
+    /// The light's shadow cube settings: only point lights cast (omnidirectional) shadows.
+    pub fn cube(&self) -> Option<&Shadow> {
+        self.shadow.as_ref().filter(|_| self.kind == LightKind::Point)
+    }
+}
+
 /// How a light spreads.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LightKind {

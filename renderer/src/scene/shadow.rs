@@ -46,8 +46,7 @@ pub struct ShadowCubes {
 impl ShadowCubes {
     /// None when no light casts a shadow: no shadow pass, no cube.
     pub fn of(lights: &[Light]) -> Option<ShadowCubes> {
-        let shadows: Vec<&Shadow> =
-            lights.iter().filter_map(|l| l.shadow.as_ref()).take(MAX_SHADOW_LIGHTS).collect();
+        let shadows: Vec<&Shadow> = lights.iter().filter_map(Light::cube).take(MAX_SHADOW_LIGHTS).collect();
         let resolution = shadows.iter().map(|s| s.resolution).max()?;
         Some(ShadowCubes { lights: shadows.len() as u32, resolution })
     }

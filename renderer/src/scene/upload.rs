@@ -50,6 +50,9 @@ struct GpuLight {
     padding: [f32; 3],
 }
 
+// The uniform table's stride in `shaders/lib/scene.wgsl` (std140: 16-byte multiples).
+const _: () = assert!(std::mem::size_of::<GpuLight>() == 80);
+
 /// `LIGHT_*` in `shaders/lib/scene.wgsl`.
 pub const LIGHT_POINT: u32 = 0;
 pub const LIGHT_SPOT: u32 = 1;
@@ -63,9 +66,11 @@ fn light_shape(kind: LightKind) -> (u32, [f32; 3], f32, f32) {
         LightKind::Point => (LIGHT_POINT, [0.0; 3], 0.0, 1.0),
         LightKind::Spot { direction, inner, outer } => {
             let scale = 1.0 / (inner.cos() - outer.cos()).max(0.001);
-            (LIGHT_SPOT, direction.to_array(), scale, -outer.cos() * scale)
+            (LIGHT_SPOT, direction.normalize_or_zero().to_array(), scale, -outer.cos() * scale)
         }
-        LightKind::Directional { direction } => (LIGHT_DIRECTIONAL, direction.to_array(), 0.0, 1.0),
+        LightKind::Directional { direction } => {
+            (LIGHT_DIRECTIONAL, direction.normalize_or_zero().to_array(), 0.0, 1.0)
+        }
     }
 }
 
@@ -118,7 +123,7 @@ impl GpuScene {
         let mut faces = Vec::new();
         for light in lights {
             let near = f64::from(light.range) * shadow::NEAR_FRACTION;
-            let cube = match light.shadow {
+            let cube = match light.cube() {
                 Some(_) if faces.len() < 6 * MAX_SHADOW_LIGHTS => {
                     faces.extend(shadow::face_matrices(light.position, near, f64::from(light.range)));
                     (faces.len() / 6 - 1) as i32

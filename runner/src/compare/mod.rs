@@ -599,8 +599,11 @@ impl ModeContext<'_> {
         let then = then_per_process.concat();
         let shift = Shift::between(now, &then, CONFIDENCE)?;
         let relative = |log: f64| log.exp() - 1.0;
-        let spread = process_spread(then_per_process);
-        let bound = (1.0 + threshold).ln() + spread;
+        // Widened by at most the tolerance itself: a 25% slowdown stays caught under the
+        // default 10% however much one blessed process strayed.
+        let tolerance = (1.0 + threshold).ln();
+        let spread = process_spread(then_per_process).min(tolerance);
+        let bound = tolerance + spread;
         let outcome = if shift.low > bound {
             Outcome::Regressed
         } else if shift.high < -bound {
@@ -669,12 +672,12 @@ fn total_variation(a: &[u64], b: &[u64]) -> f64 {
     (0..length).map(|i| (at(a, i) / sum_a - at(b, i) / sum_b).abs()).sum::<f64>() / 2.0
 }
 
-/// exp of the median of log values: the median ratio.
 /// How far the baseline's processes disagree with one another: the largest distance (in log)
 /// of one process's median from the pooled median; 0 for a baseline of one process. Frames of
 /// one process vary less than processes do (a stalled mode's ratio moved 2.31–2.57× across the
 /// three blessed processes of one build), and the shift's interval only covers the former: a
-/// shift within this spread is no evidence of a change.
+/// shift within this spread is no evidence of a change. The caller caps it, so that one
+/// disturbed blessed process cannot switch a mode's time gate off.
 fn process_spread(per_process: &[Vec<f64>]) -> f64 {
     let median = |logs: &[f64]| crate::stats::Summary::new(logs.to_vec()).map(|s| s.median);
     match (per_process.len(), median(&per_process.concat())) {
@@ -685,6 +688,7 @@ fn process_spread(per_process: &[Vec<f64>]) -> f64 {
     }
 }
 
+/// exp of the median of log values: the median ratio.
 fn median_exp(logs: &[f64]) -> f64 {
     crate::stats::Summary::new(logs.to_vec()).map_or(f64::NAN, |s| s.median.exp())
 }

@@ -426,6 +426,23 @@ fn khr_lights_punctual_lights_come_with_their_node_transforms() {
         },
     );
     assert!(error(&wide).contains("nodes[1]: KHR_lights_punctual light 0: cone angles"), "{}", error(&wide));
+
+    // Values are checked as a manifest's lights are.
+    let negative = folder.gltf(
+        "negative.gltf",
+        json!([{ "mesh": 0 }, { "extensions": { "KHR_lights_punctual": { "light": 0 } } }]),
+        |d| {
+            d["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+            d["extensions"] =
+                json!({ "KHR_lights_punctual": { "lights": [{ "type": "point", "intensity": -1 }] } });
+            d["scenes"][0]["nodes"] = json!([0, 1]);
+        },
+    );
+    let message = error(&negative);
+    assert!(
+        message.contains("KHR_lights_punctual light 0: intensity: -1 must be finite and ≥ 0"),
+        "{message}"
+    );
 }
 
 #[test]

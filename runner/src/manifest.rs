@@ -8,7 +8,7 @@ use aabench_renderer::AdaptiveSettings;
 use aabench_renderer::adaptive::{DepthMetric, MAX_METRIC_CONSTANT};
 use aabench_renderer::color::{ColorSettings, Dither, Tonemap, Transfer};
 use aabench_renderer::scene::generate::{Generated, Generator, Placement};
-use aabench_renderer::scene::{Camera, MAX_COORDINATE, MAX_LIGHTS, MAX_SHADOW_LIGHTS, Shadow};
+use aabench_renderer::scene::{Camera, MAX_LIGHTS, MAX_SHADOW_LIGHTS, Shadow, check_light};
 use glam::DVec3;
 use serde::Deserialize;
 
@@ -546,18 +546,8 @@ impl Manifest {
         }
         for (i, light) in self.lights.iter().enumerate() {
             let field = |name: &str| format!("lights[{i}].{name}");
-            if !light.position.iter().all(|c| c.is_finite() && c.abs() <= MAX_COORDINATE) {
-                return fail(&field("position"), format!("must be finite and within ±{MAX_COORDINATE:e}"));
-            }
-            if !light.color.iter().all(|c| c.is_finite() && *c >= 0.0) {
-                return fail(&field("color"), "components must be finite and ≥ 0".into());
-            }
-            if !(light.intensity >= 0.0 && light.intensity.is_finite()) {
-                return fail(&field("intensity"), format!("{} must be finite and ≥ 0", light.intensity));
-            }
-            if !(light.range > 0.0 && light.range.is_finite()) {
-                return fail(&field("range"), format!("{} must be finite and > 0", light.range));
-            }
+            check_light(DVec3::from(light.position), light.color, light.intensity, Some(light.range))
+                .or_else(|(name, why)| fail(&field(name), why))?;
             if light.shadow.is_some() && !light.casts_shadows {
                 return fail(&field("shadow"), "is given but casts_shadows is false".into());
             }

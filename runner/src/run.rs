@@ -770,10 +770,7 @@ fn available_memory() -> Option<u64> {
     let meminfo = std::fs::read_to_string("/proc/meminfo").ok();
     let host = meminfo.as_deref().and_then(|m| meminfo_field(m, "MemAvailable:")).map(|kib| kib * 1024);
     let membership = std::fs::read_to_string("/proc/self/cgroup").unwrap_or_default();
-    match (host, cgroup_headroom(Path::new("/sys/fs/cgroup"), &membership)) {
-        (Some(host), Some(cgroup)) => Some(host.min(cgroup)),
-        (host, cgroup) => host.or(cgroup),
-    }
+    host.into_iter().chain(cgroup_headroom(Path::new("/sys/fs/cgroup"), &membership)).min()
 }
 
 fn meminfo_field(text: &str, name: &str) -> Option<u64> {

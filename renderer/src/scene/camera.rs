@@ -31,7 +31,7 @@ fn number(x: f64) -> String {
     }
 }
 
-fn vector(v: DVec3) -> String {
+pub(crate) fn vector(v: DVec3) -> String {
     format!("[{}, {}, {}]", number(v.x), number(v.y), number(v.z))
 }
 

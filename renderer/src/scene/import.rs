@@ -639,21 +639,10 @@ fn light_from_node(light: &gltf::khr_lights_punctual::Light, world: DMat4) -> Re
             LightKind::Spot { direction, inner: inner_cone_angle, outer: outer_cone_angle }
         }
     };
-    let color = glam::Vec3::from(light.color());
-    let intensity = light.intensity();
+    super::check_light(position, light.color(), light.intensity(), light.range())
+        .map_err(|(field, why)| format!("{what}: {field}: {why}"))?;
+    let (color, intensity) = (glam::Vec3::from(light.color()), light.intensity());
     let range = light.range().unwrap_or(f32::INFINITY);
-    if !(color.is_finite() && color.min_element() >= 0.0) {
-        return Err(format!("{what}: color {color} must be finite and ≥ 0"));
-    }
-    if !(intensity.is_finite() && intensity >= 0.0) {
-        return Err(format!("{what}: intensity {intensity} must be finite and ≥ 0"));
-    }
-    if range.is_nan() || range <= 0.0 {
-        return Err(format!("{what}: range {range} must be > 0"));
-    }
-    if position.abs().max_element() > super::MAX_COORDINATE {
-        return Err(format!("{what}: its node places it at {position}, beyond ±{:e}", super::MAX_COORDINATE));
-    }
     Ok((Light { kind, position: glam::Vec3::ZERO, color, intensity, range, shadow: None }, position))
 }
 

@@ -108,6 +108,36 @@ impl Light {
     }
 }
 
+/// Checks a light's values the same way whichever file they come from (a manifest, a glTF
+/// file's `KHR_lights_punctual`): a finite position within ±[`MAX_COORDINATE`], a colour and
+/// an intensity finite and ≥ 0, a range finite and > 0 (`None`: a glTF light that reaches
+/// everywhere). On failure, the field and why.
+pub fn check_light(
+    position: glam::DVec3,
+    color: [f32; 3],
+    intensity: f32,
+    range: Option<f32>,
+) -> Result<(), (&'static str, String)> {
+    if !(position.is_finite() && position.abs().max_element() <= MAX_COORDINATE) {
+        return Err((
+            "position",
+            format!("{} must be finite and within ±{MAX_COORDINATE:e}", camera::vector(position)),
+        ));
+    }
+    if !color.iter().all(|c| c.is_finite() && *c >= 0.0) {
+        return Err(("color", "components must be finite and ≥ 0".into()));
+    }
+    if !(intensity.is_finite() && intensity >= 0.0) {
+        return Err(("intensity", format!("{intensity} must be finite and ≥ 0")));
+    }
+    match range {
+        Some(range) if !(range.is_finite() && range > 0.0) => {
+            Err(("range", format!("{range} must be finite and > 0")))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// How a light spreads.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LightKind {

@@ -1,5 +1,5 @@
-// Rasterizes the scene into the (enlarged) G-buffer: UV, normal, material, UV derivatives and
-// depth. Opaque geometry uses `gbuffer_opaque`; alpha-masked geometry `gbuffer_masked`,
+// Rasterizes the scene into the (enlarged) G-buffer: UV, normal (the normal map's, where a
+// material has one), material, UV derivatives and depth. Opaque geometry uses `gbuffer_opaque`; alpha-masked geometry `gbuffer_masked`,
 // which discards and so loses early depth testing, is drawn after it.
 
 #include "lib/common.wgsl"
@@ -11,6 +11,9 @@ struct VertexOut {
     @location(0) normal: vec3<f32>,
     @location(1) uv: vec2<f32>,
     @location(2) @interpolate(flat) material: u32,
+#ifdef NORMAL_MAPS
+    @location(3) tangent: vec4<f32>,
+#endif
 }
 
 // 24 bytes per sample plus depth; see lib/gbuffer.wgsl for the layout.
@@ -20,11 +23,44 @@ struct GBuffer {
     @location(2) uv_grad: vec4<f32>,
 }
 
+#ifdef NORMAL_MAPS
+// Tangents come from a second vertex buffer (scene::Scene::tangents).
+struct TangentIn {
+    @location(4) tangent: vec4<f32>,
+}
+
+@vertex
+fn vertex(v: VertexIn, t: TangentIn) -> VertexOut {
+    let world = vec4<f32>(v.position, 1.0);
+    return VertexOut(frame.view_proj * world, v.normal, v.uv, v.material, t.tangent);
+}
+
+// The normal map's normal in world space, or `n` where the material has no normal map or the
+// vertex no tangent. The interpolated tangent is made perpendicular to `n` first.
+fn mapped_normal(n: vec3<f32>, tangent: vec4<f32>, material_index: u32, uv: vec2<f32>, uv_dx: vec2<f32>, uv_dy: vec2<f32>) -> vec3<f32> {
+    let material = materials[material_index];
+    let along = tangent.xyz - n * dot(n, tangent.xyz);
+    let along2 = dot(along, along);
+    if material.normal_texture < 0 || along2 < 1e-12 {
+        return n;
+    }
+    let t = along * inverseSqrt(along2);
+    let b = cross(n, t) * select(1.0, -1.0, tangent.w < 0.0);
+    let c = slot_coords(i32(material_index), SLOT_NORMAL, uv, uv_dx, uv_dy);
+    let texel = texture_lookup(scene_data_textures, material.normal_texture, c.uv, c.dx, c.dy).xyz;
+    let local = (texel * 2.0 - 1.0) * vec3<f32>(material.normal_scale, material.normal_scale, 1.0);
+    let mapped = t * local.x + b * local.y + n * local.z;
+    // A map that cancels the normal keeps the surface's own.
+    let length2 = dot(mapped, mapped);
+    return select(n, mapped * inverseSqrt(length2), length2 > 1e-12);
+}
+#else
 @vertex
 fn vertex(v: VertexIn) -> VertexOut {
     let world = vec4<f32>(v.position, 1.0);
     return VertexOut(frame.view_proj * world, v.normal, v.uv, v.material);
 }
+#endif
 
 fn write_gbuffer(v: VertexOut, front_facing: bool) -> GBuffer {
     let uv_dx = dpdx(v.uv);
@@ -32,6 +68,9 @@ fn write_gbuffer(v: VertexOut, front_facing: bool) -> GBuffer {
     // The importer repairs zero normals, but interpolation can still cancel two: scale by an
     // inverse square root bounded away from zero, so a zero normal stays zero, not NaN.
     var n = v.normal * inverseSqrt(max(dot(v.normal, v.normal), 1e-20));
+#ifdef NORMAL_MAPS
+    n = mapped_normal(n, v.tangent, v.material, v.uv, uv_dx, uv_dy);
+#endif
     // Back faces (of double-sided surfaces; others are culled) show their normal flipped.
     n = select(-n, n, front_facing);
     return GBuffer(v.uv, vec4<f32>(n, f32(v.material)), vec4<f32>(uv_dx, uv_dy));

@@ -142,10 +142,12 @@ impl Shader {
 #[derive(Debug, Clone)]
 pub(crate) enum Bound {
     Buffer(wgpu::Buffer),
-    /// A texture, and whether shaders read it through a filtering sampler.
+    /// A texture, whether shaders read it through a filtering sampler, and the format to view
+    /// it in when not its own (the sRGB scene textures read as plain data).
     Texture {
         texture: wgpu::Texture,
         filterable: bool,
+        view_format: Option<wgpu::TextureFormat>,
     },
     Sampler {
         sampler: wgpu::Sampler,
@@ -235,8 +237,8 @@ fn layout_type(
         (Kind::Storage { writable }, Bound::Buffer(b)) => {
             (buffer(wgpu::BufferBindingType::Storage { read_only: !writable }), Held::Buffer(b))
         }
-        (Kind::Texture { sample, dimension }, Bound::Texture { texture, filterable }) => {
-            let format = texture.format();
+        (Kind::Texture { sample, dimension }, Bound::Texture { texture, filterable, view_format }) => {
+            let format = view_format.unwrap_or(texture.format());
             let fits = match (sample, format.sample_type(None, None)) {
                 (Sample::Float, Some(wgpu::TextureSampleType::Float { filterable: can })) => {
                     can || !filterable
@@ -265,6 +267,7 @@ fn layout_type(
             };
             let view = texture.create_view(&wgpu::TextureViewDescriptor {
                 dimension: Some(dimension),
+                format: view_format,
                 ..Default::default()
             });
             (
@@ -335,8 +338,10 @@ mod tests {
             let (a, b) = if swap { (counts.clone(), first.clone()) } else { (first.clone(), counts.clone()) };
             let offsets = offsets.clone();
             move |name: &str| match name {
-                "first" | "extra_samples" => Some(Bound::Texture { texture: a.clone(), filterable: false }),
-                "counts" => Some(Bound::Texture { texture: b.clone(), filterable: false }),
+                "first" | "extra_samples" => {
+                    Some(Bound::Texture { texture: a.clone(), filterable: false, view_format: None })
+                }
+                "counts" => Some(Bound::Texture { texture: b.clone(), filterable: false, view_format: None }),
                 "list_offsets" => Some(Bound::Buffer(offsets.clone())),
                 _ => None,
             }

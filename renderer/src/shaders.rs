@@ -70,18 +70,62 @@ pub struct Features {
     /// `LIGHT_KINDS`: spot and directional lights in shading; without it, every light is a
     /// point light and shading skips the kind's arithmetic.
     pub light_kinds: bool,
+    /// `NORMAL_MAPS`: tangents as a second vertex buffer and the normal map's lookup in the
+    /// G-buffer pass. Needs `textured`.
+    pub normal_maps: bool,
+    /// `EMISSIVE`: emitted radiance (factor, and texture where textured) in shading.
+    pub emissive: bool,
+    /// `OCCLUSION`: occlusion textures on the ambient term. Needs `textured`.
+    pub occlusion: bool,
+    /// `TEXTURE_TRANSFORM`: `KHR_texture_transform` on every lookup. Needs `textured`.
+    pub texture_transform: bool,
+    /// `TEXTURE_PAGES`: textures of different sizes share layers; lookups find each by its
+    /// place. Needs `textured`.
+    pub texture_pages: bool,
+    /// `METALLIC_ROUGHNESS`: metallic-roughness textures in shading. Needs `textured`.
+    pub metallic_roughness: bool,
 }
 
 impl Features {
-    pub const ALL: Features = Features { textured: true, shadows: true, light_kinds: true };
+    pub const ALL: Features = Features {
+        textured: true,
+        shadows: true,
+        light_kinds: true,
+        normal_maps: true,
+        emissive: true,
+        occlusion: true,
+        texture_transform: true,
+        texture_pages: true,
+        metallic_roughness: true,
+    };
 
-    /// Every combination, for tests that validate each variant of a shader.
+    /// Every consistent combination (the texture features need `textured`), for tests that
+    /// validate each variant of a shader.
     pub fn combinations() -> impl Iterator<Item = Features> {
-        (0..8).map(|bits| Features {
-            textured: bits & 1 != 0,
-            shadows: bits & 2 != 0,
-            light_kinds: bits & 4 != 0,
-        })
+        (0..512)
+            .map(|bits: u32| Features {
+                textured: bits & 1 != 0,
+                shadows: bits & 2 != 0,
+                light_kinds: bits & 4 != 0,
+                normal_maps: bits & 8 != 0,
+                emissive: bits & 16 != 0,
+                occlusion: bits & 32 != 0,
+                texture_transform: bits & 64 != 0,
+                texture_pages: bits & 128 != 0,
+                metallic_roughness: bits & 256 != 0,
+            })
+            .filter(|f| f.is_consistent())
+    }
+
+    /// Whether the texture features come with `textured`, whose bindings and functions they
+    /// use.
+    pub fn is_consistent(self) -> bool {
+        self.textured
+            || !(self.normal_maps
+                || self.occlusion
+                || self.texture_transform
+                || self.texture_pages
+                || self.metallic_roughness)
     }
 
     fn defines(self, name: &str) -> Option<bool> {
@@ -89,6 +133,12 @@ impl Features {
             "TEXTURED" => Some(self.textured),
             "SHADOWS" => Some(self.shadows),
             "LIGHT_KINDS" => Some(self.light_kinds),
+            "NORMAL_MAPS" => Some(self.normal_maps),
+            "EMISSIVE" => Some(self.emissive),
+            "OCCLUSION" => Some(self.occlusion),
+            "TEXTURE_TRANSFORM" => Some(self.texture_transform),
+            "TEXTURE_PAGES" => Some(self.texture_pages),
+            "METALLIC_ROUGHNESS" => Some(self.metallic_roughness),
             _ => None,
         }
     }
@@ -97,6 +147,9 @@ impl Features {
 /// The text of `name` with its includes spliced in and its conditional lines resolved for
 /// `features`, ready for naga.
 pub fn compose(name: &str, features: Features) -> Result<String, RenderError> {
+    if !features.is_consistent() {
+        return Err(RenderError::Shader(format!("{features:?}: texture features need `textured`")));
+    }
     let mut out = String::new();
     let mut seen = HashSet::new();
     splice(name, features, &mut out, &mut seen)?;

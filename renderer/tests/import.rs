@@ -468,3 +468,141 @@ fn a_jpeg_texture_decodes_to_its_png_twin_within_jpeg_error() {
     let mean = differences.iter().sum::<u32>() as f64 / differences.len() as f64;
     assert!(mean < 2.0 && *differences.iter().max().unwrap() < 24, "mean {mean}");
 }
+
+#[test]
+fn material_textures_are_read_with_their_transforms_uv_sets_and_encodings() {
+    use aabench_renderer::scene::{Encoding, UvTransform};
+    let folder = Folder::new("materials");
+    image::RgbaImage::from_pixel(4, 4, image::Rgba([200, 100, 50, 255]))
+        .save(folder.dir.join("t.png"))
+        .unwrap();
+    let material = |d: &mut Value, material: Value| {
+        d["images"] = json!([{ "uri": "t.png" }]);
+        d["textures"] = json!([{ "source": 0 }]);
+        d["materials"] = json!([material]);
+        d["meshes"][0]["primitives"][0]["material"] = json!(0);
+    };
+    let transform =
+        json!({ "KHR_texture_transform": { "offset": [0.5, 0], "rotation": 0.25, "scale": [2, 3] } });
+    let path = folder.one_node("all.gltf", |d| {
+        d["extensionsRequired"] = json!(["KHR_texture_transform", "KHR_materials_emissive_strength"]);
+        d["extensionsUsed"] = d["extensionsRequired"].clone();
+        material(
+            d,
+            json!({
+                "pbrMetallicRoughness": { "baseColorTexture": { "index": 0, "extensions": transform } },
+                "normalTexture": { "index": 0, "scale": 0.5, "extensions": transform },
+                "emissiveTexture": { "index": 0 },
+                "emissiveFactor": [1, 0.5, 0],
+                "occlusionTexture": { "index": 0, "texCoord": 1, "strength": 0.3 },
+                "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": 4 } }
+            }),
+        );
+    });
+    let scene = load_gltf(&path).unwrap();
+    let m = &scene.materials[0];
+    let expected = UvTransform::new([0.5, 0.0], 0.25, [2.0, 3.0]);
+    assert_eq!(m.texture.unwrap().transform, expected);
+    assert_eq!(m.normal_texture.unwrap().transform, expected, "read from the normal texture's own extension");
+    assert_eq!(m.normal_scale, 0.5);
+    assert_eq!(m.emissive, [4.0, 2.0, 0.0]);
+    assert!(m.emissive_texture.unwrap().transform.is_identity());
+    // One image, read as colour (base, emissive) and as data (normal): two textures.
+    assert_eq!(
+        scene.textures.iter().map(|t| t.encoding).collect::<Vec<_>>(),
+        vec![Encoding::Srgb, Encoding::Linear]
+    );
+    assert_eq!(m.texture.unwrap().texture, m.emissive_texture.unwrap().texture);
+    // Occlusion on a second UV set is ignored, with a warning that says so.
+    assert!(m.occlusion_texture.is_none());
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("materials[0].occlusionTexture: uses TEXCOORD_1")),
+        "{:?}",
+        scene.warnings
+    );
+    // The transform's own texCoord overrides the slot's.
+    let path = folder.one_node("override.gltf", |d| {
+        let transform = json!({ "KHR_texture_transform": { "texCoord": 1 } });
+        material(d, json!({ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0, "extensions": transform } } }));
+    });
+    let scene = load_gltf(&path).unwrap();
+    assert!(scene.materials[0].texture.is_none() && scene.warnings[0].contains("TEXCOORD_1"));
+
+    // Values no renderer can use are errors naming the material.
+    let path = folder.one_node("huge.gltf", |d| {
+        let transform = json!({ "KHR_texture_transform": { "rotation": 1e39 } });
+        material(d, json!({ "normalTexture": { "index": 0, "extensions": transform } }));
+    });
+    let message = error(&path);
+    assert!(message.contains("materials[0].normalTexture.extensions.KHR_texture_transform"), "{message}");
+    let path = folder.one_node("negative.gltf", |d| {
+        let strength = json!({ "KHR_materials_emissive_strength": { "emissiveStrength": -2 } });
+        material(d, json!({ "emissiveFactor": [1, 1, 1], "extensions": strength }));
+    });
+    let message = error(&path);
+    assert!(message.contains("materials[0]: emissiveFactor") && message.contains("≥ 0"), "{message}");
+    // The crate checks neither a normal map's scale nor an occlusion strength.
+    let path = folder
+        .one_node("scale.gltf", |d| material(d, json!({ "normalTexture": { "index": 0, "scale": 1e39 } })));
+    let message = error(&path);
+    assert!(message.contains("materials[0].normalTexture.scale: inf must be finite"), "{message}");
+    let path = folder.one_node("strength.gltf", |d| {
+        material(d, json!({ "occlusionTexture": { "index": 0, "strength": -0.5 } }))
+    });
+    let message = error(&path);
+    assert!(message.contains("materials[0].occlusionTexture.strength: -0.5 must be in [0, 1]"), "{message}");
+}
+
+#[test]
+fn sixteen_bit_and_grey_textures_decode_like_their_eight_bit_rgba_twins() {
+    let folder = Folder::new("depths");
+    let grey8 = image::GrayImage::from_fn(16, 16, |x, y| image::Luma([(x * 16 + y) as u8]));
+    let grey16 = image::ImageBuffer::<image::Luma<u16>, _>::from_fn(16, 16, |x, y| {
+        image::Luma([u16::from(grey8.get_pixel(x, y)[0]) * 257])
+    });
+    let grey_alpha =
+        image::GrayAlphaImage::from_fn(16, 16, |x, y| image::LumaA([grey8.get_pixel(x, y)[0], 77]));
+    let rgb16 = image::ImageBuffer::<image::Rgb<u16>, _>::from_fn(16, 16, |x, y| {
+        let v = u16::from(grey8.get_pixel(x, y)[0]) * 257;
+        image::Rgb([v, v, v])
+    });
+    grey8.save(folder.dir.join("grey8.png")).unwrap();
+    grey16.save(folder.dir.join("grey16.png")).unwrap();
+    grey_alpha.save(folder.dir.join("grey-alpha.png")).unwrap();
+    rgb16.save(folder.dir.join("rgb16.png")).unwrap();
+    let texture = |uri: &str| {
+        let path = folder.one_node(&format!("{uri}.gltf"), |d| {
+            d["images"] = json!([{ "uri": uri }]);
+            d["textures"] = json!([{ "source": 0 }]);
+            d["materials"] = json!([{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }]);
+            d["meshes"][0]["primitives"][0]["material"] = json!(0);
+        });
+        load_gltf(&path).unwrap().textures.remove(0).rgba
+    };
+    let expected: Vec<u8> = grey8.pixels().flat_map(|p| [p[0], p[0], p[0], 255]).collect();
+    assert_eq!(texture("grey8.png"), expected);
+    assert_eq!(texture("grey16.png"), expected);
+    assert_eq!(texture("rgb16.png"), expected);
+    let with_alpha: Vec<u8> = grey8.pixels().flat_map(|p| [p[0], p[0], p[0], 77]).collect();
+    assert_eq!(texture("grey-alpha.png"), with_alpha);
+}
+
+#[test]
+fn position_accessors_without_bounds_load_with_a_warning() {
+    // glTF requires min and max on POSITION accessors; Khronos' IncorrectVertexArrays sample
+    // and some exporters leave them out.
+    let folder = Folder::new("bounds");
+    let path = folder.one_node("unbounded.gltf", |d| {
+        let accessor = d["accessors"][0].as_object_mut().unwrap();
+        accessor.remove("min");
+        accessor.insert("max".into(), json!("not a bound"));
+    });
+    let scene = load_gltf(&path).unwrap();
+    assert_eq!(scene.triangle_count(), 1);
+    assert_eq!(scene.bounds().1, glam::Vec3::new(1.0, 1.0, 0.0), "bounds come from the data");
+    assert!(
+        scene.warnings.iter().any(|w| w.starts_with("accessors[0]: a POSITION accessor without")),
+        "{:?}",
+        scene.warnings
+    );
+}

@@ -39,11 +39,19 @@ fn features_remove_the_bindings_a_scene_does_not_need() {
         module.global_variables.iter().filter_map(|(_, g)| g.name.clone()).collect::<Vec<_>>()
     };
     let plain = names(Features::default());
-    for absent in ["scene_textures", "scene_sampler", "shadow_cubes", "shadow_sampler"] {
+    let optional = [
+        "scene_textures",
+        "scene_data_textures",
+        "scene_sampler",
+        "texture_places",
+        "shadow_cubes",
+        "shadow_sampler",
+    ];
+    for absent in optional {
         assert!(!plain.contains(&absent.to_string()), "{absent} in {plain:?}");
     }
     let all = names(Features::ALL);
-    for present in ["scene_textures", "scene_sampler", "shadow_cubes", "shadow_sampler"] {
+    for present in optional {
         assert!(all.contains(&present.to_string()), "{present} missing in {all:?}");
     }
 }
@@ -105,6 +113,18 @@ fn constants_shared_with_rust_agree() {
         [("LIGHT_POINT", LIGHT_POINT), ("LIGHT_SPOT", LIGHT_SPOT), ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL)]
     {
         assert_eq!(constant("shade.wgsl", name), naga::Literal::U32(value), "{name}");
+    }
+    use aabench_renderer::scene::{
+        SLOT_BASE, SLOT_EMISSIVE, SLOT_METALLIC_ROUGHNESS, SLOT_NORMAL, SLOT_OCCLUSION,
+    };
+    for (name, value) in [
+        ("SLOT_BASE", SLOT_BASE),
+        ("SLOT_NORMAL", SLOT_NORMAL),
+        ("SLOT_EMISSIVE", SLOT_EMISSIVE),
+        ("SLOT_OCCLUSION", SLOT_OCCLUSION),
+        ("SLOT_METALLIC_ROUGHNESS", SLOT_METALLIC_ROUGHNESS),
+    ] {
+        assert_eq!(constant("shade.wgsl", name), naga::Literal::U32(value as u32), "{name}");
     }
     // A list entry packs a rank below M² ≤ 16 and the index of a pixel of up to 4096×4096.
     let naga::Literal::U32(rank_bits) = constant("adaptive.wgsl", "RANK_BITS") else { panic!("u32") };

@@ -5,7 +5,7 @@ mod support;
 
 use aabench_renderer::scene::shadow::face_and_coordinates;
 use aabench_renderer::scene::{
-    AlphaMode, Camera, DrawClass, Light, LightKind, Lighting, Material, Scene, Shadow, Vertex,
+    Camera, DrawClass, Light, LightKind, Lighting, Material, Scene, Shadow, Vertex,
 };
 use aabench_renderer::{FrameImages, Mode, SceneRenderer, Technique};
 use glam::{DVec3, Vec3};
@@ -35,9 +35,8 @@ fn quads(quads: &[(Vec3, Vec3, Vec3)], double_sided: bool) -> Scene {
         base_color: [0.5, 0.5, 0.5, 1.0],
         metallic: 0.0,
         roughness: 0.9,
-        texture: None,
-        alpha: AlphaMode::Opaque,
         double_sided,
+        ..Material::default()
     }];
     scene
 }

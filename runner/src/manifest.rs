@@ -176,6 +176,56 @@ const MAX_SHADOW_CUBE_BYTES: u64 = 512 << 20;
 /// Texels per side of a shadow cube face.
 const SHADOW_RESOLUTIONS: std::ops::RangeInclusive<u32> = 16..=4096;
 
+/// Checks the shadows of a scene's lights, each named by its settings' field: every setting in
+/// range, at most [`MAX_SHADOW_LIGHTS`], within [`MAX_SHADOW_CUBE_BYTES`], one resolution
+/// for all (their cubes are layers of one array). On failure, the field and why.
+pub fn check_shadows(shadows: &[(String, Shadow)]) -> Result<(), (String, String)> {
+    for (field, shadow) in shadows {
+        if !SHADOW_RESOLUTIONS.contains(&shadow.resolution) {
+            let (lo, hi) = (SHADOW_RESOLUTIONS.start(), SHADOW_RESOLUTIONS.end());
+            return Err((
+                format!("{field}.resolution"),
+                format!("{} must be in [{lo}, {hi}]", shadow.resolution),
+            ));
+        }
+        for (name, value) in [("bias", shadow.bias), ("radius", shadow.radius)] {
+            if !(value >= 0.0 && value.is_finite()) {
+                return Err((format!("{field}.{name}"), format!("{value} must be finite and ≥ 0")));
+            }
+        }
+    }
+    if shadows.len() > MAX_SHADOW_LIGHTS {
+        return Err((
+            "lights".into(),
+            format!("{} lights cast shadows, at most {MAX_SHADOW_LIGHTS} may", shadows.len()),
+        ));
+    }
+    let cube_bytes: u64 = shadows.iter().map(|(_, s)| 6 * 4 * u64::from(s.resolution).pow(2)).sum();
+    if cube_bytes > MAX_SHADOW_CUBE_BYTES {
+        return Err((
+            "lights".into(),
+            format!(
+                "the shadow cubes take {} MiB, more than {} MiB: lower the shadow resolution",
+                cube_bytes >> 20,
+                MAX_SHADOW_CUBE_BYTES >> 20
+            ),
+        ));
+    }
+    if let (Some((first, a)), Some((field, b))) =
+        (shadows.first(), shadows.iter().find(|(_, s)| s.resolution != shadows[0].1.resolution))
+    {
+        return Err((
+            format!("{field}.resolution"),
+            format!(
+                "{} differs from {first}'s {}: all shadow cubes of a scene are layers of one array, so they \
+                 share one resolution",
+                b.resolution, a.resolution
+            ),
+        ));
+    }
+    Ok(())
+}
+
 fn white() -> [f32; 3] {
     [1.0; 3]
 }
@@ -360,6 +410,8 @@ pub struct Manifest {
     /// Whether the file's own lights shine beside `lights` (`keep`) or not (`replace`).
     #[serde(default)]
     pub file_lights: FileLights,
+    /// When given, every point light of the file casts a shadow with these settings.
+    pub file_light_shadows: Option<ShadowSpec>,
     #[serde(default = "default_ambient")]
     pub ambient: [f32; 3],
     #[serde(default = "default_background")]
@@ -551,52 +603,25 @@ impl Manifest {
             if light.shadow.is_some() && !light.casts_shadows {
                 return fail(&field("shadow"), "is given but casts_shadows is false".into());
             }
-            if let Some(shadow) = light.shadow() {
-                let settings = |name: &str| field(&format!("shadow.{name}"));
-                if !SHADOW_RESOLUTIONS.contains(&shadow.resolution) {
-                    let (lo, hi) = (SHADOW_RESOLUTIONS.start(), SHADOW_RESOLUTIONS.end());
-                    return fail(
-                        &settings("resolution"),
-                        format!("{} must be in [{lo}, {hi}]", shadow.resolution),
-                    );
-                }
-                for (name, value) in [("bias", shadow.bias), ("radius", shadow.radius)] {
-                    if !(value >= 0.0 && value.is_finite()) {
-                        return fail(&settings(name), format!("{value} must be finite and ≥ 0"));
-                    }
-                }
+        }
+        let shadows: Vec<(String, Shadow)> = self
+            .lights
+            .iter()
+            .enumerate()
+            .filter_map(|(i, l)| Some((format!("lights[{i}].shadow"), l.shadow()?)))
+            .collect();
+        check_shadows(&shadows).or_else(|(field, why)| fail(&field, why))?;
+        // Its settings here; how many cubes the file's point lights add is known once the
+        // file is read (scenes.rs).
+        if let Some(spec) = self.file_light_shadows {
+            if self.file_lights == FileLights::Replace {
+                return fail(
+                    "file_light_shadows",
+                    "is given but file_lights is replace: the file's lights do not shine".into(),
+                );
             }
-        }
-        let shadows: Vec<(usize, Shadow)> =
-            self.lights.iter().enumerate().filter_map(|(i, l)| Some((i, l.shadow()?))).collect();
-        if shadows.len() > MAX_SHADOW_LIGHTS {
-            return fail(
-                "lights",
-                format!("{} lights cast shadows, at most {MAX_SHADOW_LIGHTS} may", shadows.len()),
-            );
-        }
-        let cube_bytes: u64 = shadows.iter().map(|(_, s)| 6 * 4 * u64::from(s.resolution).pow(2)).sum();
-        if cube_bytes > MAX_SHADOW_CUBE_BYTES {
-            return fail(
-                "lights",
-                format!(
-                    "the shadow cubes take {} MiB, more than {} MiB: lower lights[i].shadow.resolution",
-                    cube_bytes >> 20,
-                    MAX_SHADOW_CUBE_BYTES >> 20
-                ),
-            );
-        }
-        if let (Some((first, a)), Some((i, b))) =
-            (shadows.first(), shadows.iter().find(|(_, s)| s.resolution != shadows[0].1.resolution))
-        {
-            return fail(
-                &format!("lights[{i}].shadow.resolution"),
-                format!(
-                    "{} differs from lights[{first}]'s {}: all shadow cubes of a scene are layers of \
-                     one array, so they share one resolution",
-                    b.resolution, a.resolution
-                ),
-            );
+            check_shadows(&[("file_light_shadows".into(), spec.settings())])
+                .or_else(|(field, why)| fail(&field, why))?;
         }
         for (name, value) in [("ambient", self.ambient), ("background", self.background)] {
             if !value.iter().all(|c| c.is_finite() && *c >= 0.0) {
@@ -844,6 +869,25 @@ mod tests {
         );
         check(|j| j["lights"] = json!(vec![light(64); 9]), "lights", "at most 8");
         check(|j| j["lights"] = json!(vec![light(4096); 2]), "lights", "768 MiB, more than 512 MiB");
+        // The file's point lights: their settings here, their number once the file is read.
+        check(
+            |j| j["file_light_shadows"] = json!({"resolution": 8}),
+            "file_light_shadows.resolution",
+            "[16, 4096]",
+        );
+        check(
+            |j| {
+                j["file_light_shadows"] = json!({});
+                j["file_lights"] = json!("replace");
+            },
+            "file_light_shadows",
+            "file_lights is replace",
+        );
+        let mut json: serde_json::Value = serde_json::from_str(VALID).unwrap();
+        json["lights"] = json!(vec![light(64); 8]);
+        json["file_light_shadows"] = json!({"resolution": 512});
+        Manifest::parse(Path::new("scenes/edge.json"), &json.to_string())
+            .expect("eight shadow lights beside a file that may have no point light");
         // Defaults, and no shadow for a light that casts none.
         let mut json: serde_json::Value = serde_json::from_str(VALID).unwrap();
         shadowed(json!({"bias": 0.2}))(&mut json);

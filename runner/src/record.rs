@@ -127,6 +127,9 @@ pub struct SceneRecord {
     pub load_s: Option<f64>,
     /// Bytes of render targets once every mode was prepared.
     pub target_bytes: Option<u64>,
+    /// Bytes of the scene's textures on the device, mipmaps included.
+    #[serde(default)]
+    pub texture_bytes: Option<u64>,
     /// The memory limit its modes were prepared under (`--memory-limit`, or 90% of the memory
     /// available after upload).
     #[serde(default)]

@@ -159,6 +159,7 @@ fn empty_scene_at(manifest: &Path) -> SceneRecord {
         textures: None,
         load_s: None,
         target_bytes: None,
+        texture_bytes: None,
         memory_limit_bytes: None,
         warnings: Vec::new(),
         stall_iterations: 0,
@@ -276,12 +277,13 @@ async fn run_scene(
                     }
                 }
             }
-            (outcomes, renderer.target_bytes())
+            (outcomes, renderer.target_bytes(), renderer.texture_bytes())
         })
         .await;
     let mut runs: Vec<ModeRun> = match prepared {
-        Ok((outcomes, bytes)) => {
+        Ok((outcomes, bytes, texture_bytes)) => {
             record.target_bytes = Some(bytes);
+            record.texture_bytes = Some(texture_bytes);
             outcomes
                 .into_iter()
                 .map(|outcome| match outcome {

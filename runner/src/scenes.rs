@@ -6,12 +6,12 @@ use std::time::Instant;
 
 use aabench_renderer::scene::generate::GENERATOR_STAMP;
 use aabench_renderer::scene::{
-    Camera, Light, LightKind, Lighting, MAX_LIGHTS, Scene, load_gltf, read_generator, regular_file,
+    Camera, Light, LightKind, Lighting, MAX_LIGHTS, Scene, Shadow, load_gltf, read_generator, regular_file,
 };
 use anyhow::{Context, bail};
 use glam::{DVec3, DVec4, Vec3};
 
-use crate::manifest::{FileLights, Manifest};
+use crate::manifest::{FileLights, Manifest, check_shadows};
 
 #[derive(Debug)]
 pub struct LoadedScene {
@@ -76,22 +76,51 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
     Ok(LoadedScene { scene, camera, lighting, seconds: start.elapsed().as_secs_f64() })
 }
 
-/// The file's lights (unless the manifest replaces them) and the manifest's; with neither,
-/// [`default_rig`]. More than the renderer's table holds is an error, not a silent cut.
+/// The file's lights (unless the manifest replaces them; with `file_light_shadows`, its point
+/// lights cast shadows) and the manifest's; with neither, [`default_rig`]. More than the
+/// renderer's table holds is an error, not a silent cut.
 fn lights(manifest: &Manifest, scene: &Scene) -> anyhow::Result<Vec<Light>> {
-    let from_file = match manifest.file_lights {
+    let mut from_file = match manifest.file_lights {
         FileLights::Keep => scene.lights.clone(),
         FileLights::Replace => Vec::new(),
     };
-    let from_manifest = manifest.lights.iter().map(|l| Light {
-        kind: LightKind::Point,
-        // Manifest coordinates are the file's; the scene's are relative to its origin.
-        position: (DVec3::from(l.position) - scene.origin).as_vec3(),
-        color: Vec3::from(l.color),
-        intensity: l.intensity,
-        range: l.range,
-        shadow: l.shadow(),
-    });
+    if let Some(spec) = manifest.file_light_shadows {
+        for light in from_file.iter_mut().filter(|l| l.kind == LightKind::Point) {
+            light.shadow = Some(spec.settings());
+        }
+    }
+    let from_manifest: Vec<Light> = manifest
+        .lights
+        .iter()
+        .map(|l| Light {
+            kind: LightKind::Point,
+            // Manifest coordinates are the file's; the scene's are relative to its origin.
+            position: (DVec3::from(l.position) - scene.origin).as_vec3(),
+            color: Vec3::from(l.color),
+            intensity: l.intensity,
+            range: l.range,
+            shadow: l.shadow(),
+        })
+        .collect();
+    // The manifest checked its own lights' shadows; the file's point lights join them here.
+    let shadows: Vec<(String, Shadow)> = from_file
+        .iter()
+        .filter_map(|l| Some(("file_light_shadows".to_string(), *l.cube()?)))
+        .chain(
+            from_manifest
+                .iter()
+                .enumerate()
+                .filter_map(|(i, l)| Some((format!("lights[{i}].shadow"), *l.cube()?))),
+        )
+        .collect();
+    // Only the file's lights can make a set the manifest's own check passed fail here.
+    check_shadows(&shadows).map_err(|(field, why)| {
+        let field = if field == "lights" { "file_light_shadows" } else { field.as_str() };
+        anyhow::anyhow!(
+            "{}: {field}: {why} (the file's point lights cast shadows too)",
+            manifest.path.display()
+        )
+    })?;
     let lights: Vec<Light> = from_file.into_iter().chain(from_manifest).collect();
     if lights.len() > MAX_LIGHTS {
         bail!(

@@ -218,11 +218,28 @@ fn seeds() -> Vec<Seed> {
     writer.place(2.0, [1e5, 0.0, -3.0]);
     let mut textured = Seed::from_glb(&writer.to_glb());
     add_lights(&mut textured.document);
+    add_material_maps(&mut textured.document);
     let mut seeds = vec![textured];
     for generator in [Generator::Cornell, Generator::Degenerate] {
         seeds.push(Seed::from_glb(&generator.build(1).to_glb()));
     }
     seeds
+}
+
+/// Metallic-roughness, normal, emissive and occlusion textures with their factors and UV transforms on the second
+/// material, so mutations reach every texture slot.
+fn add_material_maps(document: &mut Value) {
+    let transform =
+        json!({ "KHR_texture_transform": { "offset": [0.5, 0], "rotation": 0.3, "scale": [2, 2] } });
+    let material = &mut document["materials"][1];
+    material["normalTexture"] = json!({ "index": 0, "scale": 0.5, "extensions": transform });
+    material["occlusionTexture"] = json!({ "index": 0, "strength": 0.5, "extensions": transform });
+    material["emissiveTexture"] = json!({ "index": 0, "extensions": transform });
+    material["pbrMetallicRoughness"]["metallicRoughnessTexture"] = json!({ "index": 0 });
+    material["emissiveFactor"] = json!([1.0, 0.5, 0.0]);
+    material["extensions"] = json!({ "KHR_materials_emissive_strength": { "emissiveStrength": 2.0 } });
+    document["extensionsUsed"] =
+        json!(["KHR_lights_punctual", "KHR_texture_transform", "KHR_materials_emissive_strength"]);
 }
 
 /// KHR_lights_punctual's three kinds on nodes of their own, so mutations reach the lights.
@@ -288,7 +305,7 @@ fn at_ref<'a>(root: &'a Value, path: &[Step]) -> &'a Value {
 
 /// Keys of glTF and of manifests that seeds may lack: optional fields, extensions, the other
 /// projection, sparse storage.
-const KNOWN_KEYS: [&str; 32] = [
+const KNOWN_KEYS: [&str; 36] = [
     "byteStride",
     "byteOffset",
     "count",
@@ -321,6 +338,10 @@ const KNOWN_KEYS: [&str; 32] = [
     "sampler",
     "alphaMode",
     "generate",
+    "normalTexture",
+    "occlusionTexture",
+    "emissiveTexture",
+    "strength",
 ];
 
 fn mutate_json(document: &mut Value, mutation: &Mutation) {
@@ -445,9 +466,23 @@ fn check_scene(scene: &Scene) -> Result<(), String> {
         return Err(format!("draws {:?} do not cover {} indices", scene.draws, scene.indices.len()));
     }
     for material in &scene.materials {
-        if material.texture.is_some_and(|t| t >= scene.textures.len()) {
+        if material.textures().any(|t| t.texture >= scene.textures.len()) {
             return Err(format!("material {} names a missing texture", material.name));
         }
+        let transforms = material.textures().flat_map(|t| t.transform.rows.into_iter().flatten());
+        let factors =
+            [material.normal_scale, material.occlusion_strength].into_iter().chain(material.emissive);
+        if !transforms.chain(factors).all(f32::is_finite) || material.emissive.iter().any(|&c| c < 0.0) {
+            return Err(format!("material {}: a factor or UV transform is not finite", material.name));
+        }
+    }
+    let tangents_fit = scene.tangents.is_empty() || scene.tangents.len() == scene.vertices.len();
+    if !tangents_fit || !scene.tangents.iter().flatten().all(|c| c.is_finite()) {
+        return Err(format!(
+            "{} tangents for {} vertices, or not finite",
+            scene.tangents.len(),
+            scene.vertices.len()
+        ));
     }
     for texture in &scene.textures {
         let side_ok = (1..=MAX_TEXTURE_SIDE).contains(&texture.width)

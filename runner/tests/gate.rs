@@ -182,10 +182,11 @@ fn a_real_slowdown_is_flagged_and_three_percent_jitter_is_not() {
     }
     // The unstalled modes anchor the ratio: they do not regress, and all images stay unchanged.
     // (At 96×72 an unstalled frame takes a few milliseconds, so between frames 256× as heavy its
-    // ratio's estimate may stray past the threshold with an interval across it: `noisy`, which
-    // is reported and never fails. It did so in 1 of 5 runs before the pass graph as after.)
+    // ratio's estimate may stray past the threshold: with an interval across it (`noisy`, in 1
+    // of 5 runs before the pass graph as after), or, with the machine busy, below it
+    // (`improved`, once in a test run beside other work). Neither fails the gate.)
     let anchor = &checks_of(&verdict, "reference-2x2", "relative_time")[0]["outcome"];
-    assert!(anchor == "unchanged" || anchor == "noisy", "{anchor}");
+    assert!(anchor == "unchanged" || anchor == "noisy" || anchor == "improved", "{anchor}");
     assert_eq!(checks_of(&verdict, "reference-2x2-stalled", "psnr_vs_truth")[0]["outcome"], "unchanged");
     let notes = verdict["notes"].to_string();
     assert!(notes.contains("manifest changed"), "{notes}");

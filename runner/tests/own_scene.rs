@@ -65,3 +65,86 @@ fn a_three_line_manifest_frames_and_lights_a_file_in_any_unit() {
         assert!(brightest > 120, "{}: brightest cube red {brightest}", scene["name"]);
     }
 }
+
+/// A floor with a box standing on it and `lights` point lights of the file's own above it.
+fn lit_box_file(path: &std::path::Path, lights: usize) {
+    let mut floor = MeshData::default();
+    for (x, z) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (1.0, -1.0)] {
+        floor.positions.push([x * 6.0, 0.0, z * 6.0]);
+        floor.normals.push([0.0, 1.0, 0.0]);
+        floor.uvs.push([0.0, 0.0]);
+    }
+    floor.indices = vec![0, 1, 2, 0, 2, 3];
+    let mut writer = GltfWriter::new("a user's exporter");
+    let grey = writer.add_material(&MaterialDesc::new("floor", [0.7, 0.7, 0.7], 0.8));
+    writer.add_mesh("floor", &floor, grey);
+    let mut block = MeshData::default();
+    for (axis, sign) in (0..3).flat_map(|axis| [(axis, -1.0f32), (axis, 1.0)]) {
+        let mut normal = [0.0; 3];
+        normal[axis] = sign;
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let base = block.positions.len() as u32;
+        for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+            let mut p = [0.0, 1.0, 0.0];
+            p[axis] += sign;
+            p[u] += a;
+            p[v] += b;
+            block.positions.push(p);
+            block.normals.push(normal);
+            block.uvs.push([0.0, 0.0]);
+        }
+        block.indices.extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+    let red = writer.add_material(&MaterialDesc::new("box", [0.8, 0.2, 0.2], 0.8));
+    writer.add_mesh("box", &block, red);
+    for i in 0..lights {
+        writer.add_point_light([-3.0 + 0.01 * i as f64, 4.5, -2.0], [1.0; 3], 40.0 / lights as f32, 30.0);
+    }
+    writer.write(path).unwrap();
+}
+
+#[test]
+fn the_files_point_lights_cast_shadows_when_the_manifest_asks() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("file-shadows");
+    lit_box_file(&ws.dir.join("scenes/box.glb"), 1);
+    let camera = json!({ "position": [0, 12, 9], "target": [0, 0, 0], "fov_y_degrees": 50 });
+    for (name, shadows) in [("plain", None), ("shadowed", Some(json!({ "resolution": 256 })))] {
+        let mut manifest = json!({ "schema_version": 1, "name": name, "gltf": "box.glb", "camera": camera,
+                                   "resolution": { "quick": [96, 72] }, "ambient": [0.02, 0.02, 0.02] });
+        if let Some(shadows) = shadows {
+            manifest["file_light_shadows"] = shadows;
+        }
+        std::fs::write(ws.dir.join(format!("scenes/{name}.json")), manifest.to_string()).unwrap();
+    }
+    let output = ws.run(&["run", "--modes", "deferred-1x1", "--repetitions", "1"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let record = ws.record();
+    let image = |name: &str| {
+        let scene = record["scenes"].as_array().unwrap().iter().find(|s| s["name"] == name).unwrap();
+        let png = ws.run_dir().join(mode(scene, "deferred-1x1")["images"]["display"].as_str().unwrap());
+        image::open(&png).unwrap().to_rgb8()
+    };
+    let (plain, shadowed) = (image("plain"), image("shadowed"));
+    // The box's shadow falls on the floor behind it: floor pixels that darken by far.
+    let darkened =
+        plain.pixels().zip(shadowed.pixels()).filter(|(a, b)| a[1] > b[1].saturating_add(40)).count();
+    let share = darkened as f64 / f64::from(plain.width() * plain.height());
+    assert!(share > 0.02, "shadowed share {share:.4}");
+    // Nothing gets brighter.
+    assert!(plain.pixels().zip(shadowed.pixels()).all(|(a, b)| b[1] <= a[1].saturating_add(1)));
+
+    // Nine shadowed point lights are more cubes than a scene holds: the scene fails saying so.
+    let ws = Workspace::new("file-shadows-many");
+    lit_box_file(&ws.dir.join("scenes/box.glb"), 9);
+    let manifest =
+        json!({ "schema_version": 1, "name": "many", "gltf": "box.glb", "file_light_shadows": {} });
+    std::fs::write(ws.dir.join("scenes/many.json"), manifest.to_string()).unwrap();
+    let output = ws.run(&["run", "--modes", "deferred-1x1", "--repetitions", "1"]);
+    assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
+    let message = stderr(&output);
+    assert!(
+        message.contains("many.json: file_light_shadows: 9 lights cast shadows, at most 8 may"),
+        "{message}"
+    );
+}

@@ -13,7 +13,12 @@ fn passes_alpha_test(material_index: u32, uv: vec2<f32>) -> bool {
     let material = materials[material_index];
     var alpha = material.base_color.a;
 #ifdef TEXTURED
-    let texel = textureSample(scene_textures, scene_sampler, uv, max(material.texture, 0));
+    let coords = slot_coords(i32(material_index), SLOT_BASE, uv, vec2<f32>(0.0), vec2<f32>(0.0));
+#ifdef TEXTURE_PAGES
+    let texel = texture_lookup(scene_textures, max(material.texture, 0), coords.uv, dpdx(coords.uv), dpdy(coords.uv));
+#else
+    let texel = textureSample(scene_textures, scene_sampler, coords.uv, max(material.texture, 0));
+#endif
     alpha *= select(1.0, texel.a, material.texture >= 0);
 #endif
     return alpha >= material.alpha_cutoff;

@@ -1,6 +1,6 @@
-// Shading one G-buffer sample: metallic-roughness BRDF under the scene's point lights, albedo
-// fetched here, shadows of shadow-casting lights, and an optional stall that simulates an
-// expensive shader.
+// Shading one G-buffer sample: metallic-roughness BRDF under the scene's lights, albedo,
+// emission and occlusion fetched here, shadows of shadow-casting lights, and an optional stall
+// that simulates an expensive shader.
 
 #include "lib/finite.wgsl"
 #include "lib/shadows.wgsl"
@@ -76,25 +76,31 @@ const NEAREST_LIGHT: f32 = 1e-4;
 const MAX_ANISOTROPY: f32 = 16.0;
 
 // Anisotropic filtering in the shader: up to MAX_ANISOTROPY trilinear taps spread along the
-// major axis of the footprint (dx, dy), each tap covering its share of that axis. lavapipe's
+// major axis of the footprint (c.dx, c.dy), each tap covering its share of that axis. lavapipe's
 // own sampler anisotropy costs about 100 times a trilinear lookup, taps taken here about their
 // number (README, "Measured facts").
-fn sample_albedo(layer: i32, uv: vec2<f32>, dx: vec2<f32>, dy: vec2<f32>) -> vec4<f32> {
-    let size = vec2<f32>(textureDimensions(scene_textures));
-    let length_x = length(dx * size);
-    let length_y = length(dy * size);
+fn sample_filtered(textures: texture_2d_array<f32>, texture: i32, c: TexCoords) -> vec4<f32> {
+    // The ratio of the axes, which alone this size enters, is the same in any unit.
+    let size = vec2<f32>(textureDimensions(textures));
+    let length_x = length(c.dx * size);
+    let length_y = length(c.dy * size);
     let x_is_major = length_x >= length_y;
-    let major = select(dy, dx, x_is_major);
-    let minor = select(dx, dy, x_is_major);
+    let major = select(c.dy, c.dx, x_is_major);
+    let minor = select(c.dx, c.dy, x_is_major);
     let ratio = max(length_x, length_y) / max(min(length_x, length_y), 1e-20);
     let taps = u32(clamp(ceil(ratio), 1.0, MAX_ANISOTROPY));
     let step = major / f32(taps);
     var sum = vec4<f32>(0.0);
     for (var i = 0u; i < taps; i += 1u) {
         let offset = (f32(i) + 0.5) / f32(taps) - 0.5;
-        sum += textureSampleGrad(scene_textures, scene_sampler, uv + major * offset, layer, step, minor);
+        sum += texture_lookup(textures, texture, c.uv + major * offset, step, minor);
     }
     return sum / f32(taps);
+}
+
+// Where `slot` of the surface's material is read, its footprint scaled by `footprint`.
+fn surface_coords(s: Surface, slot: u32, footprint: f32) -> TexCoords {
+    return slot_coords(s.material, slot, s.uv, s.uv_dx * footprint, s.uv_dy * footprint);
 }
 #endif
 
@@ -111,15 +117,47 @@ fn shade(texel: vec2<i32>, footprint: f32) -> vec4<f32> {
     var albedo = material.base_color.rgb;
 #ifdef TEXTURED
     if material.texture >= 0 {
-        albedo *= sample_albedo(material.texture, s.uv, s.uv_dx * footprint, s.uv_dy * footprint).rgb;
+        albedo *= sample_filtered(scene_textures, material.texture, surface_coords(s, SLOT_BASE, footprint)).rgb;
     }
 #endif
+#ifdef METALLIC_ROUGHNESS
+    var metallic = material.metallic;
+    var rough = material.roughness;
+    if material.metallic_roughness_texture >= 0 {
+        let coords = surface_coords(s, SLOT_METALLIC_ROUGHNESS, footprint);
+        let texel = sample_filtered(scene_data_textures, material.metallic_roughness_texture, coords);
+        rough *= texel.g;
+        metallic *= texel.b;
+    }
+    let roughness = clamp(rough, 0.03, 1.0);
+#else
+    let metallic = material.metallic;
     let roughness = clamp(material.roughness, 0.03, 1.0);
+#endif
     let a = roughness * roughness;
     let a2 = a * a;
     let position = world_position(texel, s.depth);
     let v = normalize(frame.eye.xyz - position);
+#ifdef OCCLUSION
+    var ambient = frame.ambient.rgb;
+    if material.occlusion_texture >= 0 {
+        let coords = surface_coords(s, SLOT_OCCLUSION, footprint);
+        let occlusion = sample_filtered(scene_data_textures, material.occlusion_texture, coords).r;
+        ambient *= 1.0 + material.occlusion_strength * (occlusion - 1.0);
+    }
+    var radiance = ambient * albedo;
+#else
     var radiance = frame.ambient.rgb * albedo;
+#endif
+#ifdef EMISSIVE
+    var emitted = material.emissive;
+#ifdef TEXTURED
+    if material.emissive_texture >= 0 {
+        emitted *= sample_filtered(scene_textures, material.emissive_texture, surface_coords(s, SLOT_EMISSIVE, footprint)).rgb;
+    }
+#endif
+    radiance += emitted;
+#endif
     for (var i = 0u; i < LIGHT_COUNT; i += 1u) {
         let light = lights.entries[i];
 #ifdef LIGHT_KINDS
@@ -143,10 +181,10 @@ fn shade(texel: vec2<i32>, footprint: f32) -> vec4<f32> {
 #ifdef LIGHT_KINDS
             let falloff = select(1.0, attenuation(distance2, inverse * inverse, light.range), positional);
             let cone = clamp(dot(light.direction, -l) * light.spot_scale + light.spot_offset, 0.0, 1.0);
-            var contribution = brdf(s.normal, v, l, n_l, albedo, material.metallic, a2, a)
+            var contribution = brdf(s.normal, v, l, n_l, albedo, metallic, a2, a)
                 * light.radiance * falloff * (cone * cone);
 #else
-            var contribution = brdf(s.normal, v, l, n_l, albedo, material.metallic, a2, a)
+            var contribution = brdf(s.normal, v, l, n_l, albedo, metallic, a2, a)
                 * light.radiance * attenuation(distance2, inverse * inverse, light.range);
 #endif
 #ifdef SHADOWS

@@ -60,6 +60,9 @@ impl Node for GBufferNode {
                 fragment: Some(fragment),
                 constants: Constants::new(),
             };
+            let tangents = ctx.scene.has_tangents();
+            let create =
+                |device: &_, layout: &_, module: &_, key: &_| create(device, layout, module, key, tangents);
             let bundle = ctx.render_pipeline(io, &program, Raster::GBuffer(class), &[], create)?;
             pipelines.push((class, bundle));
         }
@@ -88,11 +91,19 @@ pub(crate) fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     }
 }
 
+/// The second vertex buffer of normal-mapped scenes: a tangent per vertex.
+const TANGENT_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: 16,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![4 => Float32x4],
+};
+
 fn create(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     key: &RenderKey,
+    tangents: bool,
 ) -> wgpu::RenderPipeline {
     let Raster::GBuffer(class) = key.raster else { unreachable!("a G-buffer key") };
     let targets = [UV_FORMAT, NORMAL_FORMAT, UV_GRAD_FORMAT].map(|format| Some(format.into()));
@@ -104,11 +115,13 @@ fn create(
         cull_mode: (!class.double_sided).then_some(wgpu::Face::Back),
         ..Default::default()
     };
-    scene_pipeline(device, layout, module, key, primitive, DEPTH_FORMAT, &targets)
+    scene_pipeline(device, layout, module, key, primitive, DEPTH_FORMAT, &targets, tangents)
 }
 
-/// A pipeline that draws the scene's vertices with reversed depth into a `depth` target, and
-/// into `targets` when the key has a fragment stage: what the G-buffer and shadow passes share.
+/// A pipeline that draws the scene's vertices (with their tangents when `tangents`) with
+/// reversed depth into a `depth` target, and into `targets` when the key has a fragment stage:
+/// what the G-buffer and shadow passes share.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn scene_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
@@ -117,7 +130,10 @@ pub(crate) fn scene_pipeline(
     primitive: wgpu::PrimitiveState,
     depth: wgpu::TextureFormat,
     targets: &[Option<wgpu::ColorTargetState>],
+    tangents: bool,
 ) -> wgpu::RenderPipeline {
+    let with_tangents = [Some(vertex_layout()), Some(TANGENT_LAYOUT)];
+    let buffers = if tangents { &with_tangents[..] } else { &with_tangents[..1] };
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: key.fragment.or(Some(key.vertex)),
         layout: Some(layout),
@@ -125,7 +141,7 @@ pub(crate) fn scene_pipeline(
             module,
             entry_point: Some(key.vertex),
             compilation_options: Default::default(),
-            buffers: &[Some(vertex_layout())],
+            buffers,
         },
         primitive,
         depth_stencil: Some(reversed_depth_test(depth)),

@@ -91,9 +91,11 @@ impl Io {
         if let Some((port, allocated)) = self.ports.get(name) {
             return port.access.is_binding().then(|| match allocated {
                 Allocated::Buffer(buffer) => Bound::Buffer(buffer.clone()),
-                Allocated::Texture(texture) => {
-                    Bound::Texture { texture: texture.clone(), filterable: port.access == Access::Sampled }
-                }
+                Allocated::Texture(texture) => Bound::Texture {
+                    texture: texture.clone(),
+                    filterable: port.access == Access::Sampled,
+                    view_format: None,
+                },
             });
         }
         owned.iter().find(|(n, _)| *n == name).map(|(_, b)| b.clone()).or_else(|| scene.binding(name))

@@ -62,7 +62,8 @@ fn create(
     key: &RenderKey,
 ) -> wgpu::RenderPipeline {
     // Faces of a cube map mirror one axis, so winding flips between faces: draw both sides.
-    scene_pipeline(device, layout, module, key, wgpu::PrimitiveState::default(), FORMAT, &[])
+    // Depth needs no tangents.
+    scene_pipeline(device, layout, module, key, wgpu::PrimitiveState::default(), FORMAT, &[], false)
 }
 
 #[derive(Debug)]

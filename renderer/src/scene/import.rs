@@ -1,13 +1,18 @@
-//! glTF 2.0 import through the `gltf` crate: meshes with baked node transforms, base-colour
-//! textures and factors, metallic/roughness factors, alpha MASK, UVs and normals (flat normals
-//! generated where a primitive has none), the first camera, and `KHR_lights_punctual` lights.
+//! glTF 2.0 import through the `gltf` crate: meshes with baked node transforms; base-colour,
+//! metallic-roughness, normal, emissive and occlusion textures with `KHR_texture_transform`; factors (emission
+//! with `KHR_materials_emissive_strength`), alpha MASK; UVs, normals (flat normals generated
+//! where a primitive has none) and tangents (MikkTSpace where a normal-mapped primitive has
+//! none); the first camera, and `KHR_lights_punctual` lights.
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 use glam::{DMat3, DMat4, DVec3, Vec3};
 
-use super::{AlphaMode, Camera, DrawClass, Light, LightKind, Material, Scene, Texture, Vertex};
+use super::{
+    AlphaMode, Camera, DrawClass, Encoding, Light, LightKind, Material, Scene, Texture, TextureRef,
+    UvTransform, Vertex,
+};
 use crate::RenderError;
 
 /// Reads a `.gltf` or `.glb` file and everything it references. Every error names the part of
@@ -15,14 +20,15 @@ use crate::RenderError;
 pub fn load_gltf(path: &Path) -> Result<Scene, RenderError> {
     let fail = |message: String| RenderError::Scene { path: path.to_path_buf(), message };
     regular_file(path).map_err(|e| fail(format!("cannot read glTF: {e}")))?;
-    let gltf::Gltf { document, blob } = open(path).map_err(|e| fail(format!("cannot read glTF: {e}")))?;
+    let (gltf::Gltf { document, blob }, lenient) =
+        open(path).map_err(|e| fail(format!("cannot read glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
     check_external_files(&document, base).map_err(fail)?;
     let buffers = gltf::import_buffers(&document, Some(base), blob)
         .map_err(|e| fail(format!("cannot read buffers: {e}")))?;
 
     let mut importer = Importer::default();
-    let (materials, image_of_texture) = import_materials(&document);
+    let Materials { materials, textures, mut warnings } = import_materials(&document).map_err(fail)?;
     if materials.len() > crate::passes::gbuffer::MAX_MATERIALS {
         return Err(fail(format!(
             "materials: {} materials, the G-buffer holds at most {}",
@@ -34,12 +40,11 @@ pub fn load_gltf(path: &Path) -> Result<Scene, RenderError> {
     importer.visit_scene(&document, &buffers).map_err(fail)?;
 
     let mut scene = importer.finish();
-    scene.textures = decode_textures(&document, base, &buffers, &image_of_texture).map_err(fail)?;
-    for material in &mut scene.materials {
-        material.texture = material.texture.map(|image| image_of_texture[&image]);
-    }
+    scene.textures = decode_textures(&document, base, &buffers, &textures).map_err(fail)?;
     scene.generator = document.as_json().asset.generator.clone();
-    scene.warnings = ignored_extensions(&document);
+    warnings.extend(lenient);
+    warnings.extend(ignored_extensions(&document));
+    scene.warnings = warnings;
     Ok(scene)
 }
 
@@ -131,10 +136,11 @@ pub fn percent_decode(uri: &str) -> Result<String, String> {
     String::from_utf8(out).map_err(|_| format!("`{uri}`: its %-escapes do not decode to UTF-8"))
 }
 
-/// Reads and validates a glTF or GLB file. The gltf crate's validation (gltf-json 1.4.1) looks
-/// up each primitive's POSITION accessor before checking that it exists, and panics when it
-/// does not; that one reference is checked here first.
-fn open(path: &Path) -> Result<gltf::Gltf, String> {
+/// Reads and validates a glTF or GLB file; the second value holds a warning for each departure
+/// from the specification that it tolerates. The gltf crate's validation (gltf-json 1.4.1)
+/// looks up each primitive's POSITION accessor before checking that it exists, and panics when
+/// it does not; that one reference is checked here first.
+fn open(path: &Path) -> Result<(gltf::Gltf, Vec<String>), String> {
     use gltf::json::mesh::Semantic;
     use gltf::json::validation::Checked;
     let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
@@ -149,7 +155,7 @@ fn open(path: &Path) -> Result<gltf::Gltf, String> {
     }
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| e.to_string())?;
-    let json = document.into_json();
+    let mut json = document.into_json();
     // Before the crate's validation, which refuses required extensions it was not built with
     // in words that do not say what aabench reads.
     if let Some(unknown) = json.extensions_required.iter().find(|e| !EXTENSIONS.contains(&e.as_str())) {
@@ -158,6 +164,7 @@ fn open(path: &Path) -> Result<gltf::Gltf, String> {
             EXTENSIONS.join(", ")
         ));
     }
+    let mut positions = Vec::new();
     for (m, mesh) in json.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             let position = primitive.attributes.get(&Checked::Valid(Semantic::Positions));
@@ -168,15 +175,37 @@ fn open(path: &Path) -> Result<gltf::Gltf, String> {
                     json.accessors.len()
                 ));
             }
+            positions.extend(position.map(|a| a.value()));
+        }
+    }
+    // glTF requires POSITION accessors to state their bounds, which the crate's validation
+    // checks; some exporters omit them. The importer computes bounds itself, so it stands
+    // in placeholders and says so.
+    let mut warnings = Vec::new();
+    positions.sort_unstable();
+    positions.dedup();
+    for index in positions {
+        let accessor = &mut json.accessors[index];
+        let valid = |bound: &Option<serde_json::Value>| {
+            bound.as_ref().is_some_and(|b| serde_json::from_value::<[f32; 3]>(b.clone()).is_ok())
+        };
+        if !(valid(&accessor.min) && valid(&accessor.max)) {
+            accessor.min = Some(serde_json::json!([0.0, 0.0, 0.0]));
+            accessor.max = Some(serde_json::json!([0.0, 0.0, 0.0]));
+            warnings.push(format!(
+                "accessors[{index}]: a POSITION accessor without a valid min and max (glTF requires them); \
+                 aabench computes bounds from the data"
+            ));
         }
     }
     let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
-    Ok(gltf::Gltf { document, blob })
+    Ok((gltf::Gltf { document, blob }, warnings))
 }
 
 /// The glTF extensions the importer reads. A file may require only these; others it merely
 /// uses are ignored with a warning each.
-pub const EXTENSIONS: [&str; 1] = ["KHR_lights_punctual"];
+pub const EXTENSIONS: [&str; 3] =
+    ["KHR_lights_punctual", "KHR_texture_transform", "KHR_materials_emissive_strength"];
 
 /// One line per extension the file uses that aabench ignores.
 fn ignored_extensions(document: &gltf::Document) -> Vec<String> {
@@ -190,50 +219,196 @@ fn ignored_extensions(document: &gltf::Document) -> Vec<String> {
 
 /// The `asset.generator` string of a glTF file, if it can be read.
 pub fn read_generator(path: &Path) -> Option<String> {
-    let gltf = open(path).ok()?;
+    let (gltf, _) = open(path).ok()?;
     gltf.document.as_json().asset.generator.clone()
 }
 
-/// Materials in file order plus one default at the end for primitives without a material.
-/// `Material::texture` holds the *image* index until the images are decoded; the returned map
-/// sends each used image index to its place in `Scene::textures`.
-fn import_materials(document: &gltf::Document) -> (Vec<Material>, HashMap<usize, usize>) {
-    let mut image_of_texture = HashMap::new();
-    let mut materials: Vec<Material> = document
-        .materials()
-        .map(|material| {
-            let pbr = material.pbr_metallic_roughness();
-            let image = pbr.base_color_texture().map(|info| info.texture().source().index());
-            if let Some(image) = image {
-                let next = image_of_texture.len();
-                image_of_texture.entry(image).or_insert(next);
-            }
-            Material {
-                name: material.name().unwrap_or("").to_string(),
-                base_color: pbr.base_color_factor(),
-                metallic: pbr.metallic_factor(),
-                roughness: pbr.roughness_factor(),
-                texture: image,
-                alpha: match material.alpha_mode() {
-                    gltf::material::AlphaMode::Mask => {
-                        AlphaMode::Mask { cutoff: material.alpha_cutoff().unwrap_or(0.5) }
-                    }
-                    _ => AlphaMode::Opaque,
-                },
-                double_sided: material.double_sided(),
-            }
+/// The textures that materials sample, in order of first use: each image once per encoding
+/// it is read with (an image could be both a colour and a data texture).
+#[derive(Default)]
+struct TextureUses {
+    keys: Vec<(usize, Encoding)>,
+    index: HashMap<(usize, Encoding), usize>,
+}
+
+impl TextureUses {
+    fn add(&mut self, image: usize, encoding: Encoding) -> usize {
+        *self.index.entry((image, encoding)).or_insert_with(|| {
+            self.keys.push((image, encoding));
+            self.keys.len() - 1
         })
-        .collect();
+    }
+}
+
+/// One texture slot of a material as the JSON gives it: texture index, UV set, transform.
+struct Slot<'a> {
+    field: &'static str,
+    texture: usize,
+    tex_coord: u32,
+    transform: Option<std::borrow::Cow<'a, gltf::json::extensions::texture::TextureTransform>>,
+    encoding: Encoding,
+}
+
+/// The texture slots of a material that aabench reads: base colour, metallic-roughness,
+/// normal, emissive and occlusion.
+fn texture_slots(json: &gltf::json::Material) -> Result<Vec<Slot<'_>>, String> {
+    use gltf::json::extensions::texture::TextureTransform;
+    use std::borrow::Cow;
+    fn info<'a>(field: &'static str, info: &'a gltf::json::texture::Info, encoding: Encoding) -> Slot<'a> {
+        Slot {
+            field,
+            texture: info.index.value(),
+            tex_coord: info.tex_coord,
+            transform: info.extensions.as_ref().and_then(|e| e.texture_transform.as_ref()).map(Cow::Borrowed),
+            encoding,
+        }
+    }
+    // The crate keeps the extension of normal and occlusion textures as plain JSON.
+    type Others = serde_json::Map<String, serde_json::Value>;
+    let data = |field: &'static str, texture: usize, tex_coord: u32, others: Option<&Others>| {
+        let transform = others
+            .and_then(|o| o.get("KHR_texture_transform"))
+            .map(|v| {
+                serde_json::from_value::<TextureTransform>(v.clone())
+                    .map(Cow::Owned)
+                    .map_err(|e| format!("{field}.extensions.KHR_texture_transform: {e}"))
+            })
+            .transpose()?;
+        Ok::<_, String>(Slot { field, texture, tex_coord, transform, encoding: Encoding::Linear })
+    };
+    let mut slots = Vec::new();
+    if let Some(base) = &json.pbr_metallic_roughness.base_color_texture {
+        slots.push(info("pbrMetallicRoughness.baseColorTexture", base, Encoding::Srgb));
+    }
+    if let Some(n) = &json.normal_texture {
+        slots.push(data(
+            "normalTexture",
+            n.index.value(),
+            n.tex_coord,
+            n.extensions.as_ref().map(|e| &e.others),
+        )?);
+    }
+    if let Some(metal_rough) = &json.pbr_metallic_roughness.metallic_roughness_texture {
+        slots.push(info("pbrMetallicRoughness.metallicRoughnessTexture", metal_rough, Encoding::Linear));
+    }
+    if let Some(emissive) = &json.emissive_texture {
+        slots.push(info("emissiveTexture", emissive, Encoding::Srgb));
+    }
+    if let Some(o) = &json.occlusion_texture {
+        slots.push(data(
+            "occlusionTexture",
+            o.index.value(),
+            o.tex_coord,
+            o.extensions.as_ref().map(|e| &e.others),
+        )?);
+    }
+    Ok(slots)
+}
+
+/// A slot's UV transform, checked: finite offset, rotation and scale.
+fn uv_transform(
+    transform: Option<&gltf::json::extensions::texture::TextureTransform>,
+) -> Result<UvTransform, String> {
+    let Some(t) = transform else {
+        return Ok(UvTransform::IDENTITY);
+    };
+    let values = [t.offset.0[0], t.offset.0[1], t.rotation.0, t.scale.0[0], t.scale.0[1]];
+    if !values.iter().all(|v| v.is_finite()) {
+        return Err(format!(
+            "extensions.KHR_texture_transform: offset {:?}, rotation {}, scale {:?} must be finite",
+            t.offset.0, t.rotation.0, t.scale.0
+        ));
+    }
+    Ok(UvTransform::new(t.offset.0, t.rotation.0, t.scale.0))
+}
+
+/// What [`import_materials`] reads: materials in file order plus one default at the end for
+/// primitives without a material; the textures they use (image and encoding, indexed by
+/// [`TextureRef::texture`]); and a warning for each texture that aabench cannot place (it
+/// reads one UV set, `TEXCOORD_0`).
+struct Materials {
+    materials: Vec<Material>,
+    textures: Vec<(usize, Encoding)>,
+    warnings: Vec<String>,
+}
+
+fn import_materials(document: &gltf::Document) -> Result<Materials, String> {
+    let mut uses = TextureUses::default();
+    let mut warnings = Vec::new();
+    let mut materials = Vec::new();
+    for material in document.materials() {
+        let index = material.index().unwrap_or(materials.len());
+        let json = &document.as_json().materials[index];
+        let mut refs: HashMap<&'static str, (TextureRef, Encoding)> = HashMap::new();
+        for slot in texture_slots(json).map_err(|e| format!("materials[{index}].{e}"))? {
+            let what = format!("materials[{index}].{}", slot.field);
+            let transform = uv_transform(slot.transform.as_deref()).map_err(|e| format!("{what}.{e}"))?;
+            let tex_coord = slot.transform.as_ref().and_then(|t| t.tex_coord).unwrap_or(slot.tex_coord);
+            if tex_coord != 0 {
+                warnings.push(format!(
+                    "{what}: uses TEXCOORD_{tex_coord}; aabench reads only TEXCOORD_0, so the texture is ignored"
+                ));
+                continue;
+            }
+            let image = document
+                .textures()
+                .nth(slot.texture)
+                .ok_or_else(|| format!("{what}.index: texture {} does not exist", slot.texture))?
+                .source()
+                .index();
+            let texture = uses.add(image, slot.encoding);
+            refs.insert(slot.field, (TextureRef { texture, transform }, slot.encoding));
+        }
+        let slot = |field: &str| refs.get(field).map(|(r, _)| *r);
+        let pbr = material.pbr_metallic_roughness();
+        let strength = material.emissive_strength().unwrap_or(1.0);
+        let emissive = material.emissive_factor().map(|c| c * strength);
+        if !emissive.iter().all(|c| c.is_finite() && *c >= 0.0) {
+            return Err(format!(
+                "materials[{index}]: emissiveFactor {:?} × KHR_materials_emissive_strength {strength} must be finite and ≥ 0",
+                material.emissive_factor()
+            ));
+        }
+        let normal_scale = material.normal_texture().map_or(1.0, |n| n.scale());
+        if !normal_scale.is_finite() {
+            return Err(format!("materials[{index}].normalTexture.scale: {normal_scale} must be finite"));
+        }
+        let occlusion_strength = material.occlusion_texture().map_or(1.0, |o| o.strength());
+        if !(0.0..=1.0).contains(&occlusion_strength) {
+            return Err(format!(
+                "materials[{index}].occlusionTexture.strength: {occlusion_strength} must be in [0, 1]"
+            ));
+        }
+        materials.push(Material {
+            name: material.name().unwrap_or("").to_string(),
+            base_color: pbr.base_color_factor(),
+            metallic: pbr.metallic_factor(),
+            roughness: pbr.roughness_factor(),
+            texture: slot("pbrMetallicRoughness.baseColorTexture"),
+            alpha: match material.alpha_mode() {
+                gltf::material::AlphaMode::Mask => {
+                    AlphaMode::Mask { cutoff: material.alpha_cutoff().unwrap_or(0.5) }
+                }
+                _ => AlphaMode::Opaque,
+            },
+            double_sided: material.double_sided(),
+            normal_texture: slot("normalTexture"),
+            normal_scale,
+            emissive,
+            emissive_texture: slot("emissiveTexture"),
+            occlusion_texture: slot("occlusionTexture"),
+            occlusion_strength,
+            metallic_roughness_texture: slot("pbrMetallicRoughness.metallicRoughnessTexture"),
+        });
+    }
     materials.push(Material {
         name: "default".into(),
         base_color: [0.8, 0.8, 0.8, 1.0],
         metallic: 0.0,
         roughness: 0.6,
-        texture: None,
-        alpha: AlphaMode::Opaque,
-        double_sided: false,
+        ..Material::default()
     });
-    (materials, image_of_texture)
+    Ok(Materials { materials, textures: uses.keys, warnings })
 }
 
 /// The scene's origin is a multiple of this many units (see `Importer::finish`).
@@ -248,6 +423,15 @@ struct Importer {
     lights: Vec<(Light, DVec3)>,
     /// Triangles as vertex-index triples, by draw class.
     triangles: BTreeMap<DrawClass, Vec<[u32; 3]>>,
+    /// Normal-mapped primitives without tangents of their own, for MikkTSpace.
+    untangented: Vec<Primitive>,
+}
+
+/// Where one primitive's vertices and triangles lie in the importer's lists.
+struct Primitive {
+    class: DrawClass,
+    vertices: std::ops::Range<usize>,
+    triangles: std::ops::Range<usize>,
 }
 
 impl Importer {
@@ -364,6 +548,9 @@ impl Importer {
             return Err(format!("{}: attributes.TEXCOORD_0: vertex {i} is {:?}, not finite", name(), uvs[i]));
         }
         let normals: Option<Vec<[f32; 3]>> = reader.read_normals().map(Iterator::collect);
+        // Without normals the file's tangents must be ignored (glTF 2.0, 3.7.2.1).
+        let file_tangents: Option<Vec<[f32; 4]>> =
+            reader.read_tangents().filter(|_| normals.is_some()).map(Iterator::collect);
         let indices: Vec<u32> = match reader.read_indices() {
             Some(indices) => indices.into_u32().collect(),
             None => (0..positions.len() as u32).collect(),
@@ -382,8 +569,16 @@ impl Importer {
                 positions.len()
             ));
         }
-        if uvs.len() != positions.len() || normals.as_ref().is_some_and(|n| n.len() != positions.len()) {
+        if uvs.len() != positions.len()
+            || normals.as_ref().is_some_and(|n| n.len() != positions.len())
+            || file_tangents.as_ref().is_some_and(|t| t.len() != positions.len())
+        {
             return Err(format!("{}: attribute counts differ from POSITION", name()));
+        }
+        if let Some(i) =
+            file_tangents.as_ref().and_then(|t| t.iter().position(|t| !t.iter().all(|c| c.is_finite())))
+        {
+            return Err(format!("{}: attributes.TANGENT: vertex {i} is not finite", name()));
         }
 
         let default_material = self.scene.materials.len() - 1;
@@ -411,6 +606,8 @@ impl Importer {
             uv,
             material: material as u32,
         };
+        let first_vertex = self.scene.vertices.len();
+        let first_triangle = self.triangles.get(&class).map_or(0, Vec::len);
         let vertices = &mut self.scene.vertices;
         let positions_world = &mut self.world;
         let triangles = self.triangles.entry(class).or_default();
@@ -447,13 +644,115 @@ impl Importer {
                 }
             }
         }
+        if self.scene.materials[material].normal_texture.is_some() {
+            let file_tangents = file_tangents.map(|tangents| {
+                // Tangents move with the surface; a mirroring transform flips the bitangent.
+                let linear = DMat3::from_mat4(world);
+                let handedness = if mirrored { -1.0 } else { 1.0 };
+                tangents
+                    .iter()
+                    .map(|t| {
+                        let xyz =
+                            (linear * DVec3::new(t[0].into(), t[1].into(), t[2].into())).normalize_or_zero();
+                        let w = if t[3] < 0.0 { -handedness } else { handedness };
+                        [xyz.x as f32, xyz.y as f32, xyz.z as f32, w]
+                    })
+                    .collect()
+            });
+            self.add_tangents(class, first_vertex, first_triangle, file_tangents);
+        }
         Ok(())
+    }
+
+    /// Gives the vertices from `first_vertex` on (one primitive's) tangents: the file's, or
+    /// zero until [`Importer::generate_tangents`] gives them MikkTSpace's.
+    fn add_tangents(
+        &mut self,
+        class: DrawClass,
+        first_vertex: usize,
+        first_triangle: usize,
+        file: Option<Vec<[f32; 4]>>,
+    ) {
+        let tangents = &mut self.scene.tangents;
+        tangents.resize(first_vertex, [0.0; 4]);
+        match file {
+            Some(file) => tangents.extend(file),
+            None => {
+                tangents.resize(self.scene.vertices.len(), [0.0; 4]);
+                self.untangented.push(Primitive {
+                    class,
+                    vertices: first_vertex..self.scene.vertices.len(),
+                    triangles: first_triangle..self.triangles[&class].len(),
+                });
+            }
+        }
+    }
+
+    /// MikkTSpace tangents for the primitives that need them, primitives spread over the
+    /// cores (it dominates the import of a large normal-mapped file). MikkTSpace gives one
+    /// tangent per triangle corner; corners of one vertex that it gives different tangents (UV
+    /// seams, mirrored UVs) split the vertex.
+    fn generate_tangents(&mut self) {
+        let primitives = std::mem::take(&mut self.untangented);
+        if primitives.is_empty() {
+            return;
+        }
+        // Split vertices go at the end: the table must reach it first.
+        self.scene.tangents.resize(self.scene.vertices.len(), [0.0; 4]);
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let chunk = primitives.len().div_ceil(threads).max(1);
+        let (vertices, world, triangles) = (&self.scene.vertices, &self.world, &self.triangles);
+        let corners: Vec<Vec<[f32; 4]>> = std::thread::scope(|scope| {
+            let workers: Vec<_> = primitives
+                .chunks(chunk)
+                .map(|part| {
+                    scope.spawn(move || {
+                        part.iter()
+                            .map(|p| {
+                                let triangles = &triangles[&p.class][p.triangles.clone()];
+                                mikktspace_corners(vertices, world, triangles, p.vertices.start)
+                            })
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            workers.into_iter().flat_map(|worker| worker.join().expect("MikkTSpace panicked")).collect()
+        });
+        for (primitive, corners) in primitives.iter().zip(corners) {
+            self.weld_tangents(primitive, &corners);
+        }
+    }
+
+    /// Gives each vertex of `primitive` the tangent of its corners, splitting vertices whose
+    /// corners disagree.
+    fn weld_tangents(&mut self, primitive: &Primitive, corners: &[[f32; 4]]) {
+        let first = primitive.vertices.start;
+        let mut assigned = vec![false; primitive.vertices.len()];
+        let mut splits: HashMap<(u32, [u32; 4]), u32> = HashMap::new();
+        let triangles = &mut self.triangles.get_mut(&primitive.class).expect("the primitive's class")
+            [primitive.triangles.clone()];
+        for (triangle, corner_tangents) in triangles.iter_mut().zip(corners.chunks_exact(3)) {
+            for (index, &tangent) in triangle.iter_mut().zip(corner_tangents) {
+                let v = *index as usize;
+                if !std::mem::replace(&mut assigned[v - first], true) {
+                    self.scene.tangents[v] = tangent;
+                } else if self.scene.tangents[v] != tangent {
+                    *index = *splits.entry((*index, tangent.map(f32::to_bits))).or_insert_with(|| {
+                        self.scene.vertices.push(self.scene.vertices[v]);
+                        self.world.push(self.world[v]);
+                        self.scene.tangents.push(tangent);
+                        (self.scene.vertices.len() - 1) as u32
+                    });
+                }
+            }
+        }
     }
 
     /// Sorts the triangles by draw class and makes positions relative to the scene's origin:
     /// the centre of its bounds, rounded to a multiple of [`ORIGIN_GRID`] units, so geometry
     /// far from the file's origin keeps f32 precision (and a scene near it keeps its bits).
     fn finish(mut self) -> Scene {
+        self.generate_tangents();
         let (lo, hi) = self
             .world
             .iter()
@@ -465,6 +764,9 @@ impl Importer {
         };
         for (vertex, world) in self.scene.vertices.iter_mut().zip(&self.world) {
             vertex.position = (*world - origin).as_vec3().to_array();
+        }
+        if !self.scene.tangents.is_empty() {
+            self.scene.tangents.resize(self.scene.vertices.len(), [0.0; 4]);
         }
         self.scene.origin = origin;
         if let Some(camera) = &mut self.scene.camera {
@@ -510,6 +812,7 @@ fn check_format(semantic: Option<&gltf::Semantic>, accessor: &gltf::Accessor) ->
     let allowed = match semantic {
         None => matches!(format, (DataType::U8 | DataType::U16 | DataType::U32, Dimensions::Scalar)),
         Some(Semantic::Positions | Semantic::Normals) => format == (DataType::F32, Dimensions::Vec3),
+        Some(Semantic::Tangents) => format == (DataType::F32, Dimensions::Vec4),
         Some(Semantic::TexCoords(_)) => {
             matches!(format, (DataType::F32 | DataType::U8 | DataType::U16, Dimensions::Vec2))
         }
@@ -610,6 +913,72 @@ fn repair_normals(vertices: &mut [Vertex], world: &[DVec3], triangles: &[[u32; 3
     }
 }
 
+/// MikkTSpace tangents of `triangles` (whose vertices start at `first_vertex`), one per
+/// corner in triangle order. Positions are taken relative to the first vertex, so far-out
+/// geometry keeps its precision; a corner MikkTSpace cannot give a finite tangent (a triangle
+/// without UV area) gets zero, which the shaders read as "no normal map here".
+fn mikktspace_corners(
+    vertices: &[Vertex],
+    world: &[DVec3],
+    triangles: &[[u32; 3]],
+    first_vertex: usize,
+) -> Vec<[f32; 4]> {
+    struct Corners<'a> {
+        vertices: &'a [Vertex],
+        world: &'a [DVec3],
+        origin: DVec3,
+        triangles: &'a [[u32; 3]],
+        out: Vec<[f32; 4]>,
+    }
+    impl Corners<'_> {
+        fn vertex(&self, face: usize, vert: usize) -> usize {
+            self.triangles[face][vert] as usize
+        }
+    }
+    impl mikktspace::Geometry for Corners<'_> {
+        fn num_faces(&self) -> usize {
+            self.triangles.len()
+        }
+        fn num_vertices_of_face(&self, _face: usize) -> usize {
+            3
+        }
+        fn position(&self, face: usize, vert: usize) -> [f32; 3] {
+            (self.world[self.vertex(face, vert)] - self.origin).as_vec3().to_array()
+        }
+        fn normal(&self, face: usize, vert: usize) -> [f32; 3] {
+            self.vertices[self.vertex(face, vert)].normal
+        }
+        /// glTF's V runs down the image, but its tangent space has +Y up the image (the
+        /// bitangent `w · normal × tangent` points up): MikkTSpace is given 1 − V so that its
+        /// bitangent, the direction of growing V, points up as well.
+        fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
+            let [u, v] = self.vertices[self.vertex(face, vert)].uv;
+            [u, 1.0 - v]
+        }
+        fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
+            self.out[face * 3 + vert] = tangent;
+        }
+    }
+    let mut corners = Corners {
+        vertices,
+        world,
+        origin: world.get(first_vertex).copied().unwrap_or_default(),
+        triangles,
+        out: vec![[0.0; 4]; triangles.len() * 3],
+    };
+    // MikkTSpace drops triangles with two equal corners and then underflows (an unchecked
+    // usize loop bound; out-of-bounds reads in release) when none is left: a primitive that
+    // is all slivers, or one under a node scaled to zero to hide it, gets zero tangents.
+    let proper = |t: &[u32; 3]| {
+        let p = t.map(|i| (world[i as usize] - corners.origin).as_vec3());
+        p[0] != p[1] && p[0] != p[2] && p[1] != p[2]
+    };
+    if triangles.iter().any(proper) {
+        mikktspace::generate_tangents(&mut corners);
+    }
+    corners.out.into_iter().map(|t| if t.iter().all(|c| c.is_finite()) { t } else { [0.0; 4] }).collect()
+}
+
 /// A `KHR_lights_punctual` light placed by its node: at the node's origin, shining along its
 /// −Z. Every value is checked: a light the renderer cannot draw is an error, never dropped.
 fn light_from_node(light: &gltf::khr_lights_punctual::Light, world: DMat4) -> Result<(Light, DVec3), String> {
@@ -674,16 +1043,14 @@ fn camera_from_node(document: &gltf::Document, index: usize, world: DMat4) -> Re
 /// a larger image is refused from its header, before its pixels are read.
 pub const MAX_TEXTURE_SIDE: u32 = 16384;
 
-/// Decodes the images used as base-colour textures, in parallel: a Sponza-sized scene has
+/// Decodes the images that materials use, in parallel: a Sponza-sized scene has
 /// dozens of PNG/JPEG files and decoding dominates its load time.
 fn decode_textures(
     document: &gltf::Document,
     base: &Path,
     buffers: &[gltf::buffer::Data],
-    image_of_texture: &HashMap<usize, usize>,
+    wanted: &[(usize, Encoding)],
 ) -> Result<Vec<Texture>, String> {
-    let mut wanted: Vec<(usize, usize)> = image_of_texture.iter().map(|(&i, &t)| (i, t)).collect();
-    wanted.sort_by_key(|&(_, texture)| texture);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let chunk = wanted.len().div_ceil(threads).max(1);
     std::thread::scope(|scope| {
@@ -692,7 +1059,7 @@ fn decode_textures(
             .map(|part| {
                 scope.spawn(move || {
                     part.iter()
-                        .map(|&(image, _)| decode_image(document, image, base, buffers))
+                        .map(|&(image, encoding)| decode_image(document, image, encoding, base, buffers))
                         .collect::<Result<Vec<_>, _>>()
                 })
             })
@@ -731,6 +1098,7 @@ fn image_source(document: &gltf::Document, index: usize) -> Result<ImageSource<'
 fn decode_image(
     document: &gltf::Document,
     index: usize,
+    encoding: Encoding,
     base: &Path,
     buffers: &[gltf::buffer::Data],
 ) -> Result<Texture, String> {
@@ -771,7 +1139,7 @@ fn decode_image(
     let mut decoder = reader()?;
     decoder.limits(limits);
     let decoded = decoder.decode().map_err(|e| format!("{what}: cannot decode: {e}"))?;
-    Ok(Texture { width, height, rgba: decoded.into_rgba8().into_raw() })
+    Ok(Texture { width, height, rgba: decoded.into_rgba8().into_raw(), encoding })
 }
 
 /// The bytes of a base64 `data:` URI (`data:[<media type>];base64,<data>`).

@@ -6,13 +6,17 @@ mod camera;
 pub mod generate;
 mod import;
 pub mod shadow;
+pub mod textures;
 mod upload;
 pub mod write;
 
 pub use camera::{Camera, CameraError, FrameUniforms, MAX_COORDINATE, Tile};
 pub use import::{MAX_TEXTURE_SIDE, escapes, load_gltf, percent_decode, read_generator, regular_file};
 pub use shadow::{MAX_SHADOW_LIGHTS, Shadow, ShadowCubes};
-pub use upload::{GpuScene, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MAX_LIGHTS};
+pub use upload::{
+    GpuScene, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MAX_LIGHTS, SLOT_BASE, SLOT_EMISSIVE,
+    SLOT_METALLIC_ROUGHNESS, SLOT_NORMAL, SLOT_OCCLUSION,
+};
 
 use glam::Vec3;
 
@@ -63,25 +67,122 @@ pub struct Material {
     pub base_color: [f32; 4],
     pub metallic: f32,
     pub roughness: f32,
-    /// Index into [`Scene::textures`] of the base-colour texture.
-    pub texture: Option<usize>,
+    /// The base-colour texture (sRGB).
+    pub texture: Option<TextureRef>,
     pub alpha: AlphaMode,
     /// Without it, back faces are culled.
     pub double_sided: bool,
+    /// A tangent-space normal map (linear; glTF's +X right, +Y up), whose X and Y are scaled
+    /// by `normal_scale`. Its vertices carry tangents ([`Scene::tangents`]).
+    pub normal_texture: Option<TextureRef>,
+    pub normal_scale: f32,
+    /// Emitted radiance: `emissiveFactor` times `KHR_materials_emissive_strength`, in the
+    /// renderer's units (those of a light's colour × intensity), times the texture (sRGB).
+    pub emissive: [f32; 3],
+    pub emissive_texture: Option<TextureRef>,
+    /// Ambient occlusion in the texture's red channel (linear): ambient light is scaled by
+    /// `1 + occlusion_strength · (occlusion − 1)`.
+    pub occlusion_texture: Option<TextureRef>,
+    pub occlusion_strength: f32,
+    /// Roughness in green and metalness in blue (linear), multiplying the factors.
+    pub metallic_roughness_texture: Option<TextureRef>,
+}
+
+impl Default for Material {
+    /// glTF's defaults: white, fully metallic and rough, opaque, no textures.
+    fn default() -> Material {
+        Material {
+            name: String::new(),
+            base_color: [1.0; 4],
+            metallic: 1.0,
+            roughness: 1.0,
+            texture: None,
+            alpha: AlphaMode::Opaque,
+            double_sided: false,
+            normal_texture: None,
+            normal_scale: 1.0,
+            emissive: [0.0; 3],
+            emissive_texture: None,
+            occlusion_texture: None,
+            occlusion_strength: 1.0,
+            metallic_roughness_texture: None,
+        }
+    }
+}
+
+/// A texture as one material slot uses it: which texture, through which UV transform.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TextureRef {
+    /// Index into [`Scene::textures`].
+    pub texture: usize,
+    pub transform: UvTransform,
+}
+
+/// `KHR_texture_transform`: uv′ = offset + R(−rotation) · (scale ⊙ uv), stored as the two rows
+/// of a 2×3 affine matrix (u′ = row₀ · (u, v, 1), v′ = row₁ · (u, v, 1)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UvTransform {
+    pub rows: [[f32; 3]; 2],
+}
+
+impl UvTransform {
+    pub const IDENTITY: UvTransform = UvTransform { rows: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] };
+
+    /// The extension's translation · rotation · scale: u′ = cos r · sx·u + sin r · sy·v + ox,
+    /// v′ = −sin r · sx·u + cos r · sy·v + oy. The extension's GLSL sketch, read with GLSL's
+    /// column-major constructors, turns the other way; Khronos' TextureTransformTest sample
+    /// (its green markers) and the viewers agree on this one (README, "Materials").
+    pub fn new(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> UvTransform {
+        let (sin, cos) = rotation.sin_cos();
+        UvTransform {
+            rows: [[cos * scale[0], sin * scale[1], offset[0]], [-sin * scale[0], cos * scale[1], offset[1]]],
+        }
+    }
+
+    pub fn apply(&self, uv: [f32; 2]) -> [f32; 2] {
+        self.rows.map(|row| row[0] * uv[0] + row[1] * uv[1] + row[2])
+    }
+
+    pub fn is_identity(&self) -> bool {
+        *self == UvTransform::IDENTITY
+    }
 }
 
 impl Material {
+    /// The textures the material samples, each with its UV transform.
+    pub fn textures(&self) -> impl Iterator<Item = &TextureRef> {
+        [
+            &self.texture,
+            &self.normal_texture,
+            &self.emissive_texture,
+            &self.occlusion_texture,
+            &self.metallic_roughness_texture,
+        ]
+        .into_iter()
+        .flatten()
+    }
+
     pub fn draw_class(&self) -> DrawClass {
         DrawClass { masked: matches!(self.alpha, AlphaMode::Mask { .. }), double_sided: self.double_sided }
     }
 }
 
-/// An sRGB-encoded RGBA8 image, as decoded from the file.
+/// An RGBA8 image, as decoded from the file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Texture {
     pub width: u32,
     pub height: u32,
     pub rgba: Vec<u8>,
+    pub encoding: Encoding,
+}
+
+/// What a texture's values mean, which decides how its mipmaps average them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Encoding {
+    /// Colour (base colour, emission): sRGB-encoded, averaged in linear light.
+    Srgb,
+    /// Data (normals, occlusion, metallic-roughness): linear values, averaged as they are.
+    Linear,
 }
 
 /// A light, from the manifest or from the file's `KHR_lights_punctual`. Intensities are in
@@ -172,6 +273,9 @@ pub struct Scene {
     pub draws: Vec<(DrawClass, std::ops::Range<u32>)>,
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
+    /// One tangent per vertex (xyz unit, w = ±1: the bitangent is w · normal × tangent) when
+    /// a material has a normal map, else empty. Zero for vertices that need none.
+    pub tangents: Vec<[f32; 4]>,
     /// The first camera found in the node hierarchy, if any (relative to `origin`).
     pub camera: Option<Camera>,
     /// Where the scene's coordinates start, in the file's world space: vertices, bounds and
@@ -189,7 +293,7 @@ pub struct Scene {
 impl Scene {
     /// Whether any material samples a texture.
     pub fn is_textured(&self) -> bool {
-        !self.textures.is_empty() && self.materials.iter().any(|m| m.texture.is_some())
+        !self.textures.is_empty() && self.materials.iter().any(|m| m.textures().next().is_some())
     }
 
     pub fn triangle_count(&self) -> usize {

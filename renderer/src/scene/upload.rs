@@ -1,6 +1,6 @@
-//! Uploading a scene: geometry buffers, material and light tables, every texture as one layer
-//! of a single mipmapped 2D array (lavapipe has no binding arrays), the shadow cubes' face
-//! matrices, and the named resources that shaders bind from the scene.
+//! Uploading a scene: geometry buffers (tangents in a second vertex buffer), material and
+//! light tables, the textures (scene/textures.rs), the shadow cubes' face matrices, and the
+//! named resources that shaders bind from the scene.
 
 use std::ops::Range;
 
@@ -8,14 +8,12 @@ use bytemuck::Zeroable;
 use wgpu::util::DeviceExt;
 
 use super::shadow::{self, MAX_SHADOW_LIGHTS, ShadowCubes};
-use super::{AlphaMode, DrawClass, FrameUniforms, LightKind, Lighting, Scene, Texture};
+use super::textures;
+use super::{AlphaMode, DrawClass, FrameUniforms, LightKind, Lighting, Scene, TextureRef};
 use crate::bindings::Bound;
 
 /// Lights a scene may have: the size of the shaders' uniform light table.
 pub const MAX_LIGHTS: usize = 64;
-
-/// Textures larger than this are scaled down to it; all layers share one size.
-pub const MAX_TEXTURE_SIZE: u32 = 1024;
 
 /// `Material` in `shaders/lib/scene.wgsl`.
 #[repr(C)]
@@ -26,7 +24,28 @@ struct GpuMaterial {
     roughness: f32,
     texture: i32,
     alpha_cutoff: f32,
+    emissive: [f32; 3],
+    emissive_texture: i32,
+    normal_texture: i32,
+    normal_scale: f32,
+    occlusion_texture: i32,
+    occlusion_strength: f32,
+    metallic_roughness_texture: i32,
+    padding: [i32; 3],
+    /// The rows of each slot's UV transform ([`SLOT_BASE`] …), padded to 16 bytes.
+    transforms: [[[f32; 4]; 2]; SLOTS],
 }
+
+// The storage array's stride in `shaders/lib/scene.wgsl`.
+const _: () = assert!(std::mem::size_of::<GpuMaterial>() == 240);
+
+/// `SLOT_*` in `shaders/lib/scene.wgsl`: a material's texture slots.
+pub const SLOT_BASE: usize = 0;
+pub const SLOT_NORMAL: usize = 1;
+pub const SLOT_EMISSIVE: usize = 2;
+pub const SLOT_OCCLUSION: usize = 3;
+pub const SLOT_METALLIC_ROUGHNESS: usize = 4;
+const SLOTS: usize = 5;
 
 /// `Light` in `shaders/lib/scene.wgsl`.
 #[repr(C)]
@@ -78,6 +97,8 @@ fn light_shape(kind: LightKind) -> (u32, [f32; 3], f32, f32) {
 #[derive(Debug, Clone)]
 pub struct GpuScene {
     pub(crate) vertices: wgpu::Buffer,
+    /// One tangent per vertex, when a material has a normal map.
+    tangents: Option<wgpu::Buffer>,
     pub(crate) indices: wgpu::Buffer,
     pub(crate) draws: Vec<(DrawClass, Range<u32>)>,
     pub(crate) light_count: u32,
@@ -87,6 +108,8 @@ pub struct GpuScene {
     lights: wgpu::Buffer,
     /// The texture array and its sampler; none for an untextured scene.
     textures: Option<(wgpu::Texture, wgpu::Sampler)>,
+    /// Each texture's layer and place in it, when textures share layers.
+    texture_places: Option<wgpu::Buffer>,
     /// Face matrices of the shadow cubes and the sampler that reads them.
     shadow_faces: Option<(wgpu::Buffer, wgpu::Sampler)>,
     /// Bytes of the texture array, all mips included.
@@ -160,9 +183,16 @@ impl GpuScene {
             });
             (buffer("shadow faces", bytemuck::cast_slice(&faces), uniform), sampler)
         });
-        let textures = scene.is_textured().then(|| upload_texture_array(device, queue, &scene.textures));
+        let layout = textures::Layout::of(&scene.textures);
+        let textures = scene.is_textured().then(|| textures::upload(device, queue, &scene.textures, &layout));
+        // Where each texture lies, for scenes whose textures share layers (`TEXTURE_PAGES`).
+        let texture_places = (textures.is_some() && layout.is_packed())
+            .then(|| buffer("texture places", bytemuck::cast_slice(&layout.gpu_places()), storage));
         GpuScene {
             vertices: buffer("vertices", bytemuck::cast_slice(&scene.vertices), wgpu::BufferUsages::VERTEX),
+            tangents: (!scene.tangents.is_empty()).then(|| {
+                buffer("tangents", bytemuck::cast_slice(&scene.tangents), wgpu::BufferUsages::VERTEX)
+            }),
             indices: buffer("indices", bytemuck::cast_slice(&scene.indices), wgpu::BufferUsages::INDEX),
             draws: scene.draws.clone(),
             light_count: lights.len() as u32,
@@ -170,8 +200,9 @@ impl GpuScene {
             frame: buffer("frame", bytemuck::bytes_of(frame), uniform | wgpu::BufferUsages::COPY_DST),
             materials: buffer("materials", bytemuck::cast_slice(&materials), storage),
             lights: buffer("lights", bytemuck::cast_slice(&table), uniform),
-            texture_bytes: textures.as_ref().map_or(0, |(_, bytes)| *bytes),
-            textures: textures.map(|(array, _)| (array, texture_sampler(device))),
+            texture_bytes: if textures.is_some() { layout.bytes() } else { 0 },
+            textures: textures.map(|array| (array, textures::sampler(device))),
+            texture_places,
             shadow_faces,
         }
     }
@@ -183,12 +214,21 @@ impl GpuScene {
             "frame" => buffer(&self.frame),
             "materials" => buffer(&self.materials),
             "lights" => buffer(&self.lights),
-            "scene_textures" => {
-                self.textures.as_ref().map(|(t, _)| Bound::Texture { texture: t.clone(), filterable: true })
-            }
+            "scene_textures" => self.textures.as_ref().map(|(t, _)| Bound::Texture {
+                texture: t.clone(),
+                filterable: true,
+                view_format: None,
+            }),
+            // The same array read as data: normal, occlusion and metallic-roughness textures are not sRGB.
+            "scene_data_textures" => self.textures.as_ref().map(|(t, _)| Bound::Texture {
+                texture: t.clone(),
+                filterable: true,
+                view_format: Some(wgpu::TextureFormat::Rgba8Unorm),
+            }),
             "scene_sampler" => {
                 self.textures.as_ref().map(|(_, s)| Bound::Sampler { sampler: s.clone(), filtering: true })
             }
+            "texture_places" => self.texture_places.as_ref().and_then(buffer),
             "shadow_faces" => self.shadow_faces.as_ref().and_then(|(b, _)| buffer(b)),
             // Depth is read texel by texel: a filtering sampler would blend depths.
             "shadow_sampler" => self
@@ -197,6 +237,11 @@ impl GpuScene {
                 .map(|(_, s)| Bound::Sampler { sampler: s.clone(), filtering: false }),
             _ => None,
         }
+    }
+
+    /// Whether the vertices have tangents (a second vertex buffer), for normal maps.
+    pub(crate) fn has_tangents(&self) -> bool {
+        self.tangents.is_some()
     }
 
     /// The draw classes the scene has, in drawing order.
@@ -214,6 +259,9 @@ impl GpuScene {
         instances: Range<u32>,
     ) {
         pass.set_vertex_buffer(0, self.vertices.slice(..));
+        if let Some(tangents) = &self.tangents {
+            pass.set_vertex_buffer(1, tangents.slice(..));
+        }
         pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
         for (class, range) in &self.draws {
             let (pipeline, groups) = pick(*class);
@@ -226,164 +274,37 @@ impl GpuScene {
     }
 }
 
-/// Trilinear; the shaders add anisotropy with taps of their own (`sample_albedo`).
-fn texture_sampler(device: &wgpu::Device) -> wgpu::Sampler {
-    device.create_sampler(&wgpu::SamplerDescriptor {
-        label: Some("scene textures"),
-        address_mode_u: wgpu::AddressMode::Repeat,
-        address_mode_v: wgpu::AddressMode::Repeat,
-        mag_filter: wgpu::FilterMode::Linear,
-        min_filter: wgpu::FilterMode::Linear,
-        mipmap_filter: wgpu::MipmapFilterMode::Linear,
-        ..Default::default()
-    })
-}
-
 fn gpu_material(material: &super::Material) -> GpuMaterial {
+    let layer = |slot: &Option<TextureRef>| slot.map_or(-1, |t| t.texture as i32);
+    let mut transforms = [[[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]]; SLOTS];
+    for (slot, texture) in [
+        (SLOT_BASE, material.texture),
+        (SLOT_NORMAL, material.normal_texture),
+        (SLOT_EMISSIVE, material.emissive_texture),
+        (SLOT_OCCLUSION, material.occlusion_texture),
+        (SLOT_METALLIC_ROUGHNESS, material.metallic_roughness_texture),
+    ] {
+        if let Some(texture) = texture {
+            transforms[slot] = texture.transform.rows.map(|[a, b, c]| [a, b, c, 0.0]);
+        }
+    }
     GpuMaterial {
         base_color: material.base_color,
         metallic: material.metallic,
         roughness: material.roughness,
-        texture: material.texture.map_or(-1, |t| t as i32),
+        texture: layer(&material.texture),
         alpha_cutoff: match material.alpha {
             AlphaMode::Opaque => 0.0,
             AlphaMode::Mask { cutoff } => cutoff,
         },
-    }
-}
-
-/// Uploads all textures (at least one) as layers of one sRGB array.
-fn upload_texture_array(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    textures: &[Texture],
-) -> (wgpu::Texture, u64) {
-    let size = textures
-        .iter()
-        .map(|t| t.width.max(t.height))
-        .max()
-        .unwrap_or(1)
-        .next_power_of_two()
-        .min(MAX_TEXTURE_SIZE);
-    let layers = mip_chains(textures, size);
-    let levels = layers[0].len() as u32;
-    let array = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("scene textures"),
-        size: wgpu::Extent3d { width: size, height: size, depth_or_array_layers: layers.len() as u32 },
-        mip_level_count: levels,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8UnormSrgb,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
-    let mut bytes = 0;
-    for (layer, chain) in layers.iter().enumerate() {
-        for (level, pixels) in chain.iter().enumerate() {
-            let side = (size >> level).max(1);
-            queue.write_texture(
-                wgpu::TexelCopyTextureInfo {
-                    texture: &array,
-                    mip_level: level as u32,
-                    origin: wgpu::Origin3d { x: 0, y: 0, z: layer as u32 },
-                    aspect: wgpu::TextureAspect::All,
-                },
-                pixels,
-                wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(4 * side),
-                    rows_per_image: Some(side),
-                },
-                wgpu::Extent3d { width: side, height: side, depth_or_array_layers: 1 },
-            );
-            bytes += pixels.len() as u64;
-        }
-    }
-    (array, bytes)
-}
-
-/// Every texture scaled to `size`² and its full mip chain, textures spread over the cores.
-fn mip_chains(textures: &[Texture], size: u32) -> Vec<Vec<Vec<u8>>> {
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let chunk = textures.len().div_ceil(threads).max(1);
-    std::thread::scope(|scope| {
-        let workers: Vec<_> = textures
-            .chunks(chunk)
-            .map(|part| scope.spawn(move || part.iter().map(|t| mip_chain(t, size)).collect::<Vec<_>>()))
-            .collect();
-        workers.into_iter().flat_map(|worker| worker.join().expect("mip generation panicked")).collect()
-    })
-}
-
-fn mip_chain(texture: &Texture, size: u32) -> Vec<Vec<u8>> {
-    let base = if texture.width == size && texture.height == size {
-        texture.rgba.clone()
-    } else {
-        let image = image::RgbaImage::from_raw(texture.width, texture.height, texture.rgba.clone())
-            .expect("texture size matches its pixels");
-        image::imageops::resize(&image, size, size, image::imageops::FilterType::Triangle).into_raw()
-    };
-    let mut chain = vec![base];
-    let mut side = size;
-    while side > 1 {
-        let next = downsample(chain.last().expect("level 0"), side);
-        side /= 2;
-        chain.push(next);
-    }
-    chain
-}
-
-/// Halves a square sRGB RGBA8 image with a 2×2 box filter in linear light (alpha is linear).
-fn downsample(pixels: &[u8], side: u32) -> Vec<u8> {
-    let half = (side / 2) as usize;
-    let side = side as usize;
-    let linear = srgb_to_linear_table();
-    let mut out = vec![0u8; half * half * 4];
-    for y in 0..half {
-        for x in 0..half {
-            for c in 0..4 {
-                let texel = |dx: usize, dy: usize| pixels[((2 * y + dy) * side + 2 * x + dx) * 4 + c];
-                let quad = [texel(0, 0), texel(1, 0), texel(0, 1), texel(1, 1)];
-                out[(y * half + x) * 4 + c] = if c == 3 {
-                    (quad.iter().map(|&v| u32::from(v)).sum::<u32>() as f32 / 4.0).round() as u8
-                } else {
-                    linear_to_srgb(quad.iter().map(|&v| linear[v as usize]).sum::<f32>() / 4.0)
-                };
-            }
-        }
-    }
-    out
-}
-
-fn srgb_to_linear_table() -> [f32; 256] {
-    std::array::from_fn(|i| {
-        let v = i as f32 / 255.0;
-        if v <= 0.04045 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
-    })
-}
-
-fn linear_to_srgb(v: f32) -> u8 {
-    let encoded = if v <= 0.0031308 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
-    (encoded.clamp(0.0, 1.0) * 255.0).round() as u8
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn downsampling_averages_in_linear_light() {
-        // Black and white average to linear 0.5, which sRGB encodes as 188, not 128.
-        let pixels = [0, 0, 0, 255, 255, 255, 255, 255, 0, 0, 0, 255, 255, 255, 255, 255];
-        assert_eq!(downsample(&pixels, 2), vec![188, 188, 188, 255]);
-    }
-
-    #[test]
-    fn mip_chain_reaches_one_texel() {
-        let texture = Texture { width: 8, height: 4, rgba: vec![128; 8 * 4 * 4] };
-        let chain = mip_chain(&texture, 8);
-        let sides: Vec<usize> = chain.iter().map(|level| level.len() / 4).collect();
-        assert_eq!(sides, vec![64, 16, 4, 1]);
-        assert!(chain.iter().all(|level| level.iter().all(|&v| v == 128)));
+        emissive: material.emissive,
+        emissive_texture: layer(&material.emissive_texture),
+        normal_texture: layer(&material.normal_texture),
+        normal_scale: material.normal_scale,
+        occlusion_texture: layer(&material.occlusion_texture),
+        occlusion_strength: material.occlusion_strength,
+        metallic_roughness_texture: layer(&material.metallic_roughness_texture),
+        padding: [0; 3],
+        transforms,
     }
 }

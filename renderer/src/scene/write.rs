@@ -43,6 +43,8 @@ pub struct MaterialDesc {
     pub roughness: f32,
     /// A texture index returned by [`GltfWriter::add_png`].
     pub texture: Option<usize>,
+    /// A tangent-space normal map (a texture index); tangents are left to the reader.
+    pub normal_texture: Option<usize>,
     /// Some(cutoff) makes the material alpha-MASKed.
     pub alpha_cutoff: Option<f32>,
     /// Seen from both sides (no back-face culling), e.g. cloth and foliage cards.
@@ -57,6 +59,7 @@ impl MaterialDesc {
             metallic: 0.0,
             roughness,
             texture: None,
+            normal_texture: None,
             alpha_cutoff: None,
             double_sided: false,
         }
@@ -64,6 +67,10 @@ impl MaterialDesc {
 
     pub fn textured(self, texture: usize) -> MaterialDesc {
         MaterialDesc { texture: Some(texture), ..self }
+    }
+
+    pub fn normal_mapped(self, texture: usize) -> MaterialDesc {
+        MaterialDesc { normal_texture: Some(texture), ..self }
     }
 
     pub fn metallic(self, metallic: f32) -> MaterialDesc {
@@ -92,6 +99,8 @@ pub struct GltfWriter {
     meshes: Vec<Value>,
     nodes: Vec<Value>,
     cameras: Vec<Value>,
+    /// `KHR_lights_punctual` lights.
+    lights: Vec<Value>,
     /// A root node's uniform scale and translation over every node, if any.
     placement: Option<(f64, [f64; 3])>,
 }
@@ -115,6 +124,7 @@ impl GltfWriter {
             meshes: Vec::new(),
             nodes: Vec::new(),
             cameras: Vec::new(),
+            lights: Vec::new(),
             placement: None,
         }
     }
@@ -159,6 +169,9 @@ impl GltfWriter {
         }
         let mut value =
             json!({"name": material.name, "pbrMetallicRoughness": pbr, "doubleSided": material.double_sided});
+        if let Some(texture) = material.normal_texture {
+            value["normalTexture"] = json!({"index": texture});
+        }
         if let Some(cutoff) = material.alpha_cutoff {
             value["alphaMode"] = json!("MASK");
             value["alphaCutoff"] = json!(cutoff);
@@ -229,6 +242,16 @@ impl GltfWriter {
         }));
     }
 
+    /// Adds a `KHR_lights_punctual` point light (intensity in candela) at `position`.
+    pub fn add_point_light(&mut self, position: [f64; 3], color: [f32; 3], intensity: f32, range: f32) {
+        self.lights.push(json!({"type": "point", "color": color, "intensity": intensity, "range": range}));
+        self.nodes.push(json!({
+            "name": "light",
+            "translation": position,
+            "extensions": {"KHR_lights_punctual": {"light": self.lights.len() - 1}},
+        }));
+    }
+
     /// Puts every node under one root node that scales by `scale` and then moves by
     /// `translation`; the geometry keeps its coordinates.
     pub fn place(&mut self, scale: f64, translation: [f64; 3]) {
@@ -267,6 +290,10 @@ impl GltfWriter {
             // Linear mag, trilinear min, repeat.
             document["samplers"] =
                 json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}]);
+        }
+        if !self.lights.is_empty() {
+            document["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+            document["extensions"] = json!({"KHR_lights_punctual": {"lights": self.lights}});
         }
         if !self.cameras.is_empty() {
             let mut cameras = self.cameras.clone();

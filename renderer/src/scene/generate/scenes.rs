@@ -386,3 +386,28 @@ pub(super) fn degenerate(b: &mut Builder) {
     b.mesh(floor).append(&mesh::cuboid(Vec3::splat(0.8), 1.0), at(-3.0, 0.4, -1.0));
     b.camera([0.0, 1.4, 5.0], [0.0, 0.8, 0.0], 55.0, 40.0);
 }
+
+/// A large file as a user might bring one: 99 spheres of 10 000 triangles in a 10 × 10 grid on
+/// a floor, each with its own 256² texture (odd ones a colour texture, even ones a normal map
+/// on a plain colour), the floor one 4096² texture. No camera and no lights: a three-line
+/// manifest frames and lights it.
+pub(super) fn gallery(b: &mut Builder) {
+    let floor_texture = b.texture("floor", &textures::floor_tiles(4096));
+    let floor = b.material(MaterialDesc::new("floor", [1.0; 3], 0.7).textured(floor_texture));
+    b.mesh(floor).append(&mesh::floor(24.0, 24.0, 4, 4, 6.0), Affine3A::IDENTITY);
+    let ball = mesh::sphere(0.8, 100, 51);
+    for i in 0..99u32 {
+        let material = if i % 2 == 1 {
+            let texture = b.texture(&format!("colour-{i}"), &textures::checker(256, 2 + i % 13));
+            MaterialDesc::new(&format!("ball-{i}"), [1.0; 3], 0.5).textured(texture)
+        } else {
+            let texture = b.texture(&format!("bumps-{i}"), &textures::bumps(256, 2 + i % 9));
+            let tint = [0.3 + 0.6 * b.rng.range(0.0, 1.0), 0.5, 0.3 + 0.6 * b.rng.range(0.0, 1.0)];
+            MaterialDesc::new(&format!("ball-{i}"), tint, 0.35).normal_mapped(texture)
+        };
+        let material = b.material(material);
+        let (row, column) = ((i / 10) as f32, (i % 10) as f32);
+        b.mesh(material)
+            .append(&ball, Affine3A::from_translation(Vec3::new(column * 2.2 - 9.9, 0.8, row * 2.2 - 9.9)));
+    }
+}

@@ -159,3 +159,17 @@ pub fn png(image: &RgbaImage) -> Vec<u8> {
     image.write_to(&mut bytes, image::ImageFormat::Png).expect("PNG encoding to memory");
     bytes.into_inner()
 }
+
+/// A tangent-space normal map of `cells`² round bumps (glTF's encoding: +X right, +Y up the
+/// image, +Z out of the surface).
+pub fn bumps(size: u32, cells: u32) -> RgbaImage {
+    image(size, |u, v, _, _| {
+        // Each bump is a cosine dome; its slope gives the normal.
+        let (cu, cv) = ((u * cells as f32).fract() - 0.5, (v * cells as f32).fract() - 0.5);
+        let r = (cu * cu + cv * cv).sqrt();
+        let slope = if r < 0.5 { (r * 2.0 * std::f32::consts::PI).sin() * 1.5 } else { 0.0 };
+        let (dx, dy) = if r > 1e-6 { (cu / r * slope, -cv / r * slope) } else { (0.0, 0.0) };
+        let n = glam::Vec3::new(dx, dy, 1.0).normalize();
+        [n.x * 0.5 + 0.5, n.y * 0.5 + 0.5, n.z * 0.5 + 0.5, 1.0]
+    })
+}

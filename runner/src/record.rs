@@ -288,6 +288,29 @@ pub struct AdaptiveCost {
     pub limit_ms: f64,
     /// limit_ms over this mode's frame median: 1 means at the limit.
     pub efficiency: f64,
+    /// The per-sample cost model (absent in records from before it, and where no sample was
+    /// shaded after S).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub samples: Option<SampleCost>,
+}
+
+/// What an adaptive mode's samples cost against the reference's, and where the rest of its
+/// frame goes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SampleCost {
+    /// Samples shaded after S (in `shade_extra`, the full pixels' second S included).
+    pub extra_samples: u64,
+    /// `shade_extra`'s median over the extra samples, in nanoseconds.
+    pub extra_sample_ns: f64,
+    /// The same-M reference's `shade` median over its M²·w·h samples, in nanoseconds.
+    pub reference_sample_ns: f64,
+    /// extra_sample_ns / reference_sample_ns: 1 means an extra sample costs what a
+    /// reference sample does.
+    pub extra_sample_cost: f64,
+    /// Shares of this mode's frame median: `evaluate` with `compact` (the list), and
+    /// `gather`, costs the reference does not pay.
+    pub evaluate_share: f64,
+    pub gather_share: f64,
 }
 
 /// Reads a run: its folder or its run.json. Returns the record and the run folder (image

@@ -20,7 +20,7 @@ use crate::plan::{RunPlan, SceneEntry, Tier, fallback_name};
 use crate::progress::Progress;
 use crate::record::{
     AdaptiveCost, GraphRecord, ImageFiles, ModeRecord, PassRecord, Platform, RUN_SCHEMA, RunRecord,
-    RunSettings, SceneRecord, Status, fnv1a,
+    RunSettings, SampleCost, SceneRecord, Status, fnv1a,
 };
 use crate::scenes;
 use crate::stats::Summary;
@@ -680,11 +680,25 @@ fn adaptive_cost(modes: &[Mode], runs: &[ModeRun], mode: Mode, run: &ModeRun) ->
         + pass_median(run, "shade_first")?
         + pass_median(run, "evaluate")?
         + extra_fraction * pass_median(reference_run, "shade")?;
+    let extra_samples = stats.shaded + stats.full_pixels - counts.len() as u64;
+    let samples = (extra_samples > 0).then(|| -> Option<SampleCost> {
+        let extra_sample_ns = pass_median(run, "shade_extra")? * 1e6 / extra_samples as f64;
+        let reference_sample_ns = pass_median(reference_run, "shade")? * 1e6 / stats.total as f64;
+        Some(SampleCost {
+            extra_samples,
+            extra_sample_ns,
+            reference_sample_ns,
+            extra_sample_cost: extra_sample_ns / reference_sample_ns,
+            evaluate_share: (pass_median(run, "evaluate")? + pass_median(run, "compact")?) / own,
+            gather_share: pass_median(run, "gather")? / own,
+        })
+    });
     Some(AdaptiveCost {
         reference: reference.to_string(),
         speedup: frame_median(reference_run)? / own,
         limit_ms: limit,
         efficiency: limit / own,
+        samples: samples.flatten(),
     })
 }
 

@@ -65,6 +65,19 @@ fn a_run_writes_its_record_and_images_and_exits_zero() {
     assert!((25.0..60.0).contains(&samples["shaded_percent"].as_f64().unwrap()), "{samples}");
     assert_eq!(samples["histogram"].as_array().unwrap().len(), 4);
     assert!(adaptive["adaptive"]["speedup"].as_f64().unwrap() > 0.0);
+    // The per-sample cost model: extra samples counted as the histogram says (n − 1 per pixel,
+    // plus one for each full pixel), their cost and the reference's, the list's and gather's
+    // shares of the frame.
+    let cost = &adaptive["adaptive"]["samples"];
+    let histogram: Vec<u64> =
+        samples["histogram"].as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).collect();
+    let extra: u64 = histogram.iter().enumerate().map(|(i, n)| n * i as u64).sum::<u64>() + histogram[3];
+    assert_eq!(cost["extra_samples"].as_u64(), Some(extra), "{cost}");
+    let ratio = cost["extra_sample_ns"].as_f64().unwrap() / cost["reference_sample_ns"].as_f64().unwrap();
+    assert!((ratio - cost["extra_sample_cost"].as_f64().unwrap()).abs() < 1e-9 && ratio > 0.0, "{cost}");
+    for share in ["evaluate_share", "gather_share"] {
+        assert!((0.0..1.0).contains(&cost[share].as_f64().unwrap()), "{share}: {cost}");
+    }
     assert!(ws.run_dir().join(adaptive["images"]["samples"].as_str().unwrap()).exists());
     assert!(ws.run_dir().join(adaptive["images"]["difference"].as_str().unwrap()).exists());
     let graph = &adaptive["graph"];

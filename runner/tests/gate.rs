@@ -332,6 +332,7 @@ fn the_report_is_self_contained_and_renders_in_a_browser() {
     assert!(!html.contains("http://") && !html.contains("https://"), "the page names a network address");
     assert!(html.contains("<svg") && html.contains("error against run time"), "the plot is inline SVG");
     assert!(html.contains("no regression"), "the verdict is shown");
+    assert!(html.contains("Adaptive cost per sample"), "the adaptive modes' cost model heads the page");
     assert!(html.contains("History (3 runs)"), "the history is plotted");
     assert!(html.contains("Crops at"), "crops around the largest error");
     for tag in ["section", "table", "figure", "div", "svg"] {

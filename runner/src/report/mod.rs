@@ -32,6 +32,7 @@ pub fn write(
     let mut page = String::new();
     head(&mut page, run);
     summary(&mut page, run, verdict);
+    adaptive_costs(&mut page, run);
     let history = history_runs(run, history);
     for scene in &run.scenes {
         scene_section(&mut page, run_dir, scene, verdict, &history)?;
@@ -160,6 +161,51 @@ fn mode_outcome(checks: &[&Check], mode: &str) -> Option<(Outcome, String)> {
         .map(|c| format!("{} {}: {}", c.outcome.name(), c.metric, c.detail))
         .collect();
     Some((worst, details.join("\n")))
+}
+
+/// The headline of the adaptive modes: how far each is from the fastest it could be. Its
+/// limit pays for the G-buffer, S and evaluation and shades the extra samples at the
+/// reference's cost per sample; what it loses beyond that is dearer extra samples, the list
+/// (evaluate + compact) and the gather.
+fn adaptive_costs(page: &mut String, run: &RunRecord) {
+    let rows: Vec<(&SceneRecord, &crate::record::ModeRecord, &crate::record::AdaptiveCost)> = run
+        .scenes
+        .iter()
+        .flat_map(|scene| scene.modes.iter().filter_map(move |m| Some((scene, m, m.adaptive.as_ref()?))))
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    page.push_str(
+        "<section id=\"adaptive-cost\">\n<h2>Adaptive cost per sample</h2>\n<p class=\"meta\">Extra sample: \
+         <code>shade_extra</code> per sample shaded after S, against the same-M reference's <code>shade</code> \
+         per sample (1.00× is as cheap). Evaluate (with compact) and gather as shares of the frame. Limit: shadow \
+         + G-buffer + S + evaluate + the extra samples at the reference's cost; efficiency = limit / frame.</p>\n\
+         <table><thead><tr><th>scene</th><th>mode</th><th>speed-up vs ref</th><th>samples %</th>\
+         <th>extra sample</th><th>ns / ref ns</th><th>evaluate</th><th>gather</th><th>limit ms</th>\
+         <th>frame ms</th><th>efficiency</th></tr></thead><tbody>\n",
+    );
+    for (scene, mode, cost) in rows {
+        let samples = cost.samples.as_ref();
+        let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
+        let _ = writeln!(
+            page,
+            "<tr><td><a href=\"#{0}\">{0}</a></td><td>{1}</td><td>{2:.2}×</td><td>{3}</td><td>{4}</td><td>{5}</td>\
+             <td>{6}</td><td>{7}</td><td>{8:.1}</td><td>{9}</td><td>{10:.2}</td></tr>",
+            escape(&scene.name),
+            escape(&mode.mode),
+            cost.speedup,
+            cell(mode.samples.as_ref().map(|s| format!("{:.1}", s.shaded_percent))),
+            cell(samples.map(|s| format!("{:.2}×", s.extra_sample_cost))),
+            cell(samples.map(|s| format!("{:.1} / {:.1}", s.extra_sample_ns, s.reference_sample_ns))),
+            cell(samples.map(|s| format!("{:.0}%", 100.0 * s.evaluate_share))),
+            cell(samples.map(|s| format!("{:.0}%", 100.0 * s.gather_share))),
+            cost.limit_ms,
+            cell(mode.frame_ms.as_ref().map(|f| format!("{:.1}", f.median))),
+            cost.efficiency,
+        );
+    }
+    page.push_str("</tbody></table>\n</section>\n");
 }
 
 fn mode_table(page: &mut String, scene: &SceneRecord, checks: &[&Check]) {

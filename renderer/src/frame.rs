@@ -21,33 +21,21 @@ use crate::{ExtraSamples, RenderError, RenderSettings};
 /// What a scene asks of its frames, besides its mode.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SceneNeeds {
-    /// Some material samples a texture: the texture array and its lookups exist.
-    pub textured: bool,
+    /// How the scene's shaders are composed: only what its materials, textures and lights use.
+    pub features: Features,
     /// Shadow-casting lights: the shadow pass and its cube array exist.
     pub shadows: Option<ShadowCubes>,
-    /// Spot or directional lights: shading tells light kinds apart.
-    pub light_kinds: bool,
-    /// What the materials use beyond base colour: normal maps, emission, occlusion,
-    /// metallic-roughness textures, UV transforms, texture pages.
-    pub materials: MaterialNeeds,
 }
 
-/// The material features a scene uses, each compiled into its shaders only when used.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct MaterialNeeds {
-    pub normal_maps: bool,
-    pub emissive: bool,
-    pub occlusion: bool,
-    pub texture_transform: bool,
-    /// Textures of different sizes, packed into shared layers.
-    pub texture_pages: bool,
-    pub metallic_roughness: bool,
-}
-
-impl MaterialNeeds {
-    pub fn of(scene: &Scene) -> MaterialNeeds {
+impl SceneNeeds {
+    pub fn of(scene: &Scene, lighting: &Lighting) -> SceneNeeds {
+        let lights = &lighting.lights[..lighting.lights.len().min(crate::scene::MAX_LIGHTS)];
+        let shadows = ShadowCubes::of(lights);
         let any = |test: &dyn Fn(&crate::scene::Material) -> bool| scene.materials.iter().any(test);
-        MaterialNeeds {
+        let features = Features {
+            textured: scene.is_textured(),
+            shadows: shadows.is_some(),
+            light_kinds: lights.iter().any(|l| l.kind != crate::scene::LightKind::Point),
             normal_maps: !scene.tangents.is_empty() && any(&|m| m.normal_texture.is_some()),
             emissive: any(&|m| m.emissive.iter().any(|&c| c > 0.0)),
             occlusion: any(&|m| m.occlusion_texture.is_some()),
@@ -55,53 +43,27 @@ impl MaterialNeeds {
             texture_transform: any(&|m| m.textures().any(|t| !t.transform.is_identity())),
             texture_pages: scene.is_textured()
                 && crate::scene::textures::Layout::of(&scene.textures).is_packed(),
-        }
-    }
-}
-
-impl SceneNeeds {
-    pub fn of(scene: &Scene, lighting: &Lighting) -> SceneNeeds {
-        let lights = &lighting.lights[..lighting.lights.len().min(crate::scene::MAX_LIGHTS)];
-        SceneNeeds {
-            textured: scene.is_textured(),
-            shadows: ShadowCubes::of(lights),
-            light_kinds: lights.iter().any(|l| l.kind != crate::scene::LightKind::Point),
-            materials: MaterialNeeds::of(scene),
-        }
-    }
-
-    /// How the scene's shaders are composed.
-    pub fn features(&self) -> Features {
-        Features {
-            textured: self.textured,
-            shadows: self.shadows.is_some(),
-            light_kinds: self.light_kinds,
-            normal_maps: self.materials.normal_maps,
-            emissive: self.materials.emissive,
-            occlusion: self.materials.occlusion,
-            texture_transform: self.materials.texture_transform,
-            texture_pages: self.materials.texture_pages,
-            metallic_roughness: self.materials.metallic_roughness,
-        }
+        };
+        SceneNeeds { features, shadows }
     }
 }
 
 impl std::fmt::Display for SceneNeeds {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(if self.textured { "textured" } else { "untextured" })?;
+        let features = self.features;
+        f.write_str(if features.textured { "textured" } else { "untextured" })?;
         match self.shadows {
             Some(c) => write!(f, ", {} shadow cube(s) of {}²", c.lights, c.resolution),
             None => f.write_str(", no shadow-casting light"),
         }?;
-        f.write_str(if self.light_kinds { ", spot or directional lights" } else { "" })?;
-        let m = self.materials;
         for (used, what) in [
-            (m.normal_maps, ", normal maps"),
-            (m.emissive, ", emission"),
-            (m.occlusion, ", occlusion"),
-            (m.texture_transform, ", texture transforms"),
-            (m.texture_pages, ", textures packed in pages"),
-            (m.metallic_roughness, ", metallic-roughness textures"),
+            (features.light_kinds, ", spot or directional lights"),
+            (features.normal_maps, ", normal maps"),
+            (features.emissive, ", emission"),
+            (features.occlusion, ", occlusion"),
+            (features.texture_transform, ", texture transforms"),
+            (features.texture_pages, ", textures packed in pages"),
+            (features.metallic_roughness, ", metallic-roughness textures"),
         ] {
             f.write_str(if used { what } else { "" })?;
         }

@@ -170,7 +170,7 @@ impl SceneRenderer {
         let gpu_scene = GpuScene::new(&gpu.device, &gpu.queue, scene, lighting, &frame);
         gpu.check()?;
         Ok(SceneRenderer {
-            pipelines: Pipelines::new(gpu.device.clone(), needs.features()),
+            pipelines: Pipelines::new(gpu.device.clone(), needs.features),
             gpu,
             scene: gpu_scene,
             needs,

@@ -105,7 +105,7 @@ fn modes_share_their_allocations_through_the_pool() {
 fn an_untextured_scene_allocates_no_texture_array() {
     for (generator, textured) in [(Generator::Plane, false), (Generator::ShadowRoom, true)] {
         let (renderer, _gpu) = renderer(generator, &lit(), settings(32, 24));
-        assert_eq!(renderer.needs().textured, textured, "{generator}");
+        assert_eq!(renderer.needs().features.textured, textured, "{generator}");
         assert_eq!(renderer.texture_bytes() > 0, textured, "{generator}");
     }
 }

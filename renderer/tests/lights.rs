@@ -22,7 +22,7 @@ fn plane_and_needs(lights: Vec<Light>) -> (FrameImages, bool) {
     let (scene, camera) = generated(Generator::Plane);
     let lighting = Lighting { lights, ambient: Vec3::ZERO, background: Vec3::ZERO, exposure: 1.0 };
     let mut renderer = SceneRenderer::new(gpu, &scene, &camera, &lighting, settings(64, 48)).unwrap();
-    let kinds = renderer.needs().light_kinds;
+    let kinds = renderer.needs().features.light_kinds;
     (render(&mut renderer, "deferred-1x1"), kinds)
 }
 

@@ -391,7 +391,7 @@ fn textures_of_different_sizes_packed_in_pages_look_as_if_each_had_a_layer() {
         let camera = Camera::look_at(DVec3::new(0.0, 0.0, 1.0), DVec3::ZERO, 90.0);
         let (gpu, _guard) = gpu();
         let mut renderer = SceneRenderer::new(gpu, &scene, &camera, &ambient, settings(SIDE, SIDE)).unwrap();
-        assert_eq!(renderer.needs().materials.texture_pages, packed);
+        assert_eq!(renderer.needs().features.texture_pages, packed);
         (render(&mut renderer, "deferred-1x1"), renderer.texture_bytes())
     };
     let tiled = UPRIGHT.map(|[u, v]| [u * 8.0, v * 8.0]);

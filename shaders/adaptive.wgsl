@@ -52,9 +52,6 @@ fn compact_index(texel: vec2<u32>) -> u32 {
     return block * 16u + (texel.y % 4u) * 4u + texel.x % 4u;
 }
 
-// Bits of a list entry that hold the rank; the pixel index takes the rest.
-const RANK_BITS: u32 = 4u;
-
 // The first rank a pixel of n samples shades after S. A pixel that takes its whole window is
 // shaded exactly like the reference: rank 0 again, at the reference's footprint, instead of
 // reusing S (whose footprint spans the pixel). Any other pixel reuses S, as the paper does.
@@ -62,16 +59,43 @@ fn first_extra_rank(n: u32) -> u32 {
     return select(1u, 0u, n == M * M);
 }
 
-// Rank → row-major window cell, from the paper's Fig. 3 matrices (adaptive.rs: sample_order).
-@group(2) @binding(0) var<storage, read> order: array<u32>;
+// Rank → row-major window cell, from the paper's Fig. 3 matrices: eight 4-bit cells per word,
+// rank 0 lowest (adaptive.rs: packed_sample_order).
+override ORDER_LOW: u32;
+override ORDER_HIGH: u32;
+
+fn window_cell(rank: u32) -> u32 {
+    let word = select(ORDER_HIGH, ORDER_LOW, rank < 8u);
+    return (word >> (4u * (rank % 8u))) & 15u;
+}
+
 // S, the shade-first image.
 @group(2) @binding(1) var first: texture_2d<f32>;
 // Samples per pixel, written by evaluate.
 @group(2) @binding(2) var counts: texture_2d<u32>;
 
 fn window_texel(pixel: vec2<i32>, rank: u32) -> vec2<i32> {
-    let cell = order[rank];
+    let cell = window_cell(rank);
     return pixel * i32(M) + vec2<i32>(i32(cell % M), i32(cell / M));
+}
+
+// A list entry holds what shading one extra sample needs, decoded with shifts alone: its
+// G-buffer texel (x, y) and its pixel's sample count n, as x | y << TEXEL_BITS | (n − 1) <<
+// 2·TEXEL_BITS. Storing the pixel and rank instead cost shade_extra a texture load (the count)
+// and a division by the image width per sample (scalar on lavapipe's SIMD lanes).
+const TEXEL_BITS: u32 = 14u;
+
+fn list_entry(texel: vec2<i32>, n: u32) -> u32 {
+    return u32(texel.x) | (u32(texel.y) << TEXEL_BITS) | ((n - 1u) << (2u * TEXEL_BITS));
+}
+
+fn entry_texel(entry: u32) -> vec2<i32> {
+    let mask = (1u << TEXEL_BITS) - 1u;
+    return vec2<i32>(i32(entry & mask), i32((entry >> TEXEL_BITS) & mask));
+}
+
+fn entry_count(entry: u32) -> u32 {
+    return (entry >> (2u * TEXEL_BITS)) + 1u;
 }
 
 // A sample's texture footprint, in G-buffer texels, when n samples share the pixel: the filter
@@ -222,7 +246,7 @@ fn scan_total() {
     totals[0] = total;
 }
 
-// Writes each pixel's first list index and its (pixel, rank) entries.
+// Writes each pixel's first list index and the entries of its extra samples.
 @compute @workgroup_size(64)
 fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
     let size = textureDimensions(counts);
@@ -236,7 +260,7 @@ fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
         let n = textureLoad(counts, vec2<u32>(x, y), 0).r;
         pixel_offsets[pixel] = offset;
         for (var rank = first_extra_rank(n); rank < n; rank += 1u) {
-            entries[offset] = (pixel << RANK_BITS) | rank;
+            entries[offset] = list_entry(window_texel(vec2<i32>(i32(x), i32(y)), rank), n);
             offset += 1u;
         }
     }
@@ -268,11 +292,7 @@ fn shade_extra(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32>
         return vec4<f32>(0.0);
     }
     let entry = list_entries[index];
-    let width = textureDimensions(counts).x;
-    let pixel_index = entry >> RANK_BITS;
-    let pixel = vec2<i32>(i32(pixel_index % width), i32(pixel_index / width));
-    let n = textureLoad(counts, pixel, 0).r;
-    return shade(window_texel(pixel, entry & ((1u << RANK_BITS) - 1u)), footprint(n));
+    return shade(entry_texel(entry), footprint(entry_count(entry)));
 }
 
 // ---- gather: S, the counts, each pixel's first list index and the extra samples

@@ -19,8 +19,14 @@ pub fn dither_matrix(m: u32) -> Option<&'static [u32]> {
     }
 }
 
+/// Bits of a list entry per G-buffer texel coordinate (`shaders/adaptive.wgsl`: list_entry):
+/// two coordinates and n − 1 < 16 fill 32 bits, so the G-buffer of a listed mode is at most
+/// 2¹⁴ = 16 384 texels on a side (lavapipe's largest texture side).
+pub const LIST_TEXEL_BITS: u32 = 14;
+const _: () = assert!(2 * LIST_TEXEL_BITS + 4 <= 32, "two coordinates and n − 1 < 16 fill 32 bits");
+
 /// Rank → window cell (row-major index `y·M + x`): the inverse permutation of the matrix. The
-/// shaders read this table, so it is defined once, here.
+/// shaders get it as [`packed_sample_order`], so it is defined once, here.
 pub fn sample_order(m: u32) -> Vec<u32> {
     let matrix = dither_matrix(m).unwrap_or(&[0]);
     let mut order = vec![0; matrix.len()];
@@ -28,6 +34,17 @@ pub fn sample_order(m: u32) -> Vec<u32> {
         order[rank as usize] = cell as u32;
     }
     order
+}
+
+/// [`sample_order`] as two words of eight 4-bit cells each, rank 0 in the lowest bits of the
+/// first: the shaders' `ORDER_LOW` and `ORDER_HIGH` constants. Decoding them is a shift and a
+/// mask, where a table in a storage buffer cost a load per sample of S and per list entry.
+pub fn packed_sample_order(m: u32) -> [u32; 2] {
+    let mut words = [0u32; 2];
+    for (rank, cell) in sample_order(m).into_iter().enumerate() {
+        words[rank / 8] |= cell << (4 * (rank % 8));
+    }
+    words
 }
 
 /// How the extra samples are shaded.
@@ -291,6 +308,17 @@ mod tests {
             sorted.sort_unstable();
             assert_eq!(sorted, (0..m * m).collect::<Vec<_>>());
             assert_eq!(order[0], first_cell, "rank 0 of the {m}×{m} matrix");
+            let [low, high] = packed_sample_order(m);
+            let expected = match m {
+                2 => [0x2130, 0],
+                3 => [0x7138_2064, 5],
+                _ => [0xD7F5_820A, 0xC6E4_93B1],
+            };
+            assert_eq!([low, high], expected, "{m}×{m}: the words the shaders decode");
+            for (rank, &cell) in order.iter().enumerate() {
+                let word = if rank < 8 { low } else { high };
+                assert_eq!((word >> (4 * (rank % 8))) & 15, cell, "{m}×{m} rank {rank}");
+            }
         }
     }
 

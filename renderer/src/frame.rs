@@ -151,7 +151,6 @@ pub(crate) fn frame_graph(
                     g.connect(evaluate, "counts", compact, "counts");
                     let extra = add(&mut g, ShadeExtraNode { m, stalled, list, shadows: cubes });
                     sources.feed(&mut g, extra);
-                    g.connect(evaluate, "counts", extra, "counts");
                     g.connect(compact, "entries", extra, "list_entries");
                     g.connect(compact, "totals", extra, "list_totals");
                     g.connect(compact, "pixel_offsets", gather, "list_offsets");

@@ -2,6 +2,7 @@
 //! under a typed key.
 
 use std::collections::HashMap;
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use crate::RenderError;
@@ -75,11 +76,12 @@ pub(crate) struct ComputeKey {
 pub(crate) struct Pipelines {
     device: wgpu::Device,
     features: Features,
+    /// Where shader files are read from; `None`: `shaders::compose`'s default.
+    shader_dir: Option<PathBuf>,
     shaders: HashMap<&'static str, Arc<Shader>>,
     group_layouts: HashMap<Vec<wgpu::BindGroupLayoutEntry>, wgpu::BindGroupLayout>,
     render: HashMap<RenderKey, wgpu::RenderPipeline>,
     compute: HashMap<ComputeKey, wgpu::ComputePipeline>,
-    sample_orders: HashMap<u32, wgpu::Buffer>,
 }
 
 impl Pipelines {
@@ -87,12 +89,20 @@ impl Pipelines {
         Pipelines {
             device,
             features,
+            shader_dir: None,
             shaders: HashMap::new(),
             group_layouts: HashMap::new(),
             render: HashMap::new(),
             compute: HashMap::new(),
-            sample_orders: HashMap::new(),
         }
+    }
+
+    /// Reads shader files from `dir` from now on, dropping what was compiled from the others.
+    pub fn read_shaders_from(&mut self, dir: PathBuf) {
+        self.shader_dir = Some(dir);
+        self.shaders.clear();
+        self.render.clear();
+        self.compute.clear();
     }
 
     pub fn device(&self) -> &wgpu::Device {
@@ -103,7 +113,7 @@ impl Pipelines {
         if let Some(shader) = self.shaders.get(file) {
             return Ok(Arc::clone(shader));
         }
-        let shader = Arc::new(Shader::new(&self.device, file, self.features)?);
+        let shader = Arc::new(Shader::new(&self.device, self.shader_dir.as_deref(), file, self.features)?);
         self.shaders.insert(file, Arc::clone(&shader));
         Ok(shader)
     }
@@ -171,22 +181,6 @@ impl Pipelines {
         });
         self.compute.insert(key, pipeline.clone());
         Ok(pipeline)
-    }
-
-    /// The dither order of an M×M window (`adaptive::sample_order`) as a storage buffer.
-    pub fn sample_order(&mut self, m: u32) -> wgpu::Buffer {
-        use wgpu::util::DeviceExt;
-        let device = &self.device;
-        self.sample_orders
-            .entry(m)
-            .or_insert_with(|| {
-                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("sample order"),
-                    contents: bytemuck::cast_slice(&crate::adaptive::sample_order(m)),
-                    usage: wgpu::BufferUsages::STORAGE,
-                })
-            })
-            .clone()
     }
 }
 

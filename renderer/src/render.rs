@@ -182,6 +182,14 @@ impl SceneRenderer {
         })
     }
 
+    /// Compiles shaders from the files in `dir` instead of the embedded ones (or
+    /// `AABENCH_SHADER_DIR`): two renderers of one scene can A/B two shader trees in one process.
+    /// The folder holds a whole tree (`lib/` included) that fits this build's bindings and
+    /// override constants. Modes prepared before keep their pipelines.
+    pub fn read_shaders_from(&mut self, dir: std::path::PathBuf) {
+        self.pipelines.read_shaders_from(dir);
+    }
+
     /// Bytes of the scene's texture array on the device (0 for an untextured scene).
     pub fn texture_bytes(&self) -> u64 {
         self.scene.texture_bytes

@@ -6,6 +6,7 @@
 //! shadow-casting lights no shadow cubes.
 
 use std::collections::HashSet;
+use std::path::{Path, PathBuf};
 
 use crate::RenderError;
 
@@ -43,13 +44,16 @@ pub fn pass_files() -> impl Iterator<Item = &'static str> {
 }
 
 /// Set to a folder to read shaders from disk instead of the embedded copies: edit WGSL and
-/// re-run without rebuilding, or A/B two shader trees in one process (each renderer reads the
-/// variable when it first compiles a file).
+/// re-run without rebuilding. (`SceneRenderer::read_shaders_from` gives one renderer its own
+/// folder, to A/B two shader trees in one process.)
 pub const SHADER_DIR_VARIABLE: &str = "AABENCH_SHADER_DIR";
 
-fn source(name: &str) -> Result<String, RenderError> {
-    if let Some(dir) = std::env::var_os(SHADER_DIR_VARIABLE) {
-        let path = std::path::Path::new(&dir).join(name);
+/// The text of shader file `name`: from `dir` when given, else from `AABENCH_SHADER_DIR` when
+/// set, else the embedded copy.
+fn source(dir: Option<&Path>, name: &str) -> Result<String, RenderError> {
+    let dir = dir.map(Path::to_path_buf).or_else(|| std::env::var_os(SHADER_DIR_VARIABLE).map(PathBuf::from));
+    if let Some(dir) = dir {
+        let path = dir.join(name);
         return std::fs::read_to_string(&path)
             .map_err(|e| RenderError::Shader(format!("{}: {e}", path.display())));
     }
@@ -147,16 +151,22 @@ impl Features {
 /// The text of `name` with its includes spliced in and its conditional lines resolved for
 /// `features`, ready for naga.
 pub fn compose(name: &str, features: Features) -> Result<String, RenderError> {
+    compose_from(None, name, features)
+}
+
+/// [`compose`], reading the files from `dir` when given.
+pub fn compose_from(dir: Option<&Path>, name: &str, features: Features) -> Result<String, RenderError> {
     if !features.is_consistent() {
         return Err(RenderError::Shader(format!("{features:?}: texture features need `textured`")));
     }
     let mut out = String::new();
     let mut seen = HashSet::new();
-    splice(name, features, &mut out, &mut seen)?;
+    splice(dir, name, features, &mut out, &mut seen)?;
     Ok(out)
 }
 
 fn splice(
+    dir: Option<&Path>,
     name: &str,
     features: Features,
     out: &mut String,
@@ -170,7 +180,7 @@ fn splice(
     };
     // Whether each open conditional keeps its lines, innermost last.
     let mut open: Vec<bool> = Vec::new();
-    for (number, line) in source(name)?.lines().enumerate() {
+    for (number, line) in source(dir, name)?.lines().enumerate() {
         let directive = line.trim();
         let condition = |rest: &str| {
             features
@@ -193,7 +203,7 @@ fn splice(
             if include.is_empty() {
                 return Err(error(number, "#include needs a file name"));
             }
-            splice(include, features, out, seen)?;
+            splice(dir, include, features, out, seen)?;
         } else {
             out.push_str(line);
             out.push('\n');

@@ -126,10 +126,10 @@ fn constants_shared_with_rust_agree() {
     ] {
         assert_eq!(constant("shade.wgsl", name), naga::Literal::U32(value as u32), "{name}");
     }
-    // A list entry packs a rank below M² ≤ 16 and the index of a pixel of up to 4096×4096.
-    let naga::Literal::U32(rank_bits) = constant("adaptive.wgsl", "RANK_BITS") else { panic!("u32") };
-    assert!(1u64 << rank_bits >= 16, "{rank_bits} bits cannot hold 16 ranks");
-    assert!(32 - rank_bits >= 24, "{} bits cannot index 4096×4096 pixels", 32 - rank_bits);
+    // A list entry packs two texel coordinates and n − 1 < 16 into 32 bits (adaptive.rs checks
+    // that they fit).
+    let texel_bits = aabench_renderer::adaptive::LIST_TEXEL_BITS;
+    assert_eq!(constant("adaptive.wgsl", "TEXEL_BITS"), naga::Literal::U32(texel_bits));
 }
 
 #[test]
@@ -138,4 +138,18 @@ fn includes_are_spliced_once_and_bad_names_fail() {
     assert_eq!(text.matches("struct Frame {").count(), 1);
     assert!(!text.contains('#'), "a directive survived composition");
     assert!(shaders::compose("missing.wgsl", Features::ALL).is_err());
+}
+
+#[test]
+fn a_shader_folder_replaces_the_embedded_files_includes_and_all() {
+    let dir = std::env::temp_dir().join(format!("aabench-shader-folder-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("lib")).unwrap();
+    std::fs::write(dir.join("pass.wgsl"), "#include \"lib/common.wgsl\"\nfn pass_body() {}\n").unwrap();
+    std::fs::write(dir.join("lib/common.wgsl"), "fn folder_only() {}\n").unwrap();
+    let text = shaders::compose_from(Some(&dir), "pass.wgsl", Features::ALL).unwrap();
+    assert_eq!(text, "fn folder_only() {}\nfn pass_body() {}\n");
+    // The folder's files stand alone: the embedded pass shaders are not there.
+    let error = shaders::compose_from(Some(&dir), "shade.wgsl", Features::ALL).unwrap_err().to_string();
+    assert!(error.contains(&dir.join("shade.wgsl").display().to_string()), "{error}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

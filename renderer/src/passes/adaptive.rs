@@ -3,8 +3,7 @@
 use super::{
     BuildContext, Compute, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, gbuffer, shading_inputs,
 };
-use crate::adaptive::DepthMetric;
-use crate::bindings::Bound;
+use crate::adaptive::{DepthMetric, LIST_TEXEL_BITS, packed_sample_order};
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
 use crate::mode::Metrics;
 use crate::pipelines::Constants;
@@ -26,13 +25,10 @@ fn counts() -> Resource {
     Resource::texture(COUNT_FORMAT, Extent::Output)
 }
 
+/// The window's side and its dither order.
 fn window(m: u32) -> Constants {
-    Constants::new().with("M", m)
-}
-
-/// The dither order, owned by the passes that read it: constant data, not a frame resource.
-fn order(ctx: &mut BuildContext, m: u32) -> [(&'static str, Bound); 1] {
-    [("order", Bound::Buffer(ctx.pipelines.sample_order(m)))]
+    let [low, high] = packed_sample_order(m);
+    Constants::new().with("M", m).with("ORDER_LOW", low).with("ORDER_HIGH", high)
 }
 
 /// The list of extra samples: at most M² entries per pixel (a full window shades rank 0
@@ -46,6 +42,17 @@ pub(crate) struct List {
 
 impl List {
     pub fn new(m: u32, width: u32, height: u32, limits: &wgpu::Limits) -> Result<List, RenderError> {
+        let largest_side = 1u32 << LIST_TEXEL_BITS;
+        let side = width.max(height).max(1);
+        if u64::from(m) * u64::from(side) > u64::from(largest_side) {
+            let fits = (largest_side / side).min(4);
+            let largest =
+                if fits >= 2 { format!("the largest M that fits is {fits}") } else { "no M fits".into() };
+            return Err(RenderError::Limit(format!(
+                "adaptive-{m}x{m} at {width}×{height}: list entries address G-buffer sides up to \
+                 {largest_side} texels, so {largest}"
+            )));
+        }
         let capacity = u64::from(m * m) * u64::from(width) * u64::from(height);
         let compact_width = limits.max_texture_dimension_2d / 4 * 4;
         let compact_height = capacity.div_ceil(4 * u64::from(compact_width)).max(1) * 4;
@@ -93,8 +100,7 @@ impl Node for ShadeFirstNode {
         let constants = ctx.shading_constants(self.stalled).extend(&window(self.m));
         let program =
             Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some("shade_first"), constants };
-        let owned = order(ctx, self.m);
-        Ok(Box::new(ctx.screen(io, "shade_first", program, "first", FULLSCREEN.1, &owned)?))
+        Ok(Box::new(ctx.screen(io, "shade_first", program, "first", FULLSCREEN.1)?))
     }
 }
 
@@ -135,7 +141,7 @@ impl Node for EvaluateNode {
             .flag("USE_SHADING", self.metrics != Metrics::Geometry)
             .flag("FORCE_ALL", s.force_all_samples);
         let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some("evaluate"), constants };
-        Ok(Box::new(ctx.screen(io, "evaluate", program, "counts", FULLSCREEN.1, &[])?))
+        Ok(Box::new(ctx.screen(io, "evaluate", program, "counts", FULLSCREEN.1)?))
     }
 }
 
@@ -187,7 +193,6 @@ impl Node for ShadeExtraNode {
     fn decl(&self) -> PassDecl {
         let mut ports = shading_inputs(self.shadows);
         ports.extend([
-            Port::new("counts", counts(), Access::Loaded),
             Port::new("list_entries", buffer(4 * self.list.capacity), Access::StorageRead),
             Port::new("list_totals", buffer(4), Access::StorageRead),
             Port::new("extra", self.list.extra(), Access::Attachment),
@@ -200,8 +205,7 @@ impl Node for ShadeExtraNode {
             ctx.shading_constants(self.stalled).extend(&window(self.m)).extend(&self.list.constants());
         let program =
             Program { shader: SHADER, vertex: COMPACT_ROWS.0, fragment: Some("shade_extra"), constants };
-        let owned = order(ctx, self.m);
-        Ok(Box::new(ctx.screen(io, "shade_extra", program, "extra", COMPACT_ROWS.1, &owned)?))
+        Ok(Box::new(ctx.screen(io, "shade_extra", program, "extra", COMPACT_ROWS.1)?))
     }
 }
 
@@ -248,7 +252,28 @@ impl Node for GatherNode {
             }
         };
         let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some(entry), constants };
-        let owned = order(ctx, self.m);
-        Ok(Box::new(ctx.screen(io, "gather", program, "color", FULLSCREEN.1, &owned)?))
+        Ok(Box::new(ctx.screen(io, "gather", program, "color", FULLSCREEN.1)?))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn list_entries_address_sides_up_to_the_texel_bits() {
+        // A device whose targets and buffers are larger than any G-buffer a list can address.
+        let limits = wgpu::Limits {
+            max_texture_dimension_2d: 1 << 16,
+            max_storage_buffer_binding_size: u64::MAX,
+            max_buffer_size: u64::MAX,
+            ..wgpu::Limits::default()
+        };
+        assert!(List::new(4, 4096, 16, &limits).is_ok());
+        assert!(List::new(2, 16, 8192, &limits).is_ok());
+        let error = List::new(4, 4097, 16, &limits).unwrap_err().to_string();
+        assert!(error.contains("16384 texels, so the largest M that fits is 3"), "{error}");
+        let error = List::new(2, 16, 8193, &limits).unwrap_err().to_string();
+        assert!(error.contains("16384 texels, so no M fits"), "{error}");
     }
 }

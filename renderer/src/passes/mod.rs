@@ -87,7 +87,7 @@ impl Io {
         }
     }
 
-    fn lookup(&self, name: &str, scene: &GpuScene, owned: &[(&str, Bound)]) -> Option<Bound> {
+    fn lookup(&self, name: &str, scene: &GpuScene) -> Option<Bound> {
         if let Some((port, allocated)) = self.ports.get(name) {
             return port.access.is_binding().then(|| match allocated {
                 Allocated::Buffer(buffer) => Bound::Buffer(buffer.clone()),
@@ -98,7 +98,7 @@ impl Io {
                 },
             });
         }
-        owned.iter().find(|(n, _)| *n == name).map(|(_, b)| b.clone()).or_else(|| scene.binding(name))
+        scene.binding(name)
     }
 
     /// Fails when a port declared for binding was bound by none of the pass's shaders.
@@ -149,11 +149,10 @@ impl BuildContext<'_> {
         shader: &'static str,
         entries: &[&str],
         stages: Stages,
-        owned: &[(&str, Bound)],
     ) -> Result<(LayoutEntries, Groups), RenderError> {
         let bindings = self.pipelines.shader(shader)?.bindings(entries)?;
         let scene = self.scene;
-        let lookup = |name: &str| io.lookup(name, scene, owned);
+        let lookup = |name: &str| io.lookup(name, scene);
         let mut bound = BTreeSet::new();
         let resolved = bindings::resolve(io.pass, &bindings, stages, &lookup, &mut bound)?;
         io.bound.extend(bound);
@@ -182,7 +181,6 @@ impl BuildContext<'_> {
         io: &mut Io,
         program: &Program,
         raster: Raster,
-        owned: &[(&str, Bound)],
         create: impl FnOnce(
             &wgpu::Device,
             &wgpu::PipelineLayout,
@@ -191,7 +189,7 @@ impl BuildContext<'_> {
         ) -> wgpu::RenderPipeline,
     ) -> Result<Bundle<wgpu::RenderPipeline>, RenderError> {
         let entries: Vec<&str> = std::iter::once(program.vertex).chain(program.fragment).collect();
-        let (layout, groups) = self.resolve(io, program.shader, &entries, Stages::Render, owned)?;
+        let (layout, groups) = self.resolve(io, program.shader, &entries, Stages::Render)?;
         let key = RenderKey {
             shader: program.shader,
             vertex: program.vertex,
@@ -214,19 +212,13 @@ impl BuildContext<'_> {
         program: Program,
         target: &str,
         vertices: u32,
-        owned: &[(&str, Bound)],
     ) -> Result<Screen, RenderError> {
         let target = io.texture(target)?;
         let format = target.format();
-        let bound = self.render_pipeline(
-            io,
-            &program,
-            Raster::Screen(format),
-            owned,
-            |device, layout, module, key| {
+        let bound =
+            self.render_pipeline(io, &program, Raster::Screen(format), |device, layout, module, key| {
                 crate::pipelines::screen_pipeline(device, layout, module, key, format)
-            },
-        )?;
+            })?;
         Ok(Screen {
             name,
             pipeline: bound.pipeline,
@@ -245,7 +237,7 @@ impl BuildContext<'_> {
         constants: Constants,
         workgroups: [u32; 3],
     ) -> Result<ComputeStep, RenderError> {
-        let (layout, groups) = self.resolve(io, shader, &[entry], Stages::Compute, &[])?;
+        let (layout, groups) = self.resolve(io, shader, &[entry], Stages::Compute)?;
         let pipeline = self.pipelines.compute(ComputeKey { shader, entry, constants, layout })?;
         Ok(ComputeStep { pipeline, groups, workgroups })
     }

@@ -8,7 +8,8 @@
 //   shade_extra   shades the list
 //   gather        averages S with the pixel's extra samples (gather_loop shades them itself in a
 //                 loop instead: the paper's simplest variant, kept for comparison); a pixel that
-//                 takes all M² samples leaves S out and equals the reference
+//                 takes all M² samples leaves S out and equals the reference. The `-area`
+//                 variant weights each sample by the share of the pixel nearest to it
 //
 // The metric is specified by its CPU twin in renderer/src/adaptive.rs; keep the two in step.
 // Passes bind group 2 by name (renderer/src/bindings.rs): each variable below is a port of the
@@ -299,10 +300,43 @@ fn shade_extra(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32>
 
 @group(2) @binding(9) var<storage, read> list_offsets: array<u32>;
 @group(2) @binding(10) var extra_samples: texture_2d<f32>;
+// Entry (n − 1)·M² + rank: the share of the pixel nearest to sample `rank` among the first n
+// (adaptive.rs: area_weights). Read where AREA_WEIGHTS is set.
+@group(2) @binding(11) var<storage, read> area_weights: array<f32>;
 
-// S where the pixel reuses it, else nothing: the start of the pixel's sum.
-fn gather_start(pixel: vec2<i32>, first_rank: u32) -> vec4<f32> {
-    return select(vec4<f32>(0.0), textureLoad(first, pixel, 0), first_rank == 1u);
+// Average each pixel's samples weighted by the area each stands for (the `-area` variant),
+// instead of alike (the paper). A pixel of 1 or M² samples is averaged alike either way.
+override AREA_WEIGHTS: bool;
+
+// A pixel's samples, summed as they arrive and averaged at the end: alike, in the paper's
+// order of operations, or weighted by area. `first_rank` is 1 where S is reused, else 0.
+struct Average {
+    sum: vec4<f32>,
+    n: u32,
+    weighted: bool,
+}
+
+// The paper's path keeps its exact operations (no multiplication by 1) and reads no weight.
+fn start_average(pixel: vec2<i32>, n: u32, first_rank: u32) -> Average {
+    // Area weights differ from 1/n only for 1 < n < M², where S is always reused.
+    let weighted = AREA_WEIGHTS && first_rank == 1u && n > 1u;
+    let s = select(vec4<f32>(0.0), textureLoad(first, pixel, 0), first_rank == 1u);
+    if weighted {
+        return Average(s * area_weights[(n - 1u) * M * M], n, true);
+    }
+    return Average(s, n, false);
+}
+
+fn add_sample(average: ptr<function, Average>, rank: u32, sample: vec4<f32>) {
+    if (*average).weighted {
+        (*average).sum += sample * area_weights[((*average).n - 1u) * M * M + rank];
+    } else {
+        (*average).sum += sample;
+    }
+}
+
+fn finish_average(average: Average) -> vec4<f32> {
+    return select(average.sum / f32(average.n), average.sum, average.weighted);
 }
 
 @fragment
@@ -310,14 +344,13 @@ fn gather(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
     let pixel = vec2<i32>(position.xy);
     let n = textureLoad(counts, pixel, 0).r;
     let first_rank = first_extra_rank(n);
-    var sum = gather_start(pixel, first_rank);
+    var average = start_average(pixel, n, first_rank);
     let width = textureDimensions(first).x;
     let base = list_offsets[u32(pixel.y) * width + u32(pixel.x)];
     for (var j = 0u; j < n - first_rank; j += 1u) {
-        let index = base + j;
-        sum += textureLoad(extra_samples, compact_texel(index), 0);
+        add_sample(&average, first_rank + j, textureLoad(extra_samples, compact_texel(base + j), 0));
     }
-    return sum / f32(n);
+    return finish_average(average);
 }
 
 @fragment
@@ -325,10 +358,10 @@ fn gather_loop(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32>
     let pixel = vec2<i32>(position.xy);
     let n = textureLoad(counts, pixel, 0).r;
     let first_rank = first_extra_rank(n);
-    var sum = gather_start(pixel, first_rank);
+    var average = start_average(pixel, n, first_rank);
     let scale = footprint(n);
     for (var rank = first_rank; rank < n; rank += 1u) {
-        sum += shade(window_texel(pixel, rank), scale);
+        add_sample(&average, rank, shade(window_texel(pixel, rank), scale));
     }
-    return sum / f32(n);
+    return finish_average(average);
 }

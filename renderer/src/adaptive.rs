@@ -47,6 +47,79 @@ pub fn packed_sample_order(m: u32) -> [u32; 2] {
     words
 }
 
+/// How a pixel's samples are averaged (a mode's `-area` suffix picks `Area`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Weights {
+    /// Every sample alike, as the paper does.
+    Equal,
+    /// Each sample by the area of the pixel nearer to it than to the pixel's other samples (its
+    /// Voronoi cell within the pixel): a lopsided prefix such as 3×3's centre and lower-left
+    /// corner no longer lets the corner stand for half the pixel. A pixel with one sample or all
+    /// M² is averaged exactly as under `Equal`.
+    Area,
+}
+
+/// The area weights of every prefix of the M×M dither order: entry `(n − 1)·M² + rank` is the
+/// share of the pixel whose nearest sample, among the first n, is that of `rank` (0 past n).
+/// Each row sums to 1. Cells are found exactly, by clipping the pixel with the bisector of each
+/// pair of samples (points equally near two samples, a set of measure zero, count for both).
+/// M is 2, 3 or 4.
+pub fn area_weights(m: u32) -> Vec<f32> {
+    assert!(dither_matrix(m).is_some(), "no dither order for M = {m}");
+    let cells = (m * m) as usize;
+    let order = sample_order(m);
+    let centre = |rank: usize| {
+        let cell = order[rank];
+        [(f64::from(cell % m) + 0.5) / f64::from(m), (f64::from(cell / m) + 0.5) / f64::from(m)]
+    };
+    let mut table = vec![0.0; cells * cells];
+    for n in 1..=cells {
+        for rank in 0..n {
+            let p = centre(rank);
+            let mut cell = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+            for other in (0..n).filter(|&o| o != rank) {
+                cell = clip_nearer(&cell, p, centre(other));
+            }
+            table[(n - 1) * cells + rank] = polygon_area(&cell) as f32;
+        }
+    }
+    table
+}
+
+/// The part of convex polygon `polygon` nearer to `p` than to `q` (Sutherland–Hodgman against
+/// their bisector).
+fn clip_nearer(polygon: &[[f64; 2]], p: [f64; 2], q: [f64; 2]) -> Vec<[f64; 2]> {
+    // side(x) = |x − q|² − |x − p|², affine in x: ≥ 0 where x is nearer p.
+    let side = |x: [f64; 2]| {
+        2.0 * (x[0] * (p[0] - q[0]) + x[1] * (p[1] - q[1])) + (q[0] * q[0] + q[1] * q[1])
+            - (p[0] * p[0] + p[1] * p[1])
+    };
+    let mut out = Vec::with_capacity(polygon.len() + 1);
+    for (i, &a) in polygon.iter().enumerate() {
+        let b = polygon[(i + 1) % polygon.len()];
+        let (sa, sb) = (side(a), side(b));
+        if sa >= 0.0 {
+            out.push(a);
+        }
+        if (sa >= 0.0) != (sb >= 0.0) {
+            let t = sa / (sa - sb);
+            out.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+        }
+    }
+    out
+}
+
+/// The shoelace formula.
+fn polygon_area(polygon: &[[f64; 2]]) -> f64 {
+    let twice: f64 = (0..polygon.len())
+        .map(|i| {
+            let (a, b) = (polygon[i], polygon[(i + 1) % polygon.len()]);
+            a[0] * b[1] - b[0] * a[1]
+        })
+        .sum();
+    twice.abs() / 2.0
+}
+
 /// How the extra samples are shaded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ExtraSamples {
@@ -320,6 +393,36 @@ mod tests {
                 assert_eq!((word >> (4 * (rank % 8))) & 15, cell, "{m}×{m} rank {rank}");
             }
         }
+    }
+
+    #[test]
+    fn area_weights_are_the_voronoi_shares_of_each_prefix() {
+        for m in 2..=4u32 {
+            let cells = (m * m) as usize;
+            let table = area_weights(m);
+            for n in 1..=cells {
+                let row = &table[(n - 1) * cells..n * cells];
+                let sum: f64 = row.iter().map(|&w| f64::from(w)).sum();
+                assert!((sum - 1.0).abs() < 1e-6, "{m}×{m} n = {n}: the weights sum to {sum}");
+                assert!(row[..n].iter().all(|&w| w > 0.0), "{m}×{m} n = {n}: {row:?}");
+                assert!(row[n..].iter().all(|&w| w == 0.0), "{m}×{m} n = {n}: {row:?}");
+            }
+            assert_eq!(table[0], 1.0);
+            let full = &table[(cells - 1) * cells..];
+            assert!(full.iter().all(|&w| (w - 1.0 / cells as f32).abs() < 1e-6), "{m}×{m}: {full:?}");
+        }
+        // 3×3: the centre (1/2, 1/2) and the lower-left cell's (1/6, 5/6), y down, meet on the
+        // line y = x + 1/3, which leaves the corner the triangle (0, 1/3), (0, 1), (2/3, 1): 2/9.
+        let table = area_weights(3);
+        assert!(
+            (table[9] - 7.0 / 9.0).abs() < 1e-6 && (table[10] - 2.0 / 9.0).abs() < 1e-6,
+            "{:?}",
+            &table[9..11]
+        );
+        // 2×2: two diagonal samples halve the pixel; a third takes an eighth from each.
+        let table = area_weights(2);
+        assert_eq!(&table[4..6], &[0.5, 0.5]);
+        assert!(table[8..11].iter().zip([0.375, 0.375, 0.25]).all(|(a, b)| (a - b).abs() < 1e-6));
     }
 
     #[test]

@@ -333,7 +333,11 @@ mod tests {
         let shader = Shader::new(&gpu.device, None, "adaptive.wgsl", Features::ALL).unwrap();
         let bindings = shader.bindings(&["fullscreen", "gather"]).unwrap();
         let names: Vec<&str> = bindings.iter().map(|b| b.name.as_str()).collect();
-        assert_eq!(names, ["first", "counts", "list_offsets", "extra_samples"], "{bindings:?}");
+        assert_eq!(
+            names,
+            ["first", "counts", "list_offsets", "extra_samples", "area_weights"],
+            "{bindings:?}"
+        );
         let first = texture(&gpu, wgpu::TextureFormat::Rgba16Float);
         let counts = texture(&gpu, wgpu::TextureFormat::R8Uint);
         let offsets = gpu.device.create_buffer(&wgpu::BufferDescriptor {
@@ -350,14 +354,14 @@ mod tests {
                     Some(Bound::Texture { texture: a.clone(), filterable: false, view_format: None })
                 }
                 "counts" => Some(Bound::Texture { texture: b.clone(), filterable: false, view_format: None }),
-                "list_offsets" => Some(Bound::Buffer(offsets.clone())),
+                "list_offsets" | "area_weights" => Some(Bound::Buffer(offsets.clone())),
                 _ => None,
             }
         };
         let mut bound = BTreeSet::new();
         let resolved = resolve("gather", &bindings, Stages::Render, &offer(false), &mut bound).unwrap();
-        assert_eq!(resolved.len(), 4);
-        assert_eq!(bound.len(), 4);
+        assert_eq!(resolved.len(), 5);
+        assert_eq!(bound.len(), 5);
         let error =
             resolve("gather", &bindings, Stages::Render, &offer(true), &mut bound).unwrap_err().to_string();
         assert!(error.contains("gather: first is declared") && error.contains("R8Uint"), "{error}");

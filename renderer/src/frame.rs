@@ -125,7 +125,7 @@ pub(crate) fn frame_graph(
                 resolve
             }
         }
-        Technique::Adaptive(metrics) => {
+        Technique::Adaptive(metrics, weights) => {
             let first = add(&mut g, ShadeFirstNode { m, stalled, shadows: cubes });
             sources.feed(&mut g, first);
             g.retain(first, "first", Output::First);
@@ -141,7 +141,7 @@ pub(crate) fn frame_graph(
                 Extra::List(list) => Some(list),
                 Extra::Loop { .. } => None,
             };
-            let gather = add(&mut g, GatherNode { m, extra });
+            let gather = add(&mut g, GatherNode { m, extra, weights });
             g.connect(first, "first", gather, "first");
             g.connect(evaluate, "counts", gather, "counts");
             match list {

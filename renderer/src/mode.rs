@@ -1,7 +1,10 @@
-//! Render modes and their ids: `deferred-1x1`, `reference-4x4-stalled`, `adaptive-3x3-geometry`.
+//! Render modes and their ids: `deferred-1x1`, `reference-4x4-stalled`, `adaptive-3x3-geometry`,
+//! `adaptive-3x3-area`.
 
 use std::fmt;
 use std::str::FromStr;
+
+pub use crate::adaptive::Weights;
 
 /// Which of the adaptive metrics decide the sample count (the paper's Fig. 8 ablation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -22,8 +25,9 @@ pub enum Technique {
     Fxaa,
     /// All M² samples of an M·w × M·h G-buffer shaded, box-filtered.
     Reference,
-    /// Holländer et al. 2013: the same G-buffer, samples shaded where the metrics ask.
-    Adaptive(Metrics),
+    /// Holländer et al. 2013: the same G-buffer, samples shaded where the metrics ask, averaged
+    /// with the weights.
+    Adaptive(Metrics, Weights),
 }
 
 /// A technique at a supersampling factor, with or without the expensive (stalled) shader.
@@ -54,22 +58,28 @@ impl Mode {
         modes
     }
 
-    /// Adaptive 2×2–4×4 with both metrics, plain and stalled.
+    /// Adaptive 2×2–4×4 as the paper has it, plain and stalled.
     pub fn adaptive_modes() -> Vec<Mode> {
-        Self::with_metrics(Metrics::Both)
+        Self::adaptive(Metrics::Both, Weights::Equal)
     }
 
     /// Adaptive 2×2–4×4 with one metric each: the ablation of the paper's Fig. 8.
     pub fn ablation_modes() -> Vec<Mode> {
-        let mut modes = Self::with_metrics(Metrics::Geometry);
-        modes.extend(Self::with_metrics(Metrics::Shading));
+        let mut modes = Self::adaptive(Metrics::Geometry, Weights::Equal);
+        modes.extend(Self::adaptive(Metrics::Shading, Weights::Equal));
         modes
     }
 
-    fn with_metrics(metrics: Metrics) -> Vec<Mode> {
+    /// Adaptive 2×2–4×4 beyond the paper, beside it: samples weighted by their area.
+    pub fn variant_modes() -> Vec<Mode> {
+        Self::adaptive(Metrics::Both, Weights::Area)
+    }
+
+    fn adaptive(metrics: Metrics, weights: Weights) -> Vec<Mode> {
+        let technique = Technique::Adaptive(metrics, weights);
         [false, true]
             .into_iter()
-            .flat_map(|stalled| (2..=4).map(move |m| Mode::new(Technique::Adaptive(metrics), m, stalled)))
+            .flat_map(|stalled| (2..=4).map(move |m| Mode::new(technique, m, stalled)))
             .collect()
     }
 }
@@ -81,13 +91,18 @@ impl fmt::Display for Mode {
             // FXAA has no supersampling factor to name.
             Technique::Fxaa => return f.write_str(if self.stalled { "fxaa-stalled" } else { "fxaa" }),
             Technique::Reference => "reference",
-            Technique::Adaptive(_) => "adaptive",
+            Technique::Adaptive(..) => "adaptive",
         };
         write!(f, "{name}-{m}x{m}", m = self.m)?;
-        match self.technique {
-            Technique::Adaptive(Metrics::Geometry) => f.write_str("-geometry")?,
-            Technique::Adaptive(Metrics::Shading) => f.write_str("-shading")?,
-            _ => {}
+        if let Technique::Adaptive(metrics, weights) = self.technique {
+            match metrics {
+                Metrics::Both => {}
+                Metrics::Geometry => f.write_str("-geometry")?,
+                Metrics::Shading => f.write_str("-shading")?,
+            }
+            if weights == Weights::Area {
+                f.write_str("-area")?;
+            }
         }
         if self.stalled {
             f.write_str("-stalled")?;
@@ -99,7 +114,7 @@ impl fmt::Display for Mode {
 /// A mode id that does not parse, with the reason.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry)"
+    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry, adaptive-4x4-area)"
 )]
 pub struct ModeError {
     pub id: String,
@@ -137,12 +152,18 @@ impl FromStr for Mode {
         if stalled {
             rest.pop();
         }
+        let weights = if technique == "adaptive" && rest.last() == Some(&"area") {
+            rest.pop();
+            Weights::Area
+        } else {
+            Weights::Equal
+        };
         let technique = match (technique, rest.as_slice()) {
             ("deferred", []) => Technique::Deferred,
             ("reference", []) => Technique::Reference,
-            ("adaptive", []) => Technique::Adaptive(Metrics::Both),
-            ("adaptive", ["geometry"]) => Technique::Adaptive(Metrics::Geometry),
-            ("adaptive", ["shading"]) => Technique::Adaptive(Metrics::Shading),
+            ("adaptive", []) => Technique::Adaptive(Metrics::Both, weights),
+            ("adaptive", ["geometry"]) => Technique::Adaptive(Metrics::Geometry, weights),
+            ("adaptive", ["shading"]) => Technique::Adaptive(Metrics::Shading, weights),
             ("deferred" | "reference" | "adaptive", _) => return Err(fail("unexpected suffix")),
             ("fxaa", _) => return Err(fail("FXAA has no size: `fxaa` or `fxaa-stalled`")),
             _ => return Err(fail("the technique must be deferred, fxaa, reference or adaptive")),
@@ -151,7 +172,7 @@ impl FromStr for Mode {
             Technique::Deferred | Technique::Fxaa => 1..=1,
             // reference-1x1 exists to check that the supersampling path equals deferred-1x1.
             Technique::Reference => 1..=4,
-            Technique::Adaptive(_) => 2..=4,
+            Technique::Adaptive(..) => 2..=4,
         };
         if !allowed.contains(&m) {
             return Err(fail(&format!("M must be in {}..={}", allowed.start(), allowed.end())));
@@ -174,12 +195,18 @@ mod tests {
 
     #[test]
     fn every_listed_mode_round_trips_through_its_id() {
-        let all = [Mode::baseline_modes(), Mode::adaptive_modes(), Mode::ablation_modes()].concat();
-        assert_eq!(all.len(), 10 + 6 + 12);
+        let all =
+            [Mode::baseline_modes(), Mode::adaptive_modes(), Mode::ablation_modes(), Mode::variant_modes()]
+                .concat();
+        assert_eq!(all.len(), 10 + 6 + 12 + 6);
         assert!(all.iter().any(|m| m.to_string() == "fxaa-stalled"));
+        assert!(all.iter().any(|m| m.to_string() == "adaptive-3x3-area-stalled"));
         for mode in all {
             assert_eq!(mode.to_string().parse::<Mode>(), Ok(mode));
         }
+        let combined = "adaptive-2x2-geometry-area".parse::<Mode>().unwrap();
+        assert_eq!(combined.technique, Technique::Adaptive(Metrics::Geometry, Weights::Area));
+        assert_eq!(combined.to_string(), "adaptive-2x2-geometry-area");
     }
 
     #[test]
@@ -195,6 +222,8 @@ mod tests {
         check("fxaa3", "missing the size");
         check("fxaa-2x2", "FXAA has no size");
         check("reference-2x2-geometry", "unexpected suffix");
+        check("reference-2x2-area", "unexpected suffix");
+        check("adaptive-2x2-area-geometry", "unexpected suffix");
         check("supersample-2x2", "technique must be");
     }
 }

@@ -82,6 +82,7 @@ pub(crate) struct Pipelines {
     group_layouts: HashMap<Vec<wgpu::BindGroupLayoutEntry>, wgpu::BindGroupLayout>,
     render: HashMap<RenderKey, wgpu::RenderPipeline>,
     compute: HashMap<ComputeKey, wgpu::ComputePipeline>,
+    area_weights: HashMap<u32, wgpu::Buffer>,
 }
 
 impl Pipelines {
@@ -94,6 +95,7 @@ impl Pipelines {
             group_layouts: HashMap::new(),
             render: HashMap::new(),
             compute: HashMap::new(),
+            area_weights: HashMap::new(),
         }
     }
 
@@ -181,6 +183,23 @@ impl Pipelines {
         });
         self.compute.insert(key, pipeline.clone());
         Ok(pipeline)
+    }
+
+    /// The area weights of the M×M dither order's prefixes (`adaptive::area_weights`) as a
+    /// storage buffer.
+    pub fn area_weights(&mut self, m: u32) -> wgpu::Buffer {
+        use wgpu::util::DeviceExt;
+        let device = &self.device;
+        self.area_weights
+            .entry(m)
+            .or_insert_with(|| {
+                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("area weights"),
+                    contents: bytemuck::cast_slice(&crate::adaptive::area_weights(m)),
+                    usage: wgpu::BufferUsages::STORAGE,
+                })
+            })
+            .clone()
     }
 }
 

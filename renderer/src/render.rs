@@ -255,7 +255,7 @@ impl SceneRenderer {
         let stall = self.settings.stall_iterations;
         let looped = self.settings.adaptive.extra_samples == crate::ExtraSamples::Loop;
         let limit = crate::loop_stall_limit(mode.m);
-        if looped && mode.stalled && matches!(mode.technique, Technique::Adaptive(_)) && stall > limit {
+        if looped && mode.stalled && matches!(mode.technique, Technique::Adaptive(..)) && stall > limit {
             return Err(RenderError::Limit(format!(
                 "{mode} with extra samples shaded in a loop honours at most {limit} stall iterations \
                  (lavapipe ends an invocation after 65 535 loop iterations, and the loop shades up to \

@@ -203,15 +203,58 @@ fn gpu_sample_counts_match_the_cpu_twin() {
 
 #[test]
 fn compact_and_loop_shading_agree_within_one_step() {
-    let mut images = Vec::new();
-    for strategy in [ExtraSamples::Compact, ExtraSamples::Loop] {
-        let mut s = settings(128, 96);
-        s.adaptive.extra_samples = strategy;
-        let (mut renderer, _gpu) = renderer(Generator::Atrium, &lit(), s);
-        images.push(render(&mut renderer, "adaptive-3x3"));
+    // Both the paper's average and the area-weighted one, whose weights follow each sample's rank.
+    for mode in ["adaptive-3x3", "adaptive-4x4-area"] {
+        let mut images = Vec::new();
+        for strategy in [ExtraSamples::Compact, ExtraSamples::Loop] {
+            let mut s = settings(128, 96);
+            s.adaptive.extra_samples = strategy;
+            let (mut renderer, _gpu) = renderer(Generator::Atrium, &lit(), s);
+            images.push(render(&mut renderer, mode));
+        }
+        assert_eq!(counts(&images[0]), counts(&images[1]), "{mode}");
+        assert!(max_step(&images[0], &images[1]) <= 1, "{mode}");
     }
-    assert_eq!(counts(&images[0]), counts(&images[1]));
-    assert!(max_step(&images[0], &images[1]) <= 1);
+}
+
+#[test]
+fn area_weights_reweigh_only_pixels_between_one_sample_and_all() {
+    let (mut renderer, _gpu) = renderer(Generator::Atrium, &lit(), settings(128, 96));
+    let paper = render(&mut renderer, "adaptive-3x3");
+    let prepared = renderer.prepare("adaptive-3x3-area".parse().unwrap()).unwrap();
+    prepared.render().unwrap();
+    let area = prepared.read_images().unwrap();
+    let first = prepared.read_first().unwrap().unwrap();
+    assert_eq!(counts(&paper), counts(&area), "the weights must not move the sample counts");
+    let weights = adaptive::area_weights(3);
+    let (mut reweighed, mut checked_pairs) = (0, 0);
+    for (p, &n) in counts(&area).iter().enumerate() {
+        let (a, b) = (&area.hdr[4 * p..4 * p + 3], &paper.hdr[4 * p..4 * p + 3]);
+        if n == 1 || n == 9 {
+            assert_eq!(a, b, "pixel {p} of {n} samples is averaged alike either way");
+            continue;
+        }
+        reweighed += usize::from(a != b);
+        if n == 2 {
+            // The paper's pixel is (S + x) / 2, so the one extra sample is x = 2·paper − S, and
+            // the area-weighted pixel must be w₀·S + w₁·x with 3×3's two-sample weights.
+            checked_pairs += 1;
+            for c in 0..3 {
+                let s = f64::from(first[p][c]);
+                let x = 2.0 * f64::from(b[c]) - s;
+                let expected = f64::from(weights[9]) * s + f64::from(weights[10]) * x;
+                // f16 storage of S, the paper's pixel and this one.
+                let tolerance = 4e-3 * (s.abs() + x.abs()) + 1e-4;
+                assert!(
+                    (f64::from(a[c]) - expected).abs() <= tolerance,
+                    "pixel {p} channel {c}: {} vs {expected}",
+                    a[c]
+                );
+            }
+        }
+    }
+    assert!(reweighed > 100, "area weights should change the lopsided pixels ({reweighed})");
+    assert!(checked_pairs > 20, "too few two-sample pixels to check ({checked_pairs})");
 }
 
 #[test]
@@ -256,6 +299,7 @@ fn tiny_and_odd_resolutions_render_every_mode_finite_with_counts_in_the_window()
     let mut modes = Mode::baseline_modes();
     modes.extend(Mode::adaptive_modes());
     modes.extend(Mode::ablation_modes());
+    modes.extend(Mode::variant_modes().into_iter().filter(|m| !m.stalled));
     for (width, height) in [(1, 1), (2, 3), (317, 211)] {
         let (mut renderer, _gpu) = renderer(Generator::Thin, &lit(), settings(width, height));
         for &mode in &modes {

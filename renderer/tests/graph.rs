@@ -6,15 +6,16 @@ mod support;
 
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::{Light, LightKind, Lighting, Shadow};
-use aabench_renderer::{AdaptiveSettings, ColorSettings, ExtraSamples, Metrics, Mode, Technique};
+use aabench_renderer::{AdaptiveSettings, ColorSettings, ExtraSamples, Metrics, Mode, Technique, Weights};
 use glam::Vec3;
 use support::*;
 
-/// Every mode the runner knows, plus the adaptive ablations.
+/// Every mode the runner knows, plus the adaptive ablations and variants.
 fn every_mode() -> Vec<Mode> {
     let mut modes = Mode::baseline_modes();
     modes.extend(Mode::adaptive_modes());
     modes.extend(Mode::ablation_modes());
+    modes.extend(Mode::variant_modes());
     modes
 }
 
@@ -57,7 +58,7 @@ fn every_mode_of_every_scene_compiles_binds_and_reaches_the_allocation_bound() {
                     let cube =
                         graph.allocations.iter().any(|a| a.holds.iter().any(|h| h == "shadow.shadow_cubes"));
                     assert_eq!(cube, shadows, "{context}");
-                    let adaptive = matches!(mode.technique, Technique::Adaptive(_));
+                    let adaptive = matches!(mode.technique, Technique::Adaptive(..));
                     assert_eq!(has("evaluate"), adaptive, "{context}");
                     assert_eq!(
                         has("shade_extra"),
@@ -86,7 +87,8 @@ fn modes_share_their_allocations_through_the_pool() {
         let prepared = renderer.prepare(mode).unwrap();
         each.push(prepared.graph().allocated_bytes);
     }
-    let adaptive = renderer.prepare(Mode::new(Technique::Adaptive(Metrics::Both), 2, false)).unwrap();
+    let adaptive =
+        renderer.prepare(Mode::new(Technique::Adaptive(Metrics::Both, Weights::Equal), 2, false)).unwrap();
     assert_eq!(
         adaptive.graph().passes,
         ["gbuffer", "shade_first", "evaluate", "compact", "shade_extra", "gather", "display"]

@@ -130,7 +130,7 @@ struct RunArgs {
     /// quick: small images, 3 repetitions (CI); nightly: 1024×768, 7 repetitions.
     #[arg(long, value_enum, default_value = "quick")]
     tier: Tier,
-    /// Comma-separated mode ids or groups: baseline, adaptive, ablation [default: the tier's].
+    /// Comma-separated mode ids or groups: baseline, adaptive, ablation, variant [default: the tier's].
     #[arg(long)]
     modes: Option<String>,
     /// Folder that receives the run's folder.
@@ -521,6 +521,7 @@ fn list_modes() {
     group("baseline", Mode::baseline_modes());
     group("adaptive", Mode::adaptive_modes());
     group("ablation", Mode::ablation_modes());
+    group("variant", Mode::variant_modes());
     say!("also: reference-1x1 (equals deferred-1x1; a self-check)");
 }
 

@@ -45,10 +45,13 @@ impl Tier {
         }
     }
 
-    /// The modes run when `--modes` is not given: all but the ablations in the quick tier.
+    /// The modes run when `--modes` is not given: baselines, adaptive and the unstalled
+    /// variants (their stalled twins differ only in time, which the variants do not change
+    /// beyond `gather`); the nightly tier adds the unstalled ablations.
     pub fn default_modes(self) -> Vec<Mode> {
         let mut modes = Mode::baseline_modes();
         modes.extend(Mode::adaptive_modes());
+        modes.extend(Mode::variant_modes().into_iter().filter(|m| !m.stalled));
         if self == Tier::Nightly {
             modes.extend(Mode::ablation_modes().into_iter().filter(|m| !m.stalled));
         }
@@ -56,7 +59,8 @@ impl Tier {
     }
 }
 
-/// Parses `--modes`: comma-separated mode ids or the groups `baseline`, `adaptive`, `ablation`.
+/// Parses `--modes`: comma-separated mode ids or the groups `baseline`, `adaptive`, `ablation`,
+/// `variant`.
 pub fn parse_modes(list: &str) -> Result<Vec<Mode>, String> {
     let mut modes: Vec<Mode> = Vec::new();
     for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
@@ -64,6 +68,7 @@ pub fn parse_modes(list: &str) -> Result<Vec<Mode>, String> {
             "baseline" => Mode::baseline_modes(),
             "adaptive" => Mode::adaptive_modes(),
             "ablation" => Mode::ablation_modes(),
+            "variant" => Mode::variant_modes(),
             id => vec![id.parse::<Mode>().map_err(|e| e.to_string())?],
         };
         for mode in group {
@@ -310,8 +315,10 @@ mod tests {
     fn quick_leaves_out_the_ablations_and_nightly_adds_them() {
         let quick = Tier::Quick.default_modes();
         let nightly = Tier::Nightly.default_modes();
-        assert_eq!(quick.len(), 16);
-        assert_eq!(nightly.len(), 22);
+        assert_eq!(quick.len(), 19);
+        assert_eq!(nightly.len(), 25);
         assert!(quick.iter().all(|m| !m.to_string().contains("geometry")));
+        let area: Vec<String> = quick.iter().map(Mode::to_string).filter(|id| id.contains("area")).collect();
+        assert_eq!(area, ["adaptive-2x2-area", "adaptive-3x3-area", "adaptive-4x4-area"]);
     }
 }

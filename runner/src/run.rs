@@ -588,7 +588,7 @@ fn fail_mode(record: &mut ModeRecord, error: String) {
 /// it post-processes, deferred-1x1, which is the 1×1 reference bit for bit.
 fn comparison_reference(modes: &[Mode], images: &[Option<FrameImages>], mode: Mode) -> Option<(usize, Mode)> {
     let technique = match mode.technique {
-        Technique::Adaptive(_) => Technique::Reference,
+        Technique::Adaptive(..) => Technique::Reference,
         Technique::Fxaa => Technique::Deferred,
         Technique::Deferred | Technique::Reference => return None,
     };
@@ -663,7 +663,7 @@ fn frame_median(run: &ModeRun) -> Option<f64> {
 /// Speed-up over the same-M reference with the same stall, and the cost limit (see
 /// [`AdaptiveCost`]).
 fn adaptive_cost(modes: &[Mode], runs: &[ModeRun], mode: Mode, run: &ModeRun) -> Option<AdaptiveCost> {
-    if !matches!(mode.technique, Technique::Adaptive(_)) {
+    if !matches!(mode.technique, Technique::Adaptive(..)) {
         return None;
     }
     let reference = Mode::new(Technique::Reference, mode.m, mode.stalled);

@@ -3,7 +3,8 @@
 use super::{
     BuildContext, Compute, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, gbuffer, shading_inputs,
 };
-use crate::adaptive::{DepthMetric, LIST_TEXEL_BITS, packed_sample_order};
+use crate::adaptive::{DepthMetric, LIST_TEXEL_BITS, Weights, packed_sample_order};
+use crate::bindings::Bound;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
 use crate::mode::Metrics;
 use crate::pipelines::Constants;
@@ -100,7 +101,7 @@ impl Node for ShadeFirstNode {
         let constants = ctx.shading_constants(self.stalled).extend(&window(self.m));
         let program =
             Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some("shade_first"), constants };
-        Ok(Box::new(ctx.screen(io, "shade_first", program, "first", FULLSCREEN.1)?))
+        Ok(Box::new(ctx.screen(io, "shade_first", program, "first", FULLSCREEN.1, &[])?))
     }
 }
 
@@ -141,7 +142,7 @@ impl Node for EvaluateNode {
             .flag("USE_SHADING", self.metrics != Metrics::Geometry)
             .flag("FORCE_ALL", s.force_all_samples);
         let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some("evaluate"), constants };
-        Ok(Box::new(ctx.screen(io, "evaluate", program, "counts", FULLSCREEN.1)?))
+        Ok(Box::new(ctx.screen(io, "evaluate", program, "counts", FULLSCREEN.1, &[])?))
     }
 }
 
@@ -205,7 +206,7 @@ impl Node for ShadeExtraNode {
             ctx.shading_constants(self.stalled).extend(&window(self.m)).extend(&self.list.constants());
         let program =
             Program { shader: SHADER, vertex: COMPACT_ROWS.0, fragment: Some("shade_extra"), constants };
-        Ok(Box::new(ctx.screen(io, "shade_extra", program, "extra", COMPACT_ROWS.1)?))
+        Ok(Box::new(ctx.screen(io, "shade_extra", program, "extra", COMPACT_ROWS.1, &[])?))
     }
 }
 
@@ -223,6 +224,7 @@ pub(crate) enum Extra {
 pub(crate) struct GatherNode {
     pub m: u32,
     pub extra: Extra,
+    pub weights: Weights,
 }
 
 impl Node for GatherNode {
@@ -251,8 +253,11 @@ impl Node for GatherNode {
                 ("gather_loop", ctx.shading_constants(*stalled).extend(&window(self.m)))
             }
         };
+        let constants = constants.flag("AREA_WEIGHTS", self.weights == Weights::Area);
         let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some(entry), constants };
-        Ok(Box::new(ctx.screen(io, "gather", program, "color", FULLSCREEN.1)?))
+        // Constant data, owned by the pass rather than a frame resource.
+        let owned = [("area_weights", Bound::Buffer(ctx.pipelines.area_weights(self.m)))];
+        Ok(Box::new(ctx.screen(io, "gather", program, "color", FULLSCREEN.1, &owned)?))
     }
 }
 

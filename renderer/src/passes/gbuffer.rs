@@ -63,7 +63,7 @@ impl Node for GBufferNode {
             let tangents = ctx.scene.has_tangents();
             let create =
                 |device: &_, layout: &_, module: &_, key: &_| create(device, layout, module, key, tangents);
-            let bundle = ctx.render_pipeline(io, &program, Raster::GBuffer(class), create)?;
+            let bundle = ctx.render_pipeline(io, &program, Raster::GBuffer(class), &[], create)?;
             pipelines.push((class, bundle));
         }
         Ok(Box::new(GBufferPass {

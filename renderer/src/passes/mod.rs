@@ -87,7 +87,9 @@ impl Io {
         }
     }
 
-    fn lookup(&self, name: &str, scene: &GpuScene) -> Option<Bound> {
+    /// What a binding named `name` is bound to: the pass's port of that name, else a resource
+    /// the pass owns (constant data such as `gather`'s area weights), else the scene's.
+    fn lookup(&self, name: &str, scene: &GpuScene, owned: &[(&str, Bound)]) -> Option<Bound> {
         if let Some((port, allocated)) = self.ports.get(name) {
             return port.access.is_binding().then(|| match allocated {
                 Allocated::Buffer(buffer) => Bound::Buffer(buffer.clone()),
@@ -98,7 +100,7 @@ impl Io {
                 },
             });
         }
-        scene.binding(name)
+        owned.iter().find(|(n, _)| *n == name).map(|(_, b)| b.clone()).or_else(|| scene.binding(name))
     }
 
     /// Fails when a port declared for binding was bound by none of the pass's shaders.
@@ -149,10 +151,11 @@ impl BuildContext<'_> {
         shader: &'static str,
         entries: &[&str],
         stages: Stages,
+        owned: &[(&str, Bound)],
     ) -> Result<(LayoutEntries, Groups), RenderError> {
         let bindings = self.pipelines.shader(shader)?.bindings(entries)?;
         let scene = self.scene;
-        let lookup = |name: &str| io.lookup(name, scene);
+        let lookup = |name: &str| io.lookup(name, scene, owned);
         let mut bound = BTreeSet::new();
         let resolved = bindings::resolve(io.pass, &bindings, stages, &lookup, &mut bound)?;
         io.bound.extend(bound);
@@ -181,6 +184,7 @@ impl BuildContext<'_> {
         io: &mut Io,
         program: &Program,
         raster: Raster,
+        owned: &[(&str, Bound)],
         create: impl FnOnce(
             &wgpu::Device,
             &wgpu::PipelineLayout,
@@ -189,7 +193,7 @@ impl BuildContext<'_> {
         ) -> wgpu::RenderPipeline,
     ) -> Result<Bundle<wgpu::RenderPipeline>, RenderError> {
         let entries: Vec<&str> = std::iter::once(program.vertex).chain(program.fragment).collect();
-        let (layout, groups) = self.resolve(io, program.shader, &entries, Stages::Render)?;
+        let (layout, groups) = self.resolve(io, program.shader, &entries, Stages::Render, owned)?;
         let key = RenderKey {
             shader: program.shader,
             vertex: program.vertex,
@@ -204,7 +208,8 @@ impl BuildContext<'_> {
         Ok(Bundle { pipeline, groups })
     }
 
-    /// A fragment pass of `program` over the texture of the output port `target`.
+    /// A fragment pass of `program` over the texture of the output port `target`; `owned` are
+    /// the pass's own bindings, beside its ports and the scene's.
     pub fn screen(
         &mut self,
         io: &mut Io,
@@ -212,13 +217,19 @@ impl BuildContext<'_> {
         program: Program,
         target: &str,
         vertices: u32,
+        owned: &[(&str, Bound)],
     ) -> Result<Screen, RenderError> {
         let target = io.texture(target)?;
         let format = target.format();
-        let bound =
-            self.render_pipeline(io, &program, Raster::Screen(format), |device, layout, module, key| {
+        let bound = self.render_pipeline(
+            io,
+            &program,
+            Raster::Screen(format),
+            owned,
+            |device, layout, module, key| {
                 crate::pipelines::screen_pipeline(device, layout, module, key, format)
-            })?;
+            },
+        )?;
         Ok(Screen {
             name,
             pipeline: bound.pipeline,
@@ -237,7 +248,7 @@ impl BuildContext<'_> {
         constants: Constants,
         workgroups: [u32; 3],
     ) -> Result<ComputeStep, RenderError> {
-        let (layout, groups) = self.resolve(io, shader, &[entry], Stages::Compute)?;
+        let (layout, groups) = self.resolve(io, shader, &[entry], Stages::Compute, &[])?;
         let pipeline = self.pipelines.compute(ComputeKey { shader, entry, constants, layout })?;
         Ok(ComputeStep { pipeline, groups, workgroups })
     }

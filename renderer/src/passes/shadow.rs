@@ -49,7 +49,7 @@ impl Node for ShadowNode {
                 fragment,
                 constants: Constants::new(),
             };
-            pipelines.push((masked, ctx.render_pipeline(io, &program, Raster::ShadowDepth, create)?));
+            pipelines.push((masked, ctx.render_pipeline(io, &program, Raster::ShadowDepth, &[], create)?));
         }
         Ok(Box::new(ShadowPass { pipelines, scene: ctx.scene.clone(), cubes: io.texture(CUBES)? }))
     }

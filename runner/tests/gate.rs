@@ -311,7 +311,7 @@ fn the_report_is_self_contained_and_renders_in_a_browser() {
     let run_dir = run(
         &ws,
         "reports",
-        &["--modes", &format!("{MODES},adaptive-2x2-stalled,reference-3x3,adaptive-3x3")],
+        &["--modes", &format!("{MODES},adaptive-2x2-stalled,reference-3x3,adaptive-3x3,adaptive-3x3-area")],
     );
     assert_eq!(ws.run(&["bless", &path_arg(&run_dir)]).status.code(), Some(0));
     assert_eq!(compare(&ws, &run_dir, &run_dir).status.code(), Some(0));
@@ -335,6 +335,15 @@ fn the_report_is_self_contained_and_renders_in_a_browser() {
     assert!(html.contains("Adaptive cost per sample"), "the adaptive modes' cost model heads the page");
     assert!(html.contains("History (3 runs)"), "the history is plotted");
     assert!(html.contains("Crops at"), "crops around the largest error");
+    // The area variant gets its image, its difference and a crop beside the paper's adaptive.
+    for needle in [
+        "<figcaption>adaptive-3x3-area</figcaption>",
+        "|adaptive-3x3-area − reference|",
+        "crop-3x3-adaptive-3x3.png",
+        "crop-3x3-adaptive-3x3-area.png",
+    ] {
+        assert!(html.contains(needle), "the page lacks {needle}");
+    }
     for tag in ["section", "table", "figure", "div", "svg"] {
         let (open, close) =
             (html.matches(&format!("<{tag}")).count(), html.matches(&format!("</{tag}>")).count());

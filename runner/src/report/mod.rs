@@ -299,6 +299,7 @@ fn error_points(scene: &SceneRecord) -> Vec<Point> {
                 "deferred" => Kind::Deferred,
                 "fxaa" => Kind::Fxaa,
                 "reference" => Kind::Reference,
+                _ if mode.mode.split('-').any(|part| part == "area") => Kind::Variant,
                 _ => Kind::Adaptive,
             };
             (error > 0.0).then(|| Point {
@@ -331,17 +332,10 @@ fn short_label(mode: &str) -> String {
     parts.iter().map(|p| p.replace('x', "×")).collect::<Vec<_>>().join(" ")
 }
 
-/// The truth, deferred-1x1, and per M: reference, adaptive, difference and sample counts,
-/// then 1:1 crops around adaptive's largest error against the truth.
+/// The truth, deferred-1x1, and per M: reference, adaptive (and its `-area` variant where the
+/// run has it), their differences and the sample counts, then 1:1 crops around adaptive's
+/// largest error against the truth.
 fn images(page: &mut String, run_dir: &Path, scene: &SceneRecord) -> Result<(), String> {
-    let figure = |page: &mut String, src: &str, caption: &str| {
-        let _ = write!(
-            page,
-            "<figure><img src=\"{}\" alt=\"{1}\" loading=\"lazy\"><figcaption>{1}</figcaption></figure>",
-            escape(src),
-            escape(caption)
-        );
-    };
     page.push_str("<h3>Images</h3>\n<div class=\"row\">");
     if let Some(image) = scene.truth.as_ref().and_then(|t| t.image.as_deref()) {
         figure(page, image, TRUTH_ID);
@@ -356,76 +350,81 @@ fn images(page: &mut String, run_dir: &Path, scene: &SceneRecord) -> Result<(), 
     }
     page.push_str("</div>\n");
     for m in 2..=4 {
-        let pick = |technique: &str| {
-            let plain = format!("{technique}-{m}x{m}");
-            scene.mode(&plain).or_else(|| scene.mode(&format!("{plain}-stalled")))
-        };
-        let (reference, adaptive) = (pick("reference"), pick("adaptive"));
-        if reference.is_none() && adaptive.is_none() {
+        // The unstalled mode where the run has it: stalling changes the time, not the image.
+        let pick = |id: String| scene.mode(&id).or_else(|| scene.mode(&format!("{id}-stalled")));
+        let reference = pick(format!("reference-{m}x{m}"));
+        let adaptive = pick(format!("adaptive-{m}x{m}"));
+        let area = pick(format!("adaptive-{m}x{m}-area"));
+        if reference.is_none() && adaptive.is_none() && area.is_none() {
             continue;
         }
         page.push_str("<div class=\"row\">");
-        for mode in [reference, adaptive].into_iter().flatten() {
+        for mode in [reference, adaptive, area].into_iter().flatten() {
             if let Some(image) = &mode.images.display {
                 figure(page, image, &mode.mode);
             }
         }
-        if let Some(mode) = adaptive {
+        for mode in [adaptive, area].into_iter().flatten() {
             if let Some(image) = &mode.images.difference {
                 figure(page, image, &format!("|{} − reference| (32 steps full scale)", mode.mode));
             }
-            if let Some(image) = &mode.images.samples {
-                figure(
-                    page,
-                    image,
-                    &format!("{}: samples per pixel, 1 (dark) to {} (red)", mode.mode, m * m),
-                );
-            }
+        }
+        // The area variant takes the paper's samples: one heatmap serves both.
+        if let Some((mode, image)) =
+            adaptive.or(area).and_then(|mode| Some((mode, mode.images.samples.as_ref()?)))
+        {
+            figure(page, image, &format!("{}: samples per pixel, 1 (dark) to {} (red)", mode.mode, m * m));
         }
         page.push_str("</div>\n");
-        if let Some(adaptive) = adaptive {
-            crops(page, run_dir, scene, m, [reference, Some(adaptive)])?;
+        if let Some(worst) = adaptive.or(area) {
+            let shown: Vec<&ModeRecord> = [reference, adaptive, area].into_iter().flatten().collect();
+            crops(page, run_dir, scene, m, &shown, worst)?;
         }
     }
     Ok(())
 }
 
-/// 1:1 and zoomed crops of the truth and the modes at the window where `modes[1]` (adaptive)
-/// is furthest from the truth.
+fn figure(page: &mut String, src: &str, caption: &str) {
+    let _ = write!(
+        page,
+        "<figure><img src=\"{}\" alt=\"{1}\" loading=\"lazy\"><figcaption>{1}</figcaption></figure>",
+        escape(src),
+        escape(caption)
+    );
+}
+
+/// 1:1 and zoomed crops of the truth and `modes` at the window where `worst` (one of them) is
+/// furthest from the truth.
 fn crops(
     page: &mut String,
     run_dir: &Path,
     scene: &SceneRecord,
     m: u32,
-    modes: [Option<&ModeRecord>; 2],
+    modes: &[&ModeRecord],
+    worst: &ModeRecord,
 ) -> Result<(), String> {
     let Some(truth_file) = scene.truth.as_ref().and_then(|t| t.image.clone()) else { return Ok(()) };
-    let Some(adaptive_file) = modes[1].and_then(|mode| mode.images.display.clone()) else { return Ok(()) };
+    let Some(worst_file) = worst.images.display.clone() else { return Ok(()) };
     let open = |relative: &str| {
         image::open(run_dir.join(relative))
             .map(|i| i.to_rgba8())
             .map_err(|e| format!("{}: {e}", run_dir.join(relative).display()))
     };
-    let (truth, adaptive) = (open(&truth_file)?, open(&adaptive_file)?);
-    if truth.dimensions() != adaptive.dimensions() {
+    let (truth, worst_image) = (open(&truth_file)?, open(&worst_file)?);
+    if truth.dimensions() != worst_image.dimensions() {
         return Ok(());
     }
     let side = CROP.min(truth.width()).min(truth.height());
-    let (x, y) = worst_window(&truth, &adaptive, side);
+    let (x, y) = worst_window(&truth, &worst_image, side);
     let mut sources: Vec<(String, String)> = vec![(TRUTH_ID.into(), truth_file)];
-    sources.extend(
-        modes
-            .into_iter()
-            .flatten()
-            .filter_map(|mode| Some((mode.mode.clone(), mode.images.display.clone()?))),
-    );
+    sources.extend(modes.iter().filter_map(|mode| Some((mode.mode.clone(), mode.images.display.clone()?))));
     let folder = Path::new("report").join(&scene.name);
     std::fs::create_dir_all(run_dir.join(&folder))
         .map_err(|e| format!("{}: {e}", run_dir.join(&folder).display()))?;
     let _ = write!(
         page,
         "<p class=\"meta\">Crops at ({x}, {y}), {side}×{side}: where {} differs most from the truth (1:1, then ×{ZOOM}).</p>\n<div class=\"row crops\">",
-        escape(&modes[1].map_or(String::new(), |m| m.mode.clone()))
+        escape(&worst.mode)
     );
     for (name, file) in sources {
         let image = open(&file)?;
@@ -511,6 +510,9 @@ fn history_plots(page: &mut String, scene: &SceneRecord, history: &[&RunRecord])
     };
     let adaptive: Vec<String> =
         (2..=4).flat_map(|m| [format!("adaptive-{m}x{m}"), format!("adaptive-{m}x{m}-stalled")]).collect();
+    // Quality does not depend on stalling; the area variant shares adaptive's time.
+    let quality: Vec<String> =
+        (2..=4).flat_map(|m| [format!("adaptive-{m}x{m}"), format!("adaptive-{m}x{m}-area")]).collect();
     let timed: Vec<String> =
         ["deferred-1x1", "reference-4x4", "adaptive-4x4", "reference-4x4-stalled", "adaptive-4x4-stalled"]
             .map(String::from)
@@ -524,7 +526,7 @@ fn history_plots(page: &mut String, scene: &SceneRecord, history: &[&RunRecord])
         (
             "PSNR against the truth",
             "dB",
-            series(&adaptive[..].iter().step_by(2).cloned().collect::<Vec<_>>(), &|m| {
+            series(&quality, &|m| {
                 m.vs_ground_truth.as_ref().map(|q| q.psnr_db.value()).filter(|v| v.is_finite())
             }),
         ),

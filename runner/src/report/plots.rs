@@ -11,6 +11,8 @@ pub enum Kind {
     Fxaa,
     Reference,
     Adaptive,
+    /// An adaptive variant beyond the paper (`-area`): a hollow circle beside adaptive's disc.
+    Variant,
 }
 
 /// One mode on the error-against-time plot.
@@ -140,7 +142,7 @@ pub fn error_against_time(title: &str, points: &[Point]) -> Result<String, Strin
                 .map_err(fail)?
                 .label(format!("{name} (dashed: Pareto front)"))
                 .legend(move |(x, y)| Circle::new((x, y), 4, style));
-            for kind in [Kind::Deferred, Kind::Fxaa, Kind::Reference, Kind::Adaptive] {
+            for kind in [Kind::Deferred, Kind::Fxaa, Kind::Reference, Kind::Adaptive, Kind::Variant] {
                 let of_kind = series.iter().filter(|p| p.kind == kind);
                 chart
                     .draw_series(of_kind.map(|p| {
@@ -150,6 +152,7 @@ pub fn error_against_time(title: &str, points: &[Point]) -> Result<String, Strin
                             Kind::Fxaa => at + Cross::new((0, 0), 5, colour.stroke_width(2)).into_dyn(),
                             Kind::Reference => at + TriangleMarker::new((0, 0), 6, style).into_dyn(),
                             Kind::Adaptive => at + Circle::new((0, 0), 4, style).into_dyn(),
+                            Kind::Variant => at + Circle::new((0, 0), 4, colour.stroke_width(2)).into_dyn(),
                         }
                     }))
                     .map_err(fail)?;

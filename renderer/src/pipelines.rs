@@ -83,6 +83,7 @@ pub(crate) struct Pipelines {
     render: HashMap<RenderKey, wgpu::RenderPipeline>,
     compute: HashMap<ComputeKey, wgpu::ComputePipeline>,
     area_weights: HashMap<u32, wgpu::Buffer>,
+    texel_sampler: Option<wgpu::Sampler>,
 }
 
 impl Pipelines {
@@ -96,6 +97,7 @@ impl Pipelines {
             render: HashMap::new(),
             compute: HashMap::new(),
             area_weights: HashMap::new(),
+            texel_sampler: None,
         }
     }
 
@@ -183,6 +185,19 @@ impl Pipelines {
         });
         self.compute.insert(key, pipeline.clone());
         Ok(pipeline)
+    }
+
+    /// A sampler that neither filters nor wraps, for `textureGather`: four texels in one call.
+    pub fn texel_sampler(&mut self) -> wgpu::Sampler {
+        let device = &self.device;
+        self.texel_sampler
+            .get_or_insert_with(|| {
+                device.create_sampler(&wgpu::SamplerDescriptor {
+                    label: Some("texel sampler"),
+                    ..Default::default()
+                })
+            })
+            .clone()
     }
 
     /// The area weights of the M×M dither order's prefixes (`adaptive::area_weights`) as a

@@ -13,8 +13,8 @@ use crate::{AdaptiveSettings, RenderError};
 /// Per-pixel sample counts, 1…16.
 pub(crate) const COUNT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Uint;
 
-/// A rectangle over the rows of the compact target that hold list entries.
-const COMPACT_ROWS: (&str, u32) = ("compact_rows", 6);
+/// Two rectangles over the blocks of the compact target that hold list entries.
+const COMPACT_ROWS: (&str, u32) = ("compact_rows", 12);
 
 const SHADER: &str = "adaptive.wgsl";
 
@@ -142,7 +142,9 @@ impl Node for EvaluateNode {
             .flag("USE_SHADING", self.metrics != Metrics::Geometry)
             .flag("FORCE_ALL", s.force_all_samples);
         let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some("evaluate"), constants };
-        Ok(Box::new(ctx.screen(io, "evaluate", program, "counts", FULLSCREEN.1, &[])?))
+        let owned =
+            [("texel_sampler", Bound::Sampler { sampler: ctx.pipelines.texel_sampler(), filtering: false })];
+        Ok(Box::new(ctx.screen(io, "evaluate", program, "counts", FULLSCREEN.1, &owned)?))
     }
 }
 

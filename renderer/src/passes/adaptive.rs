@@ -28,6 +28,8 @@ fn counts() -> Resource {
 
 /// The window's side and its dither order.
 fn window(m: u32) -> Constants {
+    // The dither matrices, and evaluate's depth gathers (two blocks a row), stop at 4.
+    debug_assert!((2..=4).contains(&m), "adaptive M = {m}");
     let [low, high] = packed_sample_order(m);
     Constants::new().with("M", m).with("ORDER_LOW", low).with("ORDER_HIGH", high)
 }

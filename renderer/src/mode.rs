@@ -4,7 +4,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-pub use crate::adaptive::Weights;
+use crate::adaptive::Weights;
 
 /// Which of the adaptive metrics decide the sample count (the paper's Fig. 8 ablation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]

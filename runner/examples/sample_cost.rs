@@ -22,7 +22,8 @@ use aabench::scenes;
 use aabench::stats::Summary;
 use aabench_renderer::adaptive::sample_order;
 use aabench_renderer::{
-    AdaptiveSettings, BACKGROUND_MATERIAL, ExtraSamples, Gpu, PreparedMode, RenderSettings, SceneRenderer,
+    AdaptiveSettings, BACKGROUND_MATERIAL, ExtraSamples, GBufferImages, Gpu, PreparedMode, RenderSettings,
+    SceneRenderer,
 };
 use anyhow::Context;
 
@@ -95,9 +96,9 @@ fn main() -> anyhow::Result<()> {
             times.keys().filter(|(name, _)| *name == mode).map(|(_, pass)| median(mode, pass)).sum()
         };
         let background = background_mask(&arms[0].1)?;
-        let all_samples = background.len() as f64;
-        let covered = background.iter().filter(|&&b| !b).count() as f64;
-        let (extra, extra_background) = listed(&arms[1].1, &background, m, w)?;
+        let all_samples = background.1.len() as f64;
+        let covered = background.1.iter().filter(|&&b| !b).count() as f64;
+        let (extra, extra_background) = listed(&arms[1].1, &background, m)?;
         println!("## {m}×{m}{suffix}\n");
         for (name, _) in &arms {
             let passes: Vec<String> = times
@@ -139,27 +140,31 @@ fn main() -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Per G-buffer sample, row-major: whether no geometry covers it.
-fn background_mask(reference: &PreparedMode) -> anyhow::Result<Vec<bool>> {
+/// The reference's G-buffer, and per sample (row-major) whether no geometry covers it.
+fn background_mask(reference: &PreparedMode) -> anyhow::Result<(GBufferImages, Vec<bool>)> {
     let gbuffer = reference.read_gbuffer()?;
     let background = BACKGROUND_MATERIAL as f32;
-    Ok(gbuffer.normal_material.iter().map(|s| s[3] == background).collect())
+    let mask = gbuffer.normal_material.iter().map(|s| s[3] == background).collect();
+    Ok((gbuffer, mask))
 }
 
 /// The adaptive mode's listed samples and how many of them lie on background.
-fn listed(adaptive: &PreparedMode, background: &[bool], m: u32, w: u32) -> anyhow::Result<(f64, f64)> {
+fn listed(
+    adaptive: &PreparedMode,
+    (gbuffer, background): &(GBufferImages, Vec<bool>),
+    m: u32,
+) -> anyhow::Result<(f64, f64)> {
     let counts = adaptive.read_sample_counts()?.context("an adaptive mode has counts")?;
     let order = sample_order(m);
+    let w = gbuffer.width / m;
     let (mut extra, mut on_background) = (0.0, 0.0);
     for (p, &n) in counts.iter().enumerate() {
         let n = u32::from(n);
         let first = if n == m * m { 0 } else { 1 };
-        let (x, y) = (p as u32 % w, p as u32 / w);
+        let window: Vec<usize> = gbuffer.window_indices(m, p as u32 % w, p as u32 / w).collect();
         for rank in first..n {
-            let cell = order[rank as usize];
-            let sample = ((y * m + cell / m) * w * m + x * m + cell % m) as usize;
             extra += 1.0;
-            on_background += f64::from(u8::from(background[sample]));
+            on_background += f64::from(u8::from(background[window[order[rank as usize] as usize]]));
         }
     }
     Ok((extra, on_background))

@@ -1,29 +1,137 @@
 #!/usr/bin/env bash
-# The CI regression gate: build, render every scene in scenes/ at the quick tier, compare the
-# run with the committed baselines (baselines/<platform-key>/quick/), and write summary.md,
-# junit.xml, verdict.json and the HTML report into the run's folder. Exits with compare's
-# code: 0 nothing regressed, 1 a regression, 2 an error (or the run's: 3 a scene failed). Extra
-# arguments go to `aabench run`.
-# With $GITHUB_STEP_SUMMARY set, the summary is appended to it.
+# The CI regression gate. Quality, output hashes, sample statistics and the presence of every
+# scene and mode are gated against the committed baselines (baselines/<platform-key>/quick/).
+# Time is gated against the *base build measured on this machine in this job*: in-run time
+# ratios shift 15–40 % between CPU generations, so numbers blessed on another machine cannot
+# decide time here.
 #
-# Time verdicts fail the gate only against baselines of this machine's own platform key; against
-# another platform's (another CPU, Mesa or thread count) they are reported and quality alone is
-# gated, since relative costs shift between CPUs (`compare --fail-on auto`).
-# AABENCH_GATE_FAIL_ON=all|quality overrides.
+#   ci/gate.sh [--base REF] [aabench run arguments…]
+#
+# The base is REF, or else the commit that last changed baselines/ (the build they were blessed
+# from). When the base's code differs from the working tree's, the gate builds the base beside
+# the head and runs both at the quick tier in alternating processes ($AABENCH_GATE_PROCESSES a
+# side, default 6, of $AABENCH_GATE_REPETITIONS rounds each, default 3); `aabench compare` then
+# decides time with the process as the unit. When the code is the base's (only baselines or
+# docs changed), time cannot have changed through the change: one run is compared with the
+# baselines and its time is reported, not gated. Without a usable base (no git history), one
+# run is compared with the baselines and time is gated only on the machine that blessed them.
+#
+# Writes summary.md, junit.xml, verdict.json and the HTML report into the first head run's
+# folder. Exits with compare's code: 0 nothing regressed, 1 a regression (or the run compared
+# less than its baselines hold), 2 an error, 3 a scene failed. With $GITHUB_STEP_SUMMARY set,
+# the summary is appended to it. AABENCH_GATE_FAIL_ON=all|quality overrides `--fail-on auto`.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 source ci/lib.sh
-build_aabench
-run_fresh gate --tier quick "$@"
 
-"$bin" compare "$run_dir" --baseline baselines --out "$run_dir" --fail-on "${AABENCH_GATE_FAIL_ON:-auto}"
+base_ref=""
+run_args=()
+while [ $# -gt 0 ]; do
+    case "$1" in
+        --base) base_ref=${2:?ci/gate.sh: --base needs a git revision}; shift 2 ;;
+        --base=*) base_ref=${1#--base=}; shift ;;
+        *) run_args+=("$1"); shift ;;
+    esac
+done
+processes=${AABENCH_GATE_PROCESSES:-6}
+repetitions=${AABENCH_GATE_REPETITIONS:-3}
+fail_on=${AABENCH_GATE_FAIL_ON:-auto}
+
+build_aabench
+gate_dir="$PWD/reports/gate-$(date -u +%Y%m%dT%H%M%SZ)-$$"
+mkdir -p "$gate_dir/bin" || exit 2
+head_bin="$gate_dir/bin/aabench-head"
+cp "$bin" "$head_bin" || exit 2
+
+# The base commit, or nothing when there is no git history to take it from.
+resolve_base() {
+    if [ -n "$base_ref" ]; then
+        git rev-parse --verify --quiet "$base_ref^{commit}" || {
+            echo "ci/gate.sh: --base $base_ref is no commit of this repository" >&2
+            exit 2
+        }
+    else
+        git log -1 --format=%H -- baselines 2>/dev/null
+    fi
+}
+base=$(resolve_base) || exit 2
+
+# What cannot change a time: the baselines themselves and the documentation.
+code_paths=(. ':(exclude)baselines' ':(exclude)*.md' ':(exclude)docs')
+started=$(date +%s)
+if [ -z "$base" ]; then
+    echo "ci/gate.sh: no base commit (no git history?): time is gated against the baselines only on the machine that blessed them" >&2
+    strategy=baselines
+elif git diff --quiet "$base" -- "${code_paths[@]}"; then
+    echo "ci/gate.sh: the code is the base's (${base:0:12}): time is reported against the baselines, not gated" >&2
+    strategy=unchanged
+else
+    strategy=ab
+fi
+
+if [ "$strategy" != ab ]; then
+    [ "$strategy" = unchanged ] && [ "$fail_on" = auto ] && fail_on=quality
+    "$head_bin" run --tier quick --out "$gate_dir/head" "${run_args[@]}"
+    run_code=$?
+    head_runs=("$gate_dir"/head/*/)
+    base_args=()
+else
+    # The base is built from its own tree into a target folder of its own: cargo names a
+    # workspace's artifacts by their path inside the workspace, so two trees sharing one target
+    # folder overwrite each other's binaries and each may then look up to date. The folder is
+    # kept, so a later gate on this machine compiles only what changed.
+    echo "ci/gate.sh: building the base ${base:0:12} to gate time against it on this machine" >&2
+    base_src="$gate_dir/base-src"
+    base_target="$PWD/target/gate-base"
+    mkdir -p "$base_src" && git archive "$base" | tar -x -C "$base_src" || exit 2
+    (cd "$base_src" && CARGO_TARGET_DIR="$base_target" cargo build --release --locked -p aabench) || {
+        echo "ci/gate.sh: the base ${base:0:12} does not build" >&2
+        exit 2
+    }
+    cp "$base_target/release/aabench" "$gate_dir/bin/aabench-base" || exit 2
+    started=$(date +%s)
+    # Alternating processes, in the order base head head base base head …, so that a drift of
+    # the machine over the job weighs on both builds alike.
+    run_code=0
+    for ((i = 1; i <= processes; i++)); do
+        order=(base head)
+        if ((i % 2 == 0)); then order=(head base); fi
+        for side in "${order[@]}"; do
+            echo "ci/gate.sh: process $i of $processes, $side" >&2
+            if [ "$side" = head ]; then
+                "$head_bin" run --tier quick --repetitions "$repetitions" --out "$gate_dir/head" "${run_args[@]}"
+                code=$?
+                if [ "$code" -ne 0 ] && [ "$run_code" -eq 0 ]; then run_code=$code; fi
+            else
+                (cd "$base_src" && "$gate_dir/bin/aabench-base" run --tier quick --repetitions "$repetitions" \
+                    --out "$gate_dir/base" "${run_args[@]}") ||
+                    echo "ci/gate.sh: a base process exited $?; compare uses the base runs that finished" >&2
+            fi
+        done
+    done
+    head_runs=("$gate_dir"/head/*/)
+    base_runs=()
+    for run in "$gate_dir"/base/*/; do
+        if [ -f "$run/run.json" ]; then base_runs+=("$run"); fi
+    done
+    base_args=(--base-runs "${base_runs[@]}")
+    if [ "${#base_runs[@]}" -eq 0 ]; then base_args=(); fi
+fi
+if [ ! -f "${head_runs[0]}/run.json" ]; then
+    echo "ci/gate.sh: the run wrote nothing (exit $run_code)" >&2
+    exit 2
+fi
+run_dir=${head_runs[0]%/}
+
+"$head_bin" compare "${head_runs[@]}" "${base_args[@]}" --baseline baselines --out "$run_dir" --fail-on "$fail_on"
 code=$?
 # A scene that failed already fails compare; this keeps a run that went wrong otherwise from
 # passing unnoticed.
 if [ "$code" -eq 0 ] && [ "$run_code" -ne 0 ]; then code=$run_code; fi
-"$bin" report "$run_dir" >/dev/null || echo "ci/gate.sh: the HTML report could not be written" >&2
+"$head_bin" report "$run_dir" >/dev/null || echo "ci/gate.sh: the HTML report could not be written" >&2
 if [ -n "${GITHUB_STEP_SUMMARY:-}" ] && [ -f "$run_dir/summary.md" ]; then
     cat "$run_dir/summary.md" >>"$GITHUB_STEP_SUMMARY"
 fi
+echo "ci/gate.sh: $strategy gate, $(($(date +%s) - started)) s after the builds" >&2
 echo "ci/gate.sh: $run_dir/summary.md, junit.xml, verdict.json, index.html (exit $code)" >&2
 exit "$code"

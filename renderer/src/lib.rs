@@ -84,4 +84,7 @@ pub enum RenderError {
     Binding(String),
     #[error("{}: {source}", path.display())]
     Io { path: PathBuf, source: std::io::Error },
+    /// Work given a way to stop (the ground truth's tiles) was asked to stop.
+    #[error("stopped on request after {done} of {of} tiles")]
+    Stopped { done: usize, of: usize },
 }

@@ -322,6 +322,18 @@ impl SceneRenderer {
     /// 1024×768 frame needs 1.8 GB of targets at once. The frame uniforms are restored
     /// afterwards.
     pub fn render_truth(&mut self, m: u32, tile_bytes: u64) -> Result<Truth, RenderError> {
+        self.render_truth_until(m, tile_bytes, &|| false)
+    }
+
+    /// [`render_truth`](Self::render_truth), asking `stop` before each tile: a truth of many
+    /// tiles (a 4096² frame takes 38 s) ends within one tile's time of a signal, with
+    /// [`RenderError::Stopped`].
+    pub fn render_truth_until(
+        &mut self,
+        m: u32,
+        tile_bytes: u64,
+        stop: &dyn Fn() -> bool,
+    ) -> Result<Truth, RenderError> {
         let (width, height) = (self.settings.width, self.settings.height);
         let limit = self.gpu.device.limits().max_texture_dimension_2d;
         let tiles = truth_tiles(width, height, m, limit, tile_bytes)?;
@@ -336,7 +348,12 @@ impl SceneRenderer {
             hdr: vec![0.0; 4 * pixels],
             sample_counts: None,
         };
-        let result = tiles.iter().try_for_each(|tile| self.render_truth_tile(m, *tile, &mut images));
+        let result = tiles.iter().enumerate().try_for_each(|(done, tile)| {
+            if stop() {
+                return Err(RenderError::Stopped { done, of: tiles.len() });
+            }
+            self.render_truth_tile(m, *tile, &mut images)
+        });
         self.write_frame_uniforms(Tile::whole(width, height));
         result?;
         Ok(Truth { images, m, tiles: tiles.len() })

@@ -55,6 +55,9 @@ pub struct Blessed {
     pub written: Vec<PathBuf>,
     /// Scenes that were not blessed, with the reason.
     pub skipped: Vec<(String, String)>,
+    /// What the baselines can support less well than they should, one line each: records too
+    /// short to gate time on.
+    pub warnings: Vec<String>,
 }
 
 /// Writes a baseline for every scene that finished ok in each of `runs` (one run, or several
@@ -63,6 +66,7 @@ pub struct Blessed {
 /// with `force`; otherwise nothing is written and the error lists each refusal.
 pub fn bless(runs: &[RunRecord], root: &Path, force: bool, now: &str) -> Result<Blessed, String> {
     let run = runs.first().ok_or("no run to bless")?;
+    check_finished(runs)?;
     check_alike(runs)?;
     let mut blessed = Blessed::default();
     let mut planned = Vec::new();
@@ -86,6 +90,7 @@ pub fn bless(runs: &[RunRecord], root: &Path, force: bool, now: &str) -> Result<
             refusals.push(format!("{}: {reason}", target.display()));
             continue;
         }
+        blessed.warnings.extend(short_records(&measured));
         planned.push((target, measured));
     }
     if !refusals.is_empty() {
@@ -94,24 +99,122 @@ pub fn bless(runs: &[RunRecord], root: &Path, force: bool, now: &str) -> Result<
             refusals.join("\n  ")
         ));
     }
-    for (target, measured) in planned {
-        let baseline = Baseline {
-            schema: BASELINE_SCHEMA.into(),
-            aabench_version: run.aabench_version.clone(),
-            blessed_at: now.into(),
-            run_ids: runs.iter().map(|r| r.run_id.clone()).collect(),
-            tier: run.tier,
-            platform: run.platform.clone(),
-            settings: run.settings.clone(),
-            scenes: measured.into_iter().cloned().collect(),
-        };
-        if let Some(dir) = target.parent() {
-            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-        }
-        json::write_atomic(&target, &baseline)?;
-        blessed.written.push(target);
+    let baselines: Vec<(PathBuf, Baseline)> = planned
+        .into_iter()
+        .map(|(target, measured)| {
+            let baseline = Baseline {
+                schema: BASELINE_SCHEMA.into(),
+                aabench_version: run.aabench_version.clone(),
+                blessed_at: now.into(),
+                run_ids: runs.iter().map(|r| r.run_id.clone()).collect(),
+                tier: run.tier,
+                platform: run.platform.clone(),
+                settings: run.settings.clone(),
+                scenes: measured.into_iter().cloned().collect(),
+            };
+            (target, baseline)
+        })
+        .collect();
+    if !baselines.is_empty() {
+        write_together(&root.join(&run.platform.key).join(run.tier.name()), &baselines)?;
     }
+    blessed.written = baselines.into_iter().map(|(target, _)| target).collect();
     Ok(blessed)
+}
+
+/// Writes `baselines` into `dir` as one transaction: the folder's other files and the new
+/// ones are assembled in a staging folder beside it (`<tier>.tmp-<pid>`, a temporary that a
+/// later bless removes once its process is gone), which then trades places with `dir` in one
+/// `renameat2(RENAME_EXCHANGE)`. A bless killed at any point leaves every baseline old or
+/// every one new, never a mix.
+fn write_together(dir: &Path, baselines: &[(PathBuf, Baseline)]) -> Result<(), String> {
+    let parent = dir.parent().ok_or_else(|| format!("{}: no parent folder", dir.display()))?;
+    let name = dir.file_name().ok_or_else(|| format!("{}: no folder name", dir.display()))?;
+    let mut staging = name.to_owned();
+    staging.push(format!(".tmp-{}", std::process::id()));
+    let staging = parent.join(staging);
+    let error = |path: &Path, e: std::io::Error| format!("{}: {e}", path.display());
+    let assemble = || -> Result<(), String> {
+        std::fs::create_dir_all(&staging).map_err(|e| error(&staging, e))?;
+        if dir.is_dir() {
+            for file in json::files_in(dir)? {
+                let copy = staging.join(file.file_name().unwrap_or_default());
+                std::fs::copy(&file, &copy).map_err(|e| error(&file, e))?;
+            }
+        }
+        for (target, baseline) in baselines {
+            json::write_atomic(&staging.join(target.file_name().unwrap_or_default()), baseline)?;
+        }
+        swap_into_place(&staging, dir)
+            .map_err(|e| format!("{}: cannot move the new baselines in: {e}", dir.display()))
+    };
+    let result = assemble();
+    // After the swap the staging path holds the old baselines; before it, the unused new ones.
+    let _ = std::fs::remove_dir_all(&staging);
+    result
+}
+
+/// Moves the folder `from` to `to` atomically: a plain rename when `to` does not exist, else an
+/// exchange of the two (Linux's `renameat2`), after which `from` names the old folder.
+fn swap_into_place(from: &Path, to: &Path) -> std::io::Result<()> {
+    use std::os::unix::ffi::OsStrExt;
+    if !to.exists() {
+        return std::fs::rename(from, to);
+    }
+    let c_path = |path: &Path| {
+        std::ffi::CString::new(path.as_os_str().as_bytes())
+            .map_err(|_| std::io::Error::new(std::io::ErrorKind::InvalidInput, "a NUL byte in the path"))
+    };
+    let (from, to) = (c_path(from)?, c_path(to)?);
+    // SAFETY: both are valid NUL-terminated paths that outlive the call; AT_FDCWD resolves
+    // them as relative paths are resolved everywhere else.
+    #[allow(unsafe_code)]
+    let status = unsafe {
+        libc::renameat2(libc::AT_FDCWD, from.as_ptr(), libc::AT_FDCWD, to.as_ptr(), libc::RENAME_EXCHANGE)
+    };
+    if status == 0 { Ok(()) } else { Err(std::io::Error::last_os_error()) }
+}
+
+/// Refuses a run listed twice (its one process would be pooled as two, and the processes'
+/// spread, which widens later thresholds, would read 0) and a run that did not finish (killed
+/// or interrupted: its record may stop mid-scene).
+fn check_finished(runs: &[RunRecord]) -> Result<(), String> {
+    for (index, run) in runs.iter().enumerate() {
+        // Equal records are one process read twice: two processes never time alike.
+        if runs[..index].contains(run) {
+            return Err(format!(
+                "run {} is given twice: a baseline pools separate processes, each once; nothing was written",
+                run.run_id
+            ));
+        }
+        if run.finished_at.is_none() || matches!(run.status, Status::Running | Status::Interrupted) {
+            return Err(format!(
+                "run {} did not finish (status `{}`): bless finished runs only; nothing was written",
+                run.run_id, run.status
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A warning when some of the scene's modes have fewer pooled frames than a time verdict
+/// needs: `compare` will call their time checks insufficient.
+fn short_records(measured: &[&SceneRecord]) -> Option<String> {
+    let first = measured[0];
+    let frames = |id: &str| -> usize {
+        measured.iter().filter_map(|scene| scene.mode(id)?.frame_ms.as_ref().map(|f| f.samples.len())).sum()
+    };
+    let short: Vec<usize> =
+        first.modes.iter().map(|m| frames(&m.mode)).filter(|&n| n < crate::compare::MIN_FRAMES).collect();
+    let fewest = short.iter().min()?;
+    Some(format!(
+        "{}: {} of {} modes have fewer than the {} timed frames a time verdict needs (the fewest {fewest}): \
+         their time checks will be `insufficient`; bless runs with more --repetitions",
+        first.name,
+        short.len(),
+        first.modes.len(),
+        crate::compare::MIN_FRAMES
+    ))
 }
 
 /// Runs blessed together must be of one platform, tier, build and settings (repetitions aside).
@@ -160,7 +263,11 @@ fn same_images(measured: &[&SceneRecord]) -> Result<(), String> {
 
 /// Why an existing file at `target` must not be replaced by a baseline of `run`, if it must not.
 fn refusal(target: &Path, run: &RunRecord) -> Option<String> {
-    let text = std::fs::read(target).ok()?;
+    let text = match json::read_regular(target) {
+        Ok(text) => text,
+        Err(error) if error.kind() == std::io::ErrorKind::NotFound => return None,
+        Err(error) => return Some(format!("the existing file cannot be read ({error})")),
+    };
     let schema = match json::schema_of(&text) {
         Ok(schema) => schema,
         Err(error) => return Some(format!("the existing file is not a baseline ({error})")),
@@ -197,6 +304,9 @@ pub struct BaselineSet {
     /// True when the baselines are of the run's own platform key.
     pub same_platform: bool,
     pub baselines: Vec<Baseline>,
+    /// Why there are no baselines, when there are none: the root is missing or no folder, or
+    /// holds nothing for the tier.
+    pub absent: Option<String>,
 }
 
 impl BaselineSet {
@@ -206,6 +316,20 @@ impl BaselineSet {
     /// naming the file.
     pub fn load(root: &Path, run: &RunRecord) -> Result<BaselineSet, String> {
         let tier = run.tier.name();
+        let none = |why: String| BaselineSet {
+            dir: None,
+            platform_key: None,
+            same_platform: false,
+            baselines: Vec::new(),
+            absent: Some(why),
+        };
+        match std::fs::metadata(root) {
+            Err(error) => {
+                return Ok(none(format!("the baseline folder {} cannot be read ({error})", root.display())));
+            }
+            Ok(meta) if !meta.is_dir() => return Ok(none(format!("{} is not a folder", root.display()))),
+            Ok(_) => {}
+        }
         let own = root.join(&run.platform.key).join(tier);
         let chosen = if own.is_dir() {
             Some((run.platform.key.clone(), own))
@@ -226,19 +350,16 @@ impl BaselineSet {
             })
         };
         let Some((key, dir)) = chosen else {
-            return Ok(BaselineSet {
-                dir: None,
-                platform_key: None,
-                same_platform: false,
-                baselines: Vec::new(),
-            });
+            return Ok(none(format!("{} holds no baselines for the {tier} tier", root.display())));
         };
         let baselines = json::files_in(&dir)?.iter().map(|file| load(file)).collect::<Result<Vec<_>, _>>()?;
+        let absent = baselines.is_empty().then(|| format!("{} holds no baseline files", dir.display()));
         Ok(BaselineSet {
             same_platform: key == run.platform.key,
             platform_key: Some(key),
             dir: Some(dir),
             baselines,
+            absent,
         })
     }
 

@@ -9,12 +9,32 @@ use serde::de::DeserializeOwned;
 /// is wrong with it: unreadable, not JSON (with line and column), another schema, or a field
 /// out of place (with its path, e.g. `scenes[0].modes[3].frame_ms: missing field `median``).
 pub fn read_versioned<T: DeserializeOwned>(path: &Path, schema: &str) -> Result<T, String> {
-    let text = std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    let text = read_regular(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
     let found = schema_of(&text).map_err(|e| format!("{}: not an {schema} file: {e}", path.display()))?;
     if found != schema {
         return Err(format!("{}: schema is `{found}`, this aabench reads `{schema}`", path.display()));
     }
     parse(&text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// The bytes of a regular file. Anything else is refused without blocking: a FIFO named
+/// `run.json` would wait forever for a writer, a device would never end. The file is opened
+/// without blocking and checked through its descriptor, so no rename in between can swap it.
+pub fn read_regular(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    use std::os::unix::fs::OpenOptionsExt;
+    let mut file = std::fs::File::options().read(true).custom_flags(libc::O_NONBLOCK).open(path)?;
+    let kind = file.metadata()?.file_type();
+    if !kind.is_file() {
+        let what = if kind.is_dir() { "a folder" } else { "not a regular file (a FIFO, socket or device)" };
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("{what}; give a regular file"),
+        ));
+    }
+    let mut bytes = Vec::new();
+    file.read_to_end(&mut bytes)?;
+    Ok(bytes)
 }
 
 /// The `schema` field of a JSON document, or why there is none.
@@ -40,12 +60,13 @@ pub fn write_atomic<T: Serialize>(path: &Path, value: &T) -> Result<(), String> 
         .map_err(|e| format!("{}: write: {e}", path.display()))
 }
 
-/// The `*.json` files directly in `dir`, in name order.
+/// The `*.json` entries directly in `dir`, in name order: each one is read, so a `*.json`
+/// that is no regular file (a FIFO, a folder) is an error naming it rather than skipped.
 pub fn files_in(dir: &Path) -> Result<Vec<PathBuf>, String> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(|e| format!("{}: {e}", dir.display()))?
         .filter_map(|entry| entry.ok().map(|e| e.path()))
-        .filter(|path| path.is_file() && path.extension().is_some_and(|ext| ext == "json"))
+        .filter(|path| path.extension().is_some_and(|ext| ext == "json"))
         .collect();
     files.sort();
     Ok(files)

@@ -7,6 +7,7 @@ pub mod gate;
 pub mod images;
 pub mod inputs;
 pub mod json;
+pub mod machine;
 pub mod manifest;
 pub mod merge;
 pub mod metrics;

@@ -14,13 +14,38 @@ use aabench::{baseline, compare, exit, run, scenes};
 use aabench_renderer::{ExtraSamples, Mode};
 use clap::{Parser, Subcommand};
 
-/// A line on stdout. A closed pipe (`aabench modes | head -1`) is no error: the reader took what
-/// it wanted, so the rest is dropped quietly.
+/// Set when writing to stdout failed for another reason than a closed pipe (a full disk behind a
+/// redirect): the command's output is lost, so it exits 2 whatever it did.
+static STDOUT_FAILED: AtomicBool = AtomicBool::new(false);
+
+/// Text on stdout. A closed pipe (`aabench modes | head -1`) is no error: the reader took what
+/// it wanted, so the rest is dropped quietly. Any other failure marks the command failed.
+fn out(text: std::fmt::Arguments) {
+    use std::io::Write as _;
+    let mut stdout = std::io::stdout().lock();
+    if let Err(error) = stdout.write_fmt(text).and_then(|()| stdout.flush())
+        && error.kind() != std::io::ErrorKind::BrokenPipe
+        && !STDOUT_FAILED.swap(true, Ordering::SeqCst)
+    {
+        note(format_args!("aabench: cannot write to standard output: {error}\n"));
+    }
+}
+
+/// Text on stderr. A closed or full stderr is ignored: messages are a courtesy, the exit code
+/// carries the verdict (`aabench compare … 2>&1 | head -1` keeps compare's code).
+fn note(text: std::fmt::Arguments) {
+    use std::io::Write as _;
+    let _ = std::io::stderr().lock().write_fmt(text);
+}
+
+/// A line on stdout (see [`out`]).
 macro_rules! say {
-    ($($arg:tt)*) => {{
-        use std::io::Write as _;
-        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
-    }};
+    ($($arg:tt)*) => { out(format_args!("{}\n", format_args!($($arg)*))) };
+}
+
+/// A line on stderr (see [`note`]).
+macro_rules! tell {
+    ($($arg:tt)*) => { note(format_args!("{}\n", format_args!($($arg)*))) };
 }
 
 #[derive(Debug, Parser)]
@@ -61,20 +86,32 @@ enum Command {
         force: bool,
     },
     /// Decide per scene × mode × metric whether a run regressed against its baselines; write
-    /// summary.md, junit.xml and verdict.json. Exit 0: nothing regressed, 1: something did,
-    /// 2: an error.
+    /// summary.md, junit.xml and verdict.json. Exit 0: nothing regressed, 1: something did, or
+    /// the run compared less than its baselines hold, 2: an error.
     Compare {
-        /// The run: its folder or its run.json.
-        run: PathBuf,
+        /// The run: its folder or its run.json; or several processes of one build (the first
+        /// gives the quality numbers, their frames are pooled).
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
         /// The baselines' root folder.
         #[arg(long, default_value = "baselines")]
         baseline: PathBuf,
+        /// Runs of the base build on this machine, in this job (alternating with the runs):
+        /// time is then gated against them, with the process as the unit (at least 4 a side).
+        #[arg(long, num_args = 1.., value_name = "RUN")]
+        base_runs: Vec<PathBuf>,
         /// Folder for summary.md, junit.xml and verdict.json [default: the run's folder].
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Which checks may fail: all, or quality only (time verdicts reported, not failed).
-        #[arg(long, value_enum, default_value = "all")]
+        /// Which checks may fail: auto (quality; time against the base runs, or against the
+        /// baselines on the machine that blessed them), all, or quality only.
+        #[arg(long, value_enum, default_value = "auto")]
         fail_on: compare::FailOn,
+        /// Report, not fail, what the run lacks: no baselines (or only another platform's), a
+        /// scene or mode the baselines hold, scenes at all; a shard; an unfinished run. For a
+        /// first bless or an exploratory compare, never for a gate.
+        #[arg(long)]
+        lenient: bool,
     },
     /// Write a static, self-contained index.html beside each run: per scene the modes, error
     /// against run time, images and crops, the gate's verdict, and metrics over past runs.
@@ -185,7 +222,9 @@ fn main() -> ExitCode {
         Command::Run(args) => run_command(args),
         Command::GenScenes { paths, force } => gen_scenes(&paths, force),
         Command::Bless { runs, baseline, force } => bless(&runs, &baseline, force),
-        Command::Compare { run, baseline, out, fail_on } => compare(&run, &baseline, out.as_deref(), fail_on),
+        Command::Compare { runs, baseline, base_runs, out, fail_on, lenient } => {
+            compare(&runs, &base_runs, &baseline, out.as_deref(), fail_on, lenient)
+        }
         Command::Report { runs, history, verdict } => report(&runs, history.as_deref(), verdict.as_deref()),
         Command::Merge { runs, out } => merge(&runs, &out),
         Command::Graph { manifest, mode, tier, extra_samples, dot } => {
@@ -200,11 +239,12 @@ fn main() -> ExitCode {
             exit::OK
         }
     };
-    ExitCode::from(code)
+    // Output the reader never got is a failure, whatever the command decided.
+    if STDOUT_FAILED.load(Ordering::SeqCst) { ExitCode::from(exit::ERROR) } else { ExitCode::from(code) }
 }
 
 fn fail(message: impl std::fmt::Display) -> u8 {
-    eprintln!("aabench: {message}");
+    tell!("aabench: {message}");
     exit::ERROR
 }
 
@@ -240,7 +280,7 @@ fn run_command(args: RunArgs) -> u8 {
                     Status::Interrupted => exit::INTERRUPTED,
                     _ => {
                         let failed = outcome.record.scenes.iter().filter(|s| s.status != Status::Ok).count();
-                        eprintln!("aabench: {failed} scene(s) failed; see {}", outcome.run_json.display());
+                        tell!("aabench: {failed} scene(s) failed; see {}", outcome.run_json.display());
                         exit::SCENE_FAILED
                     }
                 }
@@ -312,10 +352,7 @@ fn make_plan(args: &RunArgs) -> Result<RunPlan, String> {
     // Temporaries of killed runs (run folder, scene folders) go before this run adds its own.
     let stale = plan::remove_stale_temporaries(&args.out, 2);
     if stale > 0 {
-        eprintln!(
-            "aabench: removed {stale} temporary file(s) that killed runs left in {}",
-            args.out.display()
-        );
+        tell!("aabench: removed {stale} temporary file(s) that killed runs left in {}", args.out.display());
     }
     let (run_id, run_dir) = plan::create_run_dir(&args.out, &plan::new_run_id(args.tier, shard))?;
     Ok(RunPlan {
@@ -373,6 +410,14 @@ fn bless(runs: &[PathBuf], root: &Path, force: bool) -> u8 {
         Ok(records) => records,
         Err(message) => return fail(message),
     };
+    // What a killed bless left (files being written, a staging folder) goes first.
+    let stale = plan::remove_stale_temporaries(root, 2);
+    if stale > 0 {
+        tell!(
+            "aabench: removed {stale} temporary file(s) or folder(s) that killed blesses left in {}",
+            root.display()
+        );
+    }
     let now = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();
     match baseline::bless(&records, root, force, &now) {
         Ok(blessed) => {
@@ -380,7 +425,10 @@ fn bless(runs: &[PathBuf], root: &Path, force: bool) -> u8 {
                 say!("blessed {}", path.display());
             }
             for (scene, reason) in &blessed.skipped {
-                eprintln!("aabench: {scene}: not blessed: {reason}");
+                tell!("aabench: {scene}: not blessed: {reason}");
+            }
+            for warning in &blessed.warnings {
+                tell!("aabench: warning: {warning}");
             }
             if blessed.skipped.is_empty() { exit::OK } else { exit::ERROR }
         }
@@ -388,25 +436,39 @@ fn bless(runs: &[PathBuf], root: &Path, force: bool) -> u8 {
     }
 }
 
-fn compare(run: &Path, root: &Path, out: Option<&Path>, fail_on: compare::FailOn) -> u8 {
-    let (record, run_dir) = match aabench::record::load_run(run) {
-        Ok(run) => run,
-        Err(message) => return fail(message),
+fn compare(
+    runs: &[PathBuf],
+    base_runs: &[PathBuf],
+    root: &Path,
+    out_dir: Option<&Path>,
+    fail_on: compare::FailOn,
+    lenient: bool,
+) -> u8 {
+    let load = |paths: &[PathBuf]| -> Result<Vec<_>, String> {
+        paths.iter().map(|path| aabench::record::load_run(path)).collect()
     };
-    let baselines = match baseline::BaselineSet::load(root, &record) {
+    let (head, base) = match (load(runs), load(base_runs)) {
+        (Ok(head), Ok(base)) => (head, base),
+        (Err(message), _) | (_, Err(message)) => return fail(message),
+    };
+    let run_dir = head[0].1.clone();
+    let head: Vec<_> = head.into_iter().map(|(record, _)| record).collect();
+    let base: Vec<_> = base.into_iter().map(|(record, _)| record).collect();
+    if let Err(message) = compare::check_comparable(&head, &base) {
+        return fail(message);
+    }
+    let baselines = match baseline::BaselineSet::load(root, &head[0]) {
         Ok(baselines) => baselines,
         Err(message) => return fail(message),
     };
-    let verdict = compare::compare(&record, &baselines, fail_on);
-    let out = out.map_or(run_dir, Path::to_path_buf);
-    match compare::outputs::write_all(&verdict, &out) {
+    let request = compare::Request { runs: &head, base: &base, baselines: &baselines, fail_on, lenient };
+    let verdict = compare::compare(&request);
+    let out_dir = out_dir.map_or(run_dir, Path::to_path_buf);
+    match compare::outputs::write_all(&verdict, &out_dir) {
         Ok(files) => {
-            {
-                use std::io::Write as _;
-                let _ = write!(std::io::stdout().lock(), "{}", compare::outputs::summary(&verdict));
-            }
+            out(format_args!("{}", compare::outputs::summary(&verdict)));
             for file in files {
-                eprintln!("wrote {}", file.display());
+                tell!("wrote {}", file.display());
             }
             if verdict.regressed { exit::REGRESSION } else { exit::OK }
         }
@@ -421,7 +483,7 @@ fn report(runs: &[PathBuf], history: Option<&Path>, verdict: Option<&Path>) -> u
     let history = match history.map(aabench::report::load_history).transpose() {
         Ok(Some((runs, skipped))) => {
             for warning in skipped {
-                eprintln!("aabench: {warning}");
+                tell!("aabench: {warning}");
             }
             runs
         }
@@ -451,6 +513,9 @@ fn report(runs: &[PathBuf], history: Option<&Path>, verdict: Option<&Path>) -> u
 }
 
 fn merge(runs: &[PathBuf], out: &Path) -> u8 {
+    // A killed merge's staging folder sits beside `out`.
+    let beside = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    plan::remove_stale_temporaries(beside, 0);
     let shards: Result<Vec<_>, String> = runs.iter().map(|run| aabench::record::load_run(run)).collect();
     match shards.and_then(|shards| aabench::merge::merge(&shards, out)) {
         Ok(merged) => {
@@ -485,10 +550,7 @@ fn print_graph(
         let [width, height] = [settings.width, settings.height];
         say!("{} {mode} ({} tier, {width}×{height}; {needs})\n", manifest.name, tier.name());
     }
-    {
-        use std::io::Write as _;
-        let _ = write!(std::io::stdout().lock(), "{graph}");
-    }
+    out(format_args!("{graph}"));
     Ok(())
 }
 

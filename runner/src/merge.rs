@@ -14,12 +14,28 @@ pub fn merge(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecord, S
     if std::fs::read_dir(out).is_ok_and(|mut entries| entries.next().is_some()) {
         return Err(format!("{}: is not empty; merge into a new folder", out.display()));
     }
-    for (shard, dir) in shards {
-        for scene in shard.scenes.iter().filter(|scene| !scene.modes.is_empty() || scene.truth.is_some()) {
-            copy_folder(&dir.join(&scene.name), &out.join(&scene.name))?;
+    // Everything goes into a staging folder beside `out` (`<out>.tmp-<pid>`, which a later
+    // merge removes once its process is gone) that is renamed into place whole: a merge that
+    // fails or is killed midway (a full disk) leaves no `out` to refuse on the next try.
+    let mut staging = out.as_os_str().to_owned();
+    staging.push(format!(".tmp-{}", std::process::id()));
+    let staging = PathBuf::from(staging);
+    let fill = || -> Result<(), String> {
+        std::fs::create_dir_all(&staging).map_err(|e| format!("{}: {e}", staging.display()))?;
+        for (shard, dir) in shards {
+            for scene in shard.scenes.iter().filter(|scene| !scene.modes.is_empty() || scene.truth.is_some())
+            {
+                copy_folder(&dir.join(&scene.name), &staging.join(&scene.name))?;
+            }
         }
-    }
-    crate::json::write_atomic(&out.join("run.json"), &merged)?;
+        crate::json::write_atomic(&staging.join("run.json"), &merged)?;
+        // rename(2) replaces an empty folder, so an empty `out` is fine too.
+        std::fs::rename(&staging, out)
+            .map_err(|e| format!("{}: cannot move the merged run in: {e}", out.display()))
+    };
+    fill().inspect_err(|_| {
+        let _ = std::fs::remove_dir_all(&staging);
+    })?;
     Ok(merged)
 }
 

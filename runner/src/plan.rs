@@ -213,9 +213,9 @@ pub fn create_run_dir(out: &Path, id: &str) -> Result<(String, PathBuf), String>
 /// writer in another PID namespace (a container sharing the folder) is not in our /proc.
 const STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(60);
 
-/// Removes the temporary files (`<name>.tmp-<pid>`) that killed processes left under `dir`,
-/// down to `depth` folders; those of live processes, and any written to in the last
-/// [`STALE_AFTER`], are left alone. Returns how many went.
+/// Removes the temporary files and staging folders (`<name>.tmp-<pid>`) that killed processes
+/// left under `dir`, down to `depth` folders; those of live processes, and any written to in
+/// the last [`STALE_AFTER`], are left alone. Returns how many went.
 pub fn remove_stale_temporaries(dir: &Path, depth: u32) -> usize {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return 0;
@@ -224,19 +224,23 @@ pub fn remove_stale_temporaries(dir: &Path, depth: u32) -> usize {
     for entry in entries.flatten() {
         let path = entry.path();
         let Ok(kind) = entry.file_type() else { continue };
-        if kind.is_dir() && depth > 0 {
+        let stale = || {
+            temporary_owner(&path).is_some_and(|pid| !Path::new("/proc").join(pid.to_string()).exists())
+                && entry
+                    .metadata()
+                    .and_then(|m| m.modified())
+                    .is_ok_and(|t| t.elapsed().unwrap_or_default() > STALE_AFTER)
+        };
+        // Folders named like temporaries are a killed bless's or merge's staging folders.
+        let gone = if kind.is_dir() && stale() {
+            std::fs::remove_dir_all(&path).is_ok()
+        } else if kind.is_dir() && depth > 0 {
             removed += remove_stale_temporaries(&path, depth - 1);
-        } else if kind.is_file()
-            && let Some(pid) = temporary_owner(&path)
-            && !Path::new("/proc").join(pid.to_string()).exists()
-            && entry
-                .metadata()
-                .and_then(|m| m.modified())
-                .is_ok_and(|t| t.elapsed().unwrap_or_default() > STALE_AFTER)
-            && std::fs::remove_file(&path).is_ok()
-        {
-            removed += 1;
-        }
+            false
+        } else {
+            kind.is_file() && stale() && std::fs::remove_file(&path).is_ok()
+        };
+        removed += usize::from(gone);
     }
     removed
 }

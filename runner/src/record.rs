@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::gate::Tolerances;
 use crate::inputs::SceneInputs;
+use crate::machine::Machine;
 use crate::metrics::{FrameChecks, Quality, SampleStats};
 use crate::plan::Tier;
 use crate::stats::Summary;
@@ -71,7 +72,7 @@ pub struct Shard {
 }
 
 /// The machine: results with the same `key` are comparable in absolute time.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Platform {
     pub key: String,
     pub adapter: String,
@@ -83,6 +84,10 @@ pub struct Platform {
     pub cpu_model: String,
     pub cpu_cores: usize,
     pub build_profile: String,
+    /// The CPU's identity and calibration (absent in records from before it): decides whether
+    /// time is gated against a baseline blessed on another machine of the same key.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub machine: Option<Machine>,
 }
 
 impl From<&PlatformInfo> for Platform {
@@ -98,6 +103,7 @@ impl From<&PlatformInfo> for Platform {
             cpu_model: info.cpu_model.clone(),
             cpu_cores: info.cpu_cores,
             build_profile: info.build_profile.to_string(),
+            machine: None,
         }
     }
 }

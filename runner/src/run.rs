@@ -14,6 +14,7 @@ use aabench_renderer::{
 
 use crate::images;
 use crate::inputs::SceneInputs;
+use crate::machine::Machine;
 use crate::manifest::Manifest;
 use crate::metrics::{self, FrameChecks, Quality};
 use crate::plan::{RunPlan, SceneEntry, Tier, fallback_name};
@@ -57,7 +58,8 @@ pub async fn execute(plan: &RunPlan, progress: Progress, cancel: Arc<AtomicBool>
         status: Status::Running,
         tier: plan.tier,
         aabench_version: env!("CARGO_PKG_VERSION").into(),
-        platform: Platform::from(&worker.platform),
+        // Probed before any frame, while nothing else of the run uses the cores.
+        platform: Platform { machine: Some(Machine::measure()), ..Platform::from(&worker.platform) },
         settings: RunSettings {
             modes: plan.modes.iter().map(ToString::to_string).collect(),
             repetitions: plan.repetitions,
@@ -94,7 +96,7 @@ pub async fn execute(plan: &RunPlan, progress: Progress, cancel: Arc<AtomicBool>
             Ok(_) if worker.is_stuck() => {
                 not_run(entry, "an earlier frame timed out or the GPU worker panicked")
             }
-            Ok(manifest) => run_scene(&mut worker, plan, manifest, &progress, &cancel).await,
+            Ok(manifest) => run_scene(&mut worker, plan, manifest, &progress, Arc::clone(&cancel)).await,
             Err(error) => failed_scene(entry, error.to_string()),
         };
         report_scene(&progress, &scene);
@@ -198,7 +200,7 @@ async fn run_scene(
     plan: &RunPlan,
     manifest: &Manifest,
     progress: &Progress,
-    cancel: &AtomicBool,
+    cancel: Arc<AtomicBool>,
 ) -> SceneRecord {
     let mut record = empty_scene(manifest);
     let [width, height] = plan.tier.resolution(manifest);
@@ -255,8 +257,14 @@ async fn run_scene(
 
     // The truth renders before any mode is prepared, so its peak memory is its own.
     let (truth_record, truth_image) =
-        ground_truth(worker, plan, manifest, &inputs, [width, height], progress).await;
+        ground_truth(worker, plan, manifest, &inputs, [width, height], progress, Arc::clone(&cancel)).await;
     record.truth = Some(truth_record);
+    if cancel.load(Ordering::SeqCst) {
+        let _ = worker.call(plan.frame_timeout, |state| state.renderer = None).await;
+        record.status = Status::Interrupted;
+        record.error = Some("interrupted while its ground truth rendered: no mode ran".into());
+        return record;
+    }
 
     // Prepare every mode; a mode that cannot be prepared fails alone.
     let modes = plan.modes.clone();
@@ -408,6 +416,7 @@ async fn ground_truth(
     inputs: &SceneInputs,
     resolution: [u32; 2],
     progress: &Progress,
+    cancel: Arc<AtomicBool>,
 ) -> (TruthRecord, Option<DisplayImage>) {
     let mut record = TruthRecord {
         id: TRUTH_ID.into(),
@@ -418,6 +427,7 @@ async fn ground_truth(
         tiles: None,
         peak_rss_bytes: None,
         image: None,
+        image_hash: None,
         error: None,
     };
     let fail = |mut record: TruthRecord, error: String| {
@@ -439,12 +449,11 @@ async fn ground_truth(
             let measured = truth::peak_memory::reset();
             let start = Instant::now();
             let rendered = worker
-                .call(plan.frame_timeout.saturating_mul(16), |state| {
-                    state
-                        .renderer
-                        .as_mut()
-                        .expect("an uploaded scene")
-                        .render_truth(TRUTH_M, truth::TILE_BYTES)
+                .call(plan.frame_timeout.saturating_mul(16), move |state| {
+                    // A signal stops the truth between tiles, not after the last one.
+                    let stop = || cancel.load(Ordering::SeqCst);
+                    let renderer = state.renderer.as_mut().expect("an uploaded scene");
+                    renderer.render_truth_until(TRUTH_M, truth::TILE_BYTES, &stop)
                 })
                 .await;
             let truth = match rendered {
@@ -461,6 +470,7 @@ async fn ground_truth(
             truth.images.display
         }
     };
+    record.image_hash = Some(fingerprint(&display, None));
     let relative = format!("{}/{TRUTH_ID}.png", manifest.name);
     match images::write_display_png(&plan.run_dir.join(&relative), resolution[0], resolution[1], &display) {
         Ok(()) => record.image = Some(relative),

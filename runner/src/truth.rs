@@ -37,6 +37,10 @@ pub struct TruthRecord {
     pub peak_rss_bytes: Option<u64>,
     /// The display image, relative to the run folder.
     pub image: Option<String>,
+    /// FNV-1a 64 of the display image's code values: what `compare` looks at to say whether the
+    /// truth itself changed (its key changes with any edit of the rendering source).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image_hash: Option<String>,
     /// Why there is no truth, when there is none.
     pub error: Option<String>,
 }

@@ -263,7 +263,8 @@ fn a_failed_scene_fails_the_gate_with_or_without_a_baseline() {
     assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
     let run_dir = run_in(&ws, "reports");
     let out = ws.dir.join("gate");
-    let output = compare(&ws, &run_dir, &out);
+    // Lenient, so that the missing baselines are reported and the scene alone fails.
+    let output = ws.run(&["compare", &path_arg(&run_dir), "--out", &path_arg(&out), "--lenient"]);
     assert_eq!(output.status.code(), Some(1), "{}", String::from_utf8_lossy(&output.stdout));
     let verdict = read_json(&out.join("verdict.json"));
     let failed: Vec<&Value> =

@@ -100,6 +100,85 @@ fn broken_pipes_end_output_quietly() {
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
 }
 
+/// Runs `aabench ARGS 2>&1 | head -1` in the workspace under bash and returns aabench's own
+/// exit status (what CI log filters do to a command), and what reached head.
+fn through_head(ws: &Workspace, args: &str) -> (Option<i32>, String) {
+    let binary = env!("CARGO_BIN_EXE_aabench");
+    let output = Command::new("bash")
+        .arg("-c")
+        .arg(format!("'{binary}' {args} 2>&1 | head -1; exit ${{PIPESTATUS[0]}}"))
+        .current_dir(&ws.dir)
+        .env("CI", "1")
+        .output()
+        .unwrap();
+    (output.status.code(), String::from_utf8_lossy(&output.stdout).into_owned())
+}
+
+#[test]
+fn a_closed_stderr_keeps_the_commands_own_exit_code() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("closed-stderr");
+    ws.manifest("edge", "edge", |_| {});
+    let (code, first) =
+        through_head(&ws, "run --modes deferred-1x1,reference-2x2 --repetitions 5 --out first");
+    assert_eq!(code, Some(0), "{first}");
+    let run = std::fs::read_dir(ws.dir.join("first")).unwrap().next().unwrap().unwrap().path();
+    let run = run.to_str().unwrap();
+    let (code, first) = through_head(&ws, &format!("bless {run}"));
+    assert_eq!(code, Some(0), "{first}");
+    let (code, first) = through_head(&ws, &format!("compare {run} --out gate"));
+    assert_eq!(code, Some(0), "{first}");
+    // The same compare against a baseline it fails: exit 1, not a panic's 101.
+    let (code, first) = through_head(&ws, &format!("compare {run} --out gate --baseline no-such-folder"));
+    assert_eq!(code, Some(1), "{first}");
+    let (code, first) = through_head(&ws, "run scenes/no-such.json");
+    assert_eq!(code, Some(2), "{first}");
+    // Both pipes closed before the first byte, so every write fails: the verdict still decides.
+    let mut child = ws
+        .command(&["compare", run, "--out", "gate", "--baseline", "no-such-folder"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    drop(child.stderr.take());
+    assert_eq!(child.wait().unwrap().code(), Some(1));
+}
+
+#[test]
+fn an_unwritable_stdout_is_an_error() {
+    let full = std::fs::File::options().write(true).open("/dev/full").expect("Linux has /dev/full");
+    let output = Command::new(env!("CARGO_BIN_EXE_aabench")).arg("modes").stdout(full).output().unwrap();
+    assert_eq!(output.status.code(), Some(2));
+    assert!(stderr(&output).contains("cannot write to standard output"), "{}", stderr(&output));
+}
+
+#[test]
+fn sigterm_stops_a_ground_truth_between_tiles() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("sigterm-truth");
+    // 2048×1536 at 8×8 samples needs about 7 GB of targets: some fifteen tiles.
+    ws.manifest("edge", "edge", |m| m["resolution"]["quick"] = json!([2048, 1536]));
+    ws.run(&["gen-scenes"]);
+    let mut child = ws.command(&["run", "--modes", "deferred-1x1"]).stderr(Stdio::piped()).spawn().unwrap();
+    wait_for_line(&stderr_lines(&mut child), "rendering the ground truth");
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let signalled = std::time::Instant::now();
+    assert!(Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap().success());
+    assert_eq!(child.wait().unwrap().code(), Some(130));
+    let waited = signalled.elapsed();
+    let record = ws.record();
+    let scene = &record["scenes"][0];
+    assert_eq!(scene["status"], "interrupted", "{scene}");
+    let truth = scene["truth"]["error"].as_str().unwrap();
+    assert!(truth.contains("stopped on request after"), "{truth}");
+    // The whole truth takes about 8 s here, one of its tiles about half a second.
+    let tiles: Vec<usize> =
+        truth.split(|c: char| !c.is_ascii_digit()).filter_map(|n| n.parse().ok()).collect();
+    assert!(tiles[0] < tiles[1], "stopped before the last tile: {truth}");
+    assert!(waited < std::time::Duration::from_secs(4), "{waited:?} after the signal ({truth})");
+}
+
 #[test]
 fn two_runs_into_one_folder_in_the_same_second_keep_both_records() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
@@ -297,4 +376,40 @@ fn a_full_disk_is_reported_and_leaves_only_whole_files() {
             _ => {}
         }
     }
+}
+
+#[test]
+fn a_merge_that_runs_out_of_disk_leaves_nothing_and_the_retry_succeeds() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("merge-full");
+    ws.manifest("a-edge", "edge", |_| {});
+    ws.manifest("b-plane", "plane", |_| {});
+    for shard in ["1/2", "2/2"] {
+        let folder = format!("shard{}", &shard[..1]);
+        let args =
+            ["run", "--modes", "deferred-1x1", "--repetitions", "1", "--shard", shard, "--out", &folder];
+        assert_eq!(ws.run(&args).status.code(), Some(0));
+    }
+    let shard = |n: &str| {
+        let dir = ws.dir.join(format!("shard{n}"));
+        std::fs::read_dir(dir).unwrap().next().unwrap().unwrap().path().to_str().unwrap().to_owned()
+    };
+    let Some(disk) = SmallDisk::mount(ws.dir.join("small"), 256) else {
+        eprintln!("skipped: mounting a small tmpfs needs root (CI runs as root)");
+        return;
+    };
+    // A filler leaves room for some of the images, not all.
+    let filler = disk.dir.join("filler");
+    std::fs::write(&filler, vec![0u8; 200 << 10]).unwrap();
+    let out = disk.dir.join("merged");
+    let merge = || ws.run(&["merge", &shard("1"), &shard("2"), "--out", out.to_str().unwrap()]);
+    let output = merge();
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(stderr(&output).contains("No space left on device"), "{}", stderr(&output));
+    let left: Vec<_> = std::fs::read_dir(&disk.dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(left, ["filler"], "nothing of the failed merge stays");
+    std::fs::remove_file(&filler).unwrap();
+    let output = merge();
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    assert_eq!(read_json(&out.join("run.json"))["scenes"].as_array().map(Vec::len), Some(2));
 }

@@ -17,6 +17,7 @@
 //! instead of looking faster against an anchor that grew with them. deferred-1x1's ratio is
 //! still recorded and shown; the gate uses the steadier anchor.
 
+mod ab;
 pub mod outputs;
 
 use std::collections::BTreeMap;
@@ -47,7 +48,11 @@ pub enum Outcome {
     /// A time whose estimate is past the threshold but whose interval is not wholly: the
     /// repetitions cannot tell. Reported, not failed.
     Noisy,
-    /// In the baseline, not in the run.
+    /// A time with too little evidence to decide either way: fewer than [`MIN_FRAMES`] frames
+    /// on a side, or fewer than [`MIN_PROCESSES`] processes of the base or the head. Reported,
+    /// never failed, never called unchanged.
+    Insufficient,
+    /// In the baseline, not in the run: fails unless `--lenient`.
     Missing,
     /// In the run, not in the baseline.
     New,
@@ -55,19 +60,20 @@ pub enum Outcome {
 }
 
 impl Outcome {
-    pub const ALL: [Outcome; 7] = [
+    pub const ALL: [Outcome; 8] = [
         Outcome::Regressed,
         Outcome::Failed,
         Outcome::Improved,
         Outcome::Noisy,
+        Outcome::Insufficient,
         Outcome::Missing,
         Outcome::New,
         Outcome::Unchanged,
     ];
 
-    /// True for the outcomes that make `compare` exit 1.
+    /// True for the outcomes that make `compare` exit 1 when their check is gated.
     pub fn fails(self) -> bool {
-        matches!(self, Outcome::Regressed | Outcome::Failed)
+        matches!(self, Outcome::Regressed | Outcome::Failed | Outcome::Missing)
     }
 
     pub fn name(self) -> &'static str {
@@ -76,6 +82,7 @@ impl Outcome {
             Outcome::Failed => "failed",
             Outcome::Improved => "improved",
             Outcome::Noisy => "noisy",
+            Outcome::Insufficient => "insufficient",
             Outcome::Missing => "missing",
             Outcome::New => "new",
             Outcome::Unchanged => "unchanged",
@@ -87,18 +94,40 @@ impl Outcome {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum FailOn {
-    /// `all` against baselines of the run's own platform key, `quality` against another's:
-    /// relative costs shift between CPUs, so another machine's times can only inform.
+    /// Quality and status always; time against the base build's processes (`--base-runs`)
+    /// when given, else against the committed baselines only on the machine that blessed them
+    /// (same platform key, CPU identity and calibration): relative costs shift between CPUs,
+    /// so another machine's times can only inform.
     Auto,
-    /// Every check: quality and time.
+    /// Every check: quality and time, whichever machine blessed the baselines.
     All,
-    /// Quality and status only; time verdicts are reported but fail nothing (for machines
-    /// whose timings the baselines cannot speak for, such as shared CI runners).
+    /// Quality and status only; time verdicts are reported but fail nothing.
     Quality,
 }
 
 /// The time metrics: noisy, decided on intervals.
 const TIME_METRICS: [&str; 3] = ["relative_time", "time_vs_reference", "frame_time"];
+
+/// The fewest timed frames of a mode, on each side, from which a time check against committed
+/// baselines is decided. With fewer, the interval is the few ratios themselves: one frame a
+/// side gave false regressions in 3 of 4 compares of a build with itself.
+pub const MIN_FRAMES: usize = 5;
+
+/// The fewest processes on each side from which a time check against the base build is
+/// decided: four against four is the smallest design whose Moses interval reaches 95%
+/// (97.1%; three against three reaches only 90%).
+pub const MIN_PROCESSES: usize = 4;
+
+/// What a time check is measured against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Against {
+    /// The committed baselines (quality, presence, and time on the machine that blessed them).
+    #[default]
+    Baseline,
+    /// The base build, run in alternating processes on the same machine in the same job.
+    Base,
+}
 
 /// One decision: a metric of a mode of a scene.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -107,8 +136,11 @@ pub struct Check {
     pub mode: String,
     /// `status`, `psnr_vs_truth`, `mse_vs_truth`, `psnr_vs_reference`, `mse_vs_reference`,
     /// `shaded_percent`, `sample_histogram`, `output_hash`, `relative_time`,
-    /// `time_vs_reference`, `frame_time` (absolute, wide threshold).
+    /// `time_vs_reference`, `frame_time`; `run` for the run as a whole.
     pub metric: String,
+    /// What the check compares with: the committed baseline or the base build's processes.
+    #[serde(default)]
+    pub against: Against,
     pub outcome: Outcome,
     pub baseline: Option<f64>,
     pub current: Option<f64>,
@@ -122,7 +154,8 @@ pub struct Check {
     pub unit: String,
     /// One sentence with the numbers, for people.
     pub detail: String,
-    /// False when `--fail-on` exempts this check: its outcome is reported, not failed.
+    /// False when `--fail-on`, `--lenient` or another machine exempts this check: its outcome
+    /// is reported, not failed.
     pub gated: bool,
 }
 
@@ -131,6 +164,25 @@ impl Check {
     pub fn fails(&self) -> bool {
         self.gated && self.outcome.fails()
     }
+
+    /// A check of the run as a whole (`scene` and `mode` `*`).
+    fn of_run(outcome: Outcome, detail: String) -> Check {
+        Check {
+            scene: "*".into(),
+            mode: "*".into(),
+            metric: "run".into(),
+            against: Against::Baseline,
+            outcome,
+            baseline: None,
+            current: None,
+            change: None,
+            interval: None,
+            threshold: None,
+            unit: String::new(),
+            detail,
+            gated: true,
+        }
+    }
 }
 
 /// Every check of a run against its baselines.
@@ -138,13 +190,26 @@ impl Check {
 pub struct Verdict {
     pub schema: String,
     pub run_id: String,
+    /// Every process of the run under test (the first, `run_id`, gives the quality numbers).
+    #[serde(default)]
+    pub run_ids: Vec<String>,
+    /// The base build's processes that time was gated against, if any.
+    #[serde(default)]
+    pub base_run_ids: Vec<String>,
     pub tier: String,
     pub run_platform: String,
     /// The baselines' folder, or `None` when there were none for the tier.
     pub baseline_dir: Option<PathBuf>,
     pub baseline_platform: Option<String>,
     pub same_platform: bool,
+    /// True when the run's machine is the one that blessed the baselines (platform key, CPU
+    /// identity and calibration agree).
+    #[serde(default)]
+    pub same_machine: bool,
     pub fail_on: FailOn,
+    /// True when `--lenient` made missing baselines, scenes and modes informational.
+    #[serde(default)]
+    pub lenient: bool,
     /// True when a gated check regressed or failed: `compare` exits 1.
     pub regressed: bool,
     pub counts: BTreeMap<Outcome, usize>,
@@ -153,28 +218,58 @@ pub struct Verdict {
     pub checks: Vec<Check>,
 }
 
-/// Compares `run` with `baselines`; `fail_on` says which checks may fail it.
-pub fn compare(run: &RunRecord, baselines: &BaselineSet, fail_on: FailOn) -> Verdict {
-    let fail_on = match fail_on {
-        FailOn::Auto if baselines.same_platform => FailOn::All,
-        FailOn::Auto => FailOn::Quality,
-        chosen => chosen,
-    };
+/// What `compare` decides on.
+#[derive(Debug, Clone, Copy)]
+pub struct Request<'a> {
+    /// The run under test: one process, or several of one build (the first gives the quality
+    /// numbers; their images must agree; their frames are pooled for time against baselines).
+    pub runs: &'a [RunRecord],
+    /// Processes of the base build measured on the same machine in the same job, ideally
+    /// alternating with `runs`: time is gated against them with the process as the unit.
+    pub base: &'a [RunRecord],
+    pub baselines: &'a BaselineSet,
+    pub fail_on: FailOn,
+    /// Missing baselines, scenes, modes and platforms, shards and unfinished runs are
+    /// reported, not failed (a first bless, an exploratory compare).
+    pub lenient: bool,
+}
+
+/// Compares the request's run with its baselines (and its base build's processes, if any).
+pub fn compare(request: &Request) -> Verdict {
+    let Request { runs, base, baselines, fail_on, lenient } = *request;
+    let run = &runs[0];
     let mut notes = Vec::new();
-    match (&baselines.dir, baselines.same_platform) {
-        (None, _) => notes.push(format!(
-            "no baselines for the {} tier: every mode is new (bless a run to create them)",
-            run.tier.name()
-        )),
-        (Some(_), false) => notes.push(format!(
+    let mut checks = Vec::new();
+    for problem in run_problems(run, baselines) {
+        if lenient {
+            notes.push(format!("{problem} (--lenient: reported, not failed)"));
+        } else {
+            checks.push(Check::of_run(Outcome::Failed, format!("{problem}; or compare with --lenient")));
+        }
+    }
+    if let (Some(_), false) = (&baselines.dir, baselines.same_platform) {
+        notes.push(format!(
             "the baselines are of another platform (`{}`; this run: `{}`): quality is compared with the \
              cross-platform tolerances, in-run time ratios as usual, absolute times not at all",
             baselines.platform_key.as_deref().unwrap_or("?"),
             run.platform.key
-        )),
-        (Some(_), true) => {}
+        ));
     }
-    let mut checks = Vec::new();
+    let machine = same_machine(run, baselines);
+    let baseline_time_gated = match fail_on {
+        FailOn::All => true,
+        FailOn::Quality => false,
+        FailOn::Auto => base.is_empty() && machine.is_ok(),
+    };
+    if baselines.dir.is_some() && !baseline_time_gated && fail_on == FailOn::Auto {
+        let why = match &machine {
+            _ if !base.is_empty() => "the base build's processes on this machine decide".to_string(),
+            Err(why) => format!("another machine ({why})"),
+            Ok(()) => String::new(),
+        };
+        notes.push(format!("time against the committed baselines is informational: {why}"));
+    }
+    checks.extend(disagreements(runs));
     for scene in &run.scenes {
         // A scene that failed (to load, to render its truth, in a mode) or was interrupted
         // fails the gate, baseline or not.
@@ -183,11 +278,13 @@ pub fn compare(run: &RunRecord, baselines: &BaselineSet, fail_on: FailOn) -> Ver
             let detail = scene.error.clone().unwrap_or_else(|| format!("the scene's status is {status}"));
             checks.push(status_check(scene, "*", Outcome::Failed, &detail));
         }
+        let processes: Vec<&SceneRecord> =
+            runs.iter().filter_map(|r| r.scenes.iter().find(|s| s.name == scene.name)).collect();
         match baselines.scene(&scene.name) {
             Some(_) if scene.modes.is_empty() => {}
             Some(baseline) => {
                 notes.extend(input_notes(scene, baseline.scene()));
-                checks.extend(compare_scene(scene, baseline, baselines.same_platform, &mut notes));
+                checks.extend(compare_scene(&processes, baseline, baselines.same_platform, &mut notes));
             }
             None => checks.extend(scene.modes.iter().map(|mode| {
                 let outcome = if mode.status == Status::Ok { Outcome::New } else { Outcome::Failed };
@@ -200,7 +297,8 @@ pub fn compare(run: &RunRecord, baselines: &BaselineSet, fail_on: FailOn) -> Ver
             })),
         }
     }
-    // A shard covers only some scenes: the others are not missing.
+    // A shard covers only some scenes: the others are not missing (a strict compare has
+    // already failed the shard itself).
     if run.shard.is_none() {
         for baseline in &baselines.baselines {
             let scene = baseline.scene();
@@ -210,11 +308,22 @@ pub fn compare(run: &RunRecord, baselines: &BaselineSet, fail_on: FailOn) -> Ver
             }
         }
     }
-    if fail_on == FailOn::Quality {
-        notes.push("time verdicts are reported, not failed".into());
-        for check in checks.iter_mut().filter(|c| TIME_METRICS.contains(&c.metric.as_str())) {
+    if !base.is_empty() {
+        checks.extend(ab::checks(runs, base, baselines, &mut notes));
+    }
+    for check in &mut checks {
+        if TIME_METRICS.contains(&check.metric.as_str()) {
+            check.gated = match check.against {
+                Against::Baseline => baseline_time_gated,
+                Against::Base => fail_on != FailOn::Quality,
+            };
+        }
+        if lenient && check.outcome == Outcome::Missing {
             check.gated = false;
         }
+    }
+    if fail_on == FailOn::Quality {
+        notes.push("time verdicts are reported, not failed".into());
     }
     let mut counts = BTreeMap::new();
     for check in &checks {
@@ -223,17 +332,126 @@ pub fn compare(run: &RunRecord, baselines: &BaselineSet, fail_on: FailOn) -> Ver
     Verdict {
         schema: VERDICT_SCHEMA.into(),
         run_id: run.run_id.clone(),
+        run_ids: runs.iter().map(|r| r.run_id.clone()).collect(),
+        base_run_ids: base.iter().map(|r| r.run_id.clone()).collect(),
         tier: run.tier.name().into(),
         run_platform: run.platform.key.clone(),
         baseline_dir: baselines.dir.clone(),
         baseline_platform: baselines.platform_key.clone(),
         same_platform: baselines.same_platform,
+        same_machine: machine.is_ok(),
         fail_on,
+        lenient,
         regressed: checks.iter().any(Check::fails),
         counts,
         notes,
         checks,
     }
+}
+
+/// Runs that cannot be compared together at all (exit 2): processes of the run, or of the
+/// base, on different platforms or tiers, the same run given twice, or base runs of another
+/// platform or tier than the run's.
+pub fn check_comparable(runs: &[RunRecord], base: &[RunRecord]) -> Result<(), String> {
+    let first = &runs[0];
+    let all: Vec<&RunRecord> = runs.iter().chain(base).collect();
+    for (index, run) in all.iter().enumerate() {
+        // Equal records are one process read twice: two processes never time alike.
+        if all[..index].contains(run) {
+            return Err(format!(
+                "run {} is given twice: each process counts once (pass each run folder once)",
+                run.run_id
+            ));
+        }
+        if run.platform.key != first.platform.key || run.tier != first.tier {
+            return Err(format!(
+                "run {} ({}, {} tier) and run {} ({}, {} tier) were not measured alike: compare runs of one \
+                 platform and tier",
+                first.run_id,
+                first.platform.key,
+                first.tier.name(),
+                run.run_id,
+                run.platform.key,
+                run.tier.name()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// What makes a run unfit to gate on: no baselines, another platform's, a run without scenes,
+/// one shard of a suite, a run that did not finish. A strict compare fails on each.
+fn run_problems(run: &RunRecord, baselines: &BaselineSet) -> Vec<String> {
+    let mut problems = Vec::new();
+    match (&baselines.absent, &baselines.platform_key) {
+        (Some(why), _) => problems.push(format!(
+            "no baselines to compare with: {why} (bless runs of this build with `aabench bless`)"
+        )),
+        (None, Some(key)) if !baselines.same_platform => problems.push(format!(
+            "no baselines of this run's platform `{}` for the {} tier, only of `{key}`: bless runs made here",
+            run.platform.key,
+            run.tier.name()
+        )),
+        _ => {}
+    }
+    if run.scenes.is_empty() {
+        problems.push("the run has no scenes: nothing was measured".into());
+    }
+    if let Some(shard) = run.shard {
+        problems.push(format!(
+            "the run is shard {}/{} of a suite: join the shards with `aabench merge` and compare the merged run",
+            shard.index, shard.count
+        ));
+    }
+    if run.finished_at.is_none() || matches!(run.status, Status::Running | Status::Interrupted) {
+        problems.push(format!(
+            "the run did not finish (status `{}`): it was killed, interrupted or is still running",
+            run.status
+        ));
+    }
+    problems
+}
+
+/// Whether the run's machine is the one that blessed the baselines: the same platform key, CPU
+/// identity and calibration (see [`crate::machine`]); otherwise why not.
+fn same_machine(run: &RunRecord, baselines: &BaselineSet) -> Result<(), String> {
+    if !baselines.same_platform {
+        return Err("another platform key".into());
+    }
+    let blessed = baselines.baselines.first().ok_or("no baselines")?;
+    match (&run.platform.machine, &blessed.platform.machine) {
+        (Some(now), Some(then)) => now.same_as(then),
+        (None, _) => Err("the run did not record its machine".into()),
+        (_, None) => Err("the baselines do not record their machine (blessed before aabench did)".into()),
+    }
+}
+
+/// Processes of one build must render the same images: a mode whose output hash differs
+/// between them fails (their times are pooled, their quality taken from the first).
+fn disagreements(runs: &[RunRecord]) -> Vec<Check> {
+    let mut checks = Vec::new();
+    let first = &runs[0];
+    for (index, other) in runs.iter().enumerate().skip(1) {
+        for scene in &first.scenes {
+            let Some(theirs) = other.scenes.iter().find(|s| s.name == scene.name) else { continue };
+            for mode in scene.modes.iter().filter(|m| m.output_hash.is_some()) {
+                let hash = theirs.mode(&mode.mode).and_then(|m| m.output_hash.as_ref());
+                if hash.is_some_and(|hash| Some(hash) != mode.output_hash.as_ref()) {
+                    let detail = format!(
+                        "process {} ({}) rendered another image than process 1 ({}): the build is not deterministic",
+                        index + 1,
+                        other.run_id,
+                        first.run_id
+                    );
+                    checks.push(Check {
+                        metric: "output_hash".into(),
+                        ..status_check(scene, &mode.mode, Outcome::Failed, &detail)
+                    });
+                }
+            }
+        }
+    }
+    checks
 }
 
 /// Notes on input files that changed since the baseline: the metrics may move for that reason.
@@ -247,13 +465,19 @@ fn input_notes(scene: &SceneRecord, baseline: &SceneRecord) -> Vec<String> {
             notes.push(format!("{}: the glTF file changed since the baseline", scene.name));
         }
     }
-    if let (Some(now), Some(then)) = (&scene.truth, &baseline.truth)
-        && now.key != then.key
-    {
-        notes.push(format!(
-            "{}: the ground truth's key changed (inputs, shaders, version or driver): errors against it may move",
-            scene.name
-        ));
+    if let (Some(now), Some(then)) = (&scene.truth, &baseline.truth) {
+        // The key changes with any edit of the rendering source, a comment included; the
+        // image's own hash says whether the truth itself moved.
+        let changed = match (&now.image_hash, &then.image_hash) {
+            (Some(now), Some(then)) => now != then,
+            _ => now.key != then.key,
+        };
+        if changed {
+            notes.push(format!(
+                "{}: the ground truth's image changed since the baseline: errors against it may move",
+                scene.name
+            ));
+        }
     }
     notes
 }
@@ -263,6 +487,7 @@ fn status_check(scene: &SceneRecord, mode: &str, outcome: Outcome, detail: &str)
         scene: scene.name.clone(),
         mode: mode.into(),
         metric: "status".into(),
+        against: Against::Baseline,
         outcome,
         baseline: None,
         current: None,
@@ -275,12 +500,15 @@ fn status_check(scene: &SceneRecord, mode: &str, outcome: Outcome, detail: &str)
     }
 }
 
+/// The checks of one scene: `processes` are its records in each process of the run (the
+/// first gives the quality numbers), `baseline` its committed baseline.
 fn compare_scene(
-    scene: &SceneRecord,
+    processes: &[&SceneRecord],
     baseline: &Baseline,
     same_platform: bool,
     notes: &mut Vec<String>,
 ) -> Vec<Check> {
+    let scene = processes[0];
     let then = baseline.scene();
     if scene.resolution != then.resolution {
         let show = |r: Option<[u32; 2]>| r.map_or("?".into(), |[w, h]| format!("{w}×{h}"));
@@ -322,6 +550,7 @@ fn compare_scene(
         }
         let context = ModeContext {
             scene,
+            processes,
             baselines: &baseline.scenes,
             mode,
             old,
@@ -343,6 +572,8 @@ fn compare_scene(
 /// One mode of the run and the same mode in the baseline.
 struct ModeContext<'a> {
     scene: &'a SceneRecord,
+    /// The scene in every process of the run: time checks pool their rounds.
+    processes: &'a [&'a SceneRecord],
     /// The baseline's records of the scene, one per blessed run: time checks pool their rounds.
     baselines: &'a [SceneRecord],
     mode: &'a ModeRecord,
@@ -360,6 +591,7 @@ impl ModeContext<'_> {
             scene: self.scene.name.clone(),
             mode: self.mode.mode.clone(),
             metric: metric.into(),
+            against: Against::Baseline,
             outcome,
             baseline: None,
             current: None,
@@ -512,34 +744,30 @@ impl ModeContext<'_> {
     fn time_checks(&self) -> Vec<Check> {
         let mut checks = Vec::new();
         let threshold = self.tolerances.time_ratio;
-        let Some(now) = &self.mode.frame_ms else { return checks };
-        // The mode's frame samples in each baseline record, rounds in order.
-        let then: Vec<&Vec<f64>> = self
-            .baselines
-            .iter()
-            .filter_map(|record| record.mode(&self.mode.mode)?.frame_ms.as_ref().map(|f| &f.samples))
-            .collect();
-        if then.len() != self.baselines.len() {
-            return checks;
-        }
         let id = self.mode.mode.as_str();
-        let now_anchor = self.scene.round_anchor(self.anchor_modes, id);
-        let then_anchors: Option<Vec<Vec<f64>>> =
-            self.baselines.iter().map(|record| record.round_anchor(self.anchor_modes, id)).collect();
-        if let (Some(now_anchor), Some(then_anchors)) = (now_anchor, then_anchors) {
+        // The mode's frame samples in each baseline record and each process of the run.
+        let frames = |record: &SceneRecord| record.mode(id)?.frame_ms.as_ref().map(|f| f.samples.clone());
+        let Some(now) = self.processes.iter().map(|record| frames(record)).collect::<Option<Vec<_>>>() else {
+            return checks;
+        };
+        let Some(then) = self.baselines.iter().map(frames).collect::<Option<Vec<_>>>() else { return checks };
+        let anchors = |record: &SceneRecord| record.round_anchor(self.anchor_modes, id);
+        if let (Some(now_anchors), Some(then_anchors)) = (
+            self.processes.iter().map(|record| anchors(record)).collect::<Option<Vec<_>>>(),
+            self.baselines.iter().map(anchors).collect::<Option<Vec<_>>>(),
+        ) {
             let relative = |samples: &[f64], anchor: &[f64]| -> Vec<f64> {
                 samples.iter().zip(anchor).map(|(s, a)| s.ln() - a).collect()
             };
-            let now_log = relative(&now.samples, &now_anchor);
-            let then_logs: Vec<Vec<f64>> =
-                then.iter().zip(&then_anchors).map(|(samples, anchor)| relative(samples, anchor)).collect();
+            let relatives = |samples: &[Vec<f64>], anchors: &[Vec<f64>]| -> Vec<Vec<f64>> {
+                samples.iter().zip(anchors).map(|(s, a)| relative(s, a)).collect()
+            };
             checks.extend(self.time_check(
                 "relative_time",
-                &now_log,
-                &then_logs,
+                &relatives(&now, &now_anchors).concat(),
+                &relatives(&then, &then_anchors),
                 threshold,
                 "frame time over the geometric mean of the round's other unstalled modes",
-                (median_exp(&then_logs.concat()), median_exp(&now_log)),
                 "×",
             ));
         }
@@ -547,16 +775,14 @@ impl ModeContext<'_> {
             checks.extend(self.ratio_check("time_vs_reference", &cost.reference, threshold));
         }
         if self.same_platform {
-            let log = |samples: &[f64]| samples.iter().map(|s| s.ln()).collect::<Vec<_>>();
-            let then_logs: Vec<Vec<f64>> = then.iter().map(|samples| log(samples)).collect();
-            let now_log = log(&now.samples);
+            let log = |samples: &Vec<f64>| samples.iter().map(|s| s.ln()).collect::<Vec<_>>();
+            let now_log: Vec<f64> = now.iter().flat_map(log).collect();
             checks.extend(self.time_check(
                 "frame_time",
                 &now_log,
-                &then_logs,
+                &then.iter().map(log).collect::<Vec<_>>(),
                 self.tolerances.absolute_time,
                 "absolute frame time (wide threshold: processes drift)",
-                (median_exp(&then_logs.concat()), median_exp(&now_log)),
                 "ms",
             ));
         }
@@ -567,17 +793,15 @@ impl ModeContext<'_> {
     /// baseline's.
     fn ratio_check(&self, metric: &str, anchor: &str, threshold: f64) -> Option<Check> {
         let log = |ratios: Vec<f64>| ratios.iter().map(|r| r.ln()).collect::<Vec<_>>();
-        let now = log(self.scene.paired_ratios(&self.mode.mode, anchor)?);
-        let then: Option<Vec<Vec<f64>>> =
-            self.baselines.iter().map(|record| record.paired_ratios(&self.mode.mode, anchor)).collect();
-        let then: Vec<Vec<f64>> = then?.into_iter().map(log).collect();
+        let ratios = |record: &SceneRecord| record.paired_ratios(&self.mode.mode, anchor).map(log);
+        let now: Vec<Vec<f64>> = self.processes.iter().map(|record| ratios(record)).collect::<Option<_>>()?;
+        let then: Vec<Vec<f64>> = self.baselines.iter().map(ratios).collect::<Option<_>>()?;
         self.time_check(
             metric,
-            &now,
+            &now.concat(),
             &then,
             threshold,
             &format!("frame time over {anchor}'s in the same round"),
-            (median_exp(&then.concat()), median_exp(&now)),
             "×",
         )
     }
@@ -585,7 +809,7 @@ impl ModeContext<'_> {
     /// Decides a time metric from log samples (the baseline's per process): the
     /// Hodges–Lehmann shift with its Moses interval, as relative changes, against the
     /// threshold widened by how far the baseline's own processes disagree ([`process_spread`]).
-    #[allow(clippy::too_many_arguments)]
+    /// Fewer than [`MIN_FRAMES`] samples on either side is `insufficient`.
     fn time_check(
         &self,
         metric: &str,
@@ -593,61 +817,105 @@ impl ModeContext<'_> {
         then_per_process: &[Vec<f64>],
         threshold: f64,
         what: &str,
-        (then_value, now_value): (f64, f64),
         unit: &str,
     ) -> Option<Check> {
         let then = then_per_process.concat();
+        let values = (median_exp(&then), median_exp(now));
+        if now.len() < MIN_FRAMES || then.len() < MIN_FRAMES {
+            let value = |v: f64| show_time(v, unit);
+            return Some(Check {
+                baseline: Some(values.0),
+                current: Some(values.1),
+                ..self.check(
+                    metric,
+                    Outcome::Insufficient,
+                    "relative",
+                    format!(
+                        "{what}: {} → {}; {} frames in the run and {} in the baseline, fewer than the {MIN_FRAMES} a time verdict needs",
+                        value(values.0),
+                        value(values.1),
+                        now.len(),
+                        then.len()
+                    ),
+                )
+            });
+        }
         let shift = Shift::between(now, &then, CONFIDENCE)?;
-        let relative = |log: f64| log.exp() - 1.0;
         // Widened by at most the tolerance itself: a 25% slowdown stays caught under the
         // default 10% however much one blessed process strayed.
         let tolerance = (1.0 + threshold).ln();
         let spread = process_spread(then_per_process).min(tolerance);
-        let bound = tolerance + spread;
-        let outcome = if shift.low > bound {
-            Outcome::Regressed
-        } else if shift.high < -bound {
-            Outcome::Improved
-        } else if shift.estimate.abs() > bound {
-            Outcome::Noisy
-        } else {
-            Outcome::Unchanged
-        };
-        let (change, low, high) = (relative(shift.estimate), relative(shift.low), relative(shift.high));
-        let value = |v: f64| if unit == "ms" { format!("{v:.1} ms") } else { format!("{v:.3}{unit}") };
-        Some(Check {
-            baseline: Some(then_value),
-            current: Some(now_value),
-            change: Some(change),
-            interval: Some([low, high]),
-            threshold: Some(relative(bound)),
-            ..self.check(
-                metric,
-                outcome,
-                "relative",
-                format!(
-                    "{what}: {} → {} ({}, {:.0}% interval {} … {}; thresholds {} and {}{})",
-                    value(then_value),
-                    value(now_value),
-                    show_percent(change),
-                    shift.level * 100.0,
-                    show_percent(low),
-                    show_percent(high),
-                    show_percent(relative(-bound)),
-                    show_percent(relative(bound)),
-                    if spread > 0.0 {
-                        format!(
-                            ": the tolerance {} widened by the baseline processes' own spread, {}",
-                            show_percent(threshold),
-                            show_percent(relative(spread))
-                        )
-                    } else {
-                        String::new()
-                    }
-                ),
+        let widening = (spread > 0.0).then(|| {
+            format!(
+                ": the tolerance {} widened by the baseline processes' own spread, {}",
+                show_percent(threshold),
+                show_percent(spread.exp() - 1.0)
             )
-        })
+        });
+        let decided =
+            decide(shift, tolerance + spread, values, unit, what, widening.as_deref().unwrap_or(""));
+        Some(decided.into_check(self.check(metric, Outcome::Unchanged, "relative", String::new())))
     }
+}
+
+/// A time shift decided against a bound: its outcome and the numbers that go into a check.
+struct Decided {
+    outcome: Outcome,
+    values: (f64, f64),
+    change: f64,
+    interval: [f64; 2],
+    bound: f64,
+    detail: String,
+}
+
+impl Decided {
+    /// `template` with this decision's outcome, numbers and detail.
+    fn into_check(self, template: Check) -> Check {
+        Check {
+            outcome: self.outcome,
+            baseline: Some(self.values.0),
+            current: Some(self.values.1),
+            change: Some(self.change),
+            interval: Some(self.interval),
+            threshold: Some(self.bound.exp() - 1.0),
+            detail: self.detail,
+            ..template
+        }
+    }
+}
+
+/// Regressed when the whole interval of `shift` (in log) is past `bound`, improved when it is
+/// wholly below `-bound`, noisy when only the estimate is past either, else unchanged.
+/// `values` are the two sides' medians for the detail, `extra` ends its threshold clause.
+fn decide(shift: Shift, bound: f64, values: (f64, f64), unit: &str, what: &str, extra: &str) -> Decided {
+    let outcome = if shift.low > bound {
+        Outcome::Regressed
+    } else if shift.high < -bound {
+        Outcome::Improved
+    } else if shift.estimate.abs() > bound {
+        Outcome::Noisy
+    } else {
+        Outcome::Unchanged
+    };
+    let relative = |log: f64| log.exp() - 1.0;
+    let (change, low, high) = (relative(shift.estimate), relative(shift.low), relative(shift.high));
+    let detail = format!(
+        "{what}: {} → {} ({}, {:.0}% interval {} … {}; thresholds {} and {}{extra})",
+        show_time(values.0, unit),
+        show_time(values.1, unit),
+        show_percent(change),
+        shift.level * 100.0,
+        show_percent(low),
+        show_percent(high),
+        show_percent(relative(-bound)),
+        show_percent(relative(bound)),
+    );
+    Decided { outcome, values, change, interval: [low, high], bound, detail }
+}
+
+/// A time for people: milliseconds, or a ratio with its unit (`×`).
+fn show_time(value: f64, unit: &str) -> String {
+    if unit == "ms" { format!("{value:.1} ms") } else { format!("{value:.3}{unit}") }
 }
 
 /// Improved or regressed when `change` is past `tolerance`; `higher_is_better` says which way

@@ -4,7 +4,7 @@
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
-use super::{Check, Outcome, Verdict};
+use super::{Against, Check, Outcome, Verdict};
 use crate::report::html::escape as xml;
 
 /// Writes summary.md, junit.xml and verdict.json into `dir`, each atomically.
@@ -37,7 +37,7 @@ pub fn summary(verdict: &Verdict) -> String {
     let headline = if verdict.regressed { "❌ regression" } else { "✅ no regression" };
     let reported_only = verdict.checks.iter().filter(|c| c.outcome.fails() && !c.gated).count();
     let headline = if reported_only > 0 && !verdict.regressed {
-        format!("{headline} ({reported_only} time regressions reported, not failed)")
+        format!("{headline} ({reported_only} failing outcomes reported, not failed)")
     } else {
         headline.to_string()
     };
@@ -48,7 +48,22 @@ pub fn summary(verdict: &Verdict) -> String {
         (Some(dir), true) => format!("`{}` (same platform)", dir.display()),
         (Some(dir), false) => format!("`{}` (**another platform**)", dir.display()),
     };
-    let _ = writeln!(out, "Run `{}` ({} tier) against {against}.\n", verdict.run_id, verdict.tier);
+    let processes = match verdict.run_ids.len() {
+        0 | 1 => String::new(),
+        n => format!(" ({n} processes)"),
+    };
+    let _ = writeln!(out, "Run `{}`{processes} ({} tier) against {against}.", verdict.run_id, verdict.tier);
+    let time = if !verdict.base_run_ids.is_empty() {
+        format!(
+            "the base build's {} processes on this machine (the process is the unit of evidence)",
+            verdict.base_run_ids.len()
+        )
+    } else if verdict.same_machine {
+        "the baselines (this is the machine that blessed them)".to_string()
+    } else {
+        "nothing: no base build was measured, and the baselines were blessed on another machine".to_string()
+    };
+    let _ = writeln!(out, "Time is gated against {time}.\n");
     for note in &verdict.notes {
         let _ = writeln!(out, "- {note}");
     }
@@ -60,6 +75,7 @@ pub fn summary(verdict: &Verdict) -> String {
         (Outcome::Failed, "Failed"),
         (Outcome::Improved, "Improved"),
         (Outcome::Noisy, "Noisy (estimate past the threshold, interval not: not failed)"),
+        (Outcome::Insufficient, "Insufficient (too few frames or processes to decide time: not failed)"),
         (Outcome::Missing, "Missing from the run"),
         (Outcome::New, "New (no baseline)"),
     ] {
@@ -68,11 +84,16 @@ pub fn summary(verdict: &Verdict) -> String {
             continue;
         }
         let _ = writeln!(out, "### {title}\n");
-        let _ = writeln!(out, "| scene | mode | metric | detail |\n|---|---|---|---|");
+        let _ = writeln!(out, "| scene | mode | metric | against | detail |\n|---|---|---|---|---|");
         for check in rows {
+            let against = match check.against {
+                Against::Baseline => "baseline",
+                Against::Base => "base build",
+            };
+            let gated = if check.gated || !check.outcome.fails() { "" } else { " (reported, not failed)" };
             let _ = writeln!(
                 out,
-                "| {} | {} | {} | {} |",
+                "| {} | {} | {} | {against}{gated} | {} |",
                 check.scene,
                 check.mode,
                 check.metric,

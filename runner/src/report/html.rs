@@ -29,7 +29,7 @@ th { background: #f6f6f6; } td:first-child, th:first-child { text-align: left; }
 td:last-child:not(:first-child) { text-align: left; }
 .regressed, .failed { background: #fde0dc; color: #a50e0e; font-weight: 600; }
 .improved { background: #e0f4e4; color: #0d652d; }
-.noisy { background: #fff4ce; }
+.noisy, .insufficient { background: #fff4ce; }
 .new, .missing { background: #e8f0fe; }
 .verdict { padding: .5em .8em; border-radius: 4px; }
 .verdict.good { background: #e0f4e4; } .verdict.bad { background: #fde0dc; }

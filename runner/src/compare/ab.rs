@@ -1,0 +1,174 @@
+//! Time against the base build: the run's processes and the base build's, measured on one
+//! machine in one job (`ci/gate.sh` alternates them), compared with the process as the unit of
+//! evidence. In-run ratios do not travel between hosts (a stalled mode against plain ones, or
+//! adaptive against its reference, shifts 15–40 % from one CPU generation to the next), and
+//! on one host some modes land in a different state per process (a 36 % jump between two
+//! processes of one build), far beyond the frame-to-frame noise an interval over frames
+//! describes. So each process contributes one number per mode and metric, the median of its
+//! frames, and the shift between the two builds is the Hodges–Lehmann estimate over those
+//! numbers with its Moses interval.
+
+use crate::baseline::BaselineSet;
+use crate::record::{RunRecord, SceneRecord, Status};
+use crate::stats::{Shift, Summary};
+
+use super::{Against, CONFIDENCE, Check, MIN_PROCESSES, Outcome, decide};
+
+/// The checks of every mode that ran ok in the first process of `runs` and in the base's
+/// processes: `relative_time`, `time_vs_reference` (adaptive modes) and `frame_time`, each
+/// against the time-ratio tolerance of the scene's baseline (its run's when it has none).
+pub(super) fn checks(
+    runs: &[RunRecord],
+    base: &[RunRecord],
+    baselines: &BaselineSet,
+    notes: &mut Vec<String>,
+) -> Vec<Check> {
+    let mut checks = Vec::new();
+    for scene in runs[0].scenes.iter().filter(|s| s.status == Status::Ok) {
+        let head = records(runs, &scene.name);
+        let then = records(base, &scene.name);
+        if then.is_empty() {
+            notes.push(format!(
+                "{}: not rendered ok by the base build: its time is not compared with it",
+                scene.name
+            ));
+            continue;
+        }
+        let tolerance = baselines.scene(&scene.name).map_or(scene.gate, |b| b.scene().gate).time_ratio;
+        let side = Side { head: &head, base: &then };
+        let anchors = side.anchor_modes();
+        let bound = (1.0 + tolerance).ln();
+        for mode in scene.modes.iter().filter(|m| m.status == Status::Ok) {
+            let id = mode.mode.as_str();
+            if !then.iter().all(|s| s.mode(id).is_some_and(|m| m.status == Status::Ok)) {
+                continue;
+            }
+            let template = |metric: &str| Check {
+                scene: scene.name.clone(),
+                mode: id.into(),
+                metric: metric.into(),
+                against: Against::Base,
+                outcome: Outcome::Unchanged,
+                baseline: None,
+                current: None,
+                change: None,
+                interval: None,
+                threshold: None,
+                unit: "relative".into(),
+                detail: String::new(),
+                gated: true,
+            };
+            let relative = |record: &SceneRecord| {
+                let anchor = record.round_anchor(&anchors, id)?;
+                let samples = &record.mode(id)?.frame_ms.as_ref()?.samples;
+                median(samples.iter().zip(&anchor).map(|(s, a)| s.ln() - a).collect())
+            };
+            let what = "frame time over the geometric mean of the round's other unstalled modes";
+            checks.extend(side.check(relative, bound, what, "×", template("relative_time")));
+            if let Some(cost) = &mode.adaptive {
+                let reference = cost.reference.as_str();
+                let ratio = |record: &SceneRecord| {
+                    median(record.paired_ratios(id, reference)?.iter().map(|r| r.ln()).collect())
+                };
+                let what = format!("frame time over {reference}'s in the same round");
+                checks.extend(side.check(ratio, bound, &what, "×", template("time_vs_reference")));
+            }
+            let frame = |record: &SceneRecord| {
+                median(record.mode(id)?.frame_ms.as_ref()?.samples.iter().map(|s| s.ln()).collect())
+            };
+            checks.extend(side.check(frame, bound, "frame time", "ms", template("frame_time")));
+        }
+    }
+    checks
+}
+
+/// The records of scene `name` that ran ok, one per process that has it.
+fn records<'a>(runs: &'a [RunRecord], name: &str) -> Vec<&'a SceneRecord> {
+    runs.iter()
+        .filter_map(|run| run.scenes.iter().find(|s| s.name == name && s.status == Status::Ok))
+        .collect()
+}
+
+fn median(logs: Vec<f64>) -> Option<f64> {
+    Summary::new(logs).map(|s| s.median)
+}
+
+/// One scene in the run's processes and in the base build's.
+struct Side<'a> {
+    head: &'a [&'a SceneRecord],
+    base: &'a [&'a SceneRecord],
+}
+
+impl Side<'_> {
+    /// The unstalled modes that ran ok in every process of both builds (every such mode when
+    /// fewer than two are unstalled): the anchor of `relative_time`, as against baselines.
+    fn anchor_modes(&self) -> Vec<&str> {
+        let first = self.head[0];
+        let everywhere = |id: &str| {
+            self.head.iter().chain(self.base).all(|s| s.mode(id).is_some_and(|m| m.status == Status::Ok))
+        };
+        let common: Vec<_> = first.modes.iter().filter(|m| everywhere(&m.mode)).collect();
+        let plain: Vec<&str> = common.iter().filter(|m| !m.stalled).map(|m| m.mode.as_str()).collect();
+        if plain.len() >= 2 { plain } else { common.iter().map(|m| m.mode.as_str()).collect() }
+    }
+
+    /// One metric: `per_process` gives a process's log value; the head's against the base's.
+    fn check(
+        &self,
+        per_process: impl Fn(&SceneRecord) -> Option<f64>,
+        bound: f64,
+        what: &str,
+        unit: &str,
+        template: Check,
+    ) -> Option<Check> {
+        let head: Vec<f64> = self.head.iter().filter_map(|s| per_process(s)).collect();
+        let base: Vec<f64> = self.base.iter().filter_map(|s| per_process(s)).collect();
+        let value = |logs: &[f64]| median(logs.to_vec()).map(f64::exp);
+        let values = (value(&base)?, value(&head)?);
+        if head.len() < MIN_PROCESSES || base.len() < MIN_PROCESSES {
+            return Some(Check {
+                outcome: Outcome::Insufficient,
+                baseline: Some(values.0),
+                current: Some(values.1),
+                detail: format!(
+                    "{what} against the base build: {} process(es) of the base and {} of the run, fewer than the \
+                     {MIN_PROCESSES} on each side a time verdict needs",
+                    base.len(),
+                    head.len()
+                ),
+                ..template
+            });
+        }
+        let shift = Shift::between(&head, &base, CONFIDENCE)?;
+        let extra = format!(", over {} processes of the base and {} of the run", base.len(), head.len());
+        let what = format!("{what} against the base build");
+        Some(decide(shift, bound, values, unit, &what, &extra).into_check(template))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn four_processes_a_side_reach_the_confidence_three_do_not() {
+        let base = [0.0, 0.01, -0.01, 0.005];
+        let slower: Vec<f64> = base.iter().map(|x| x + 0.25).collect();
+        let shift = Shift::between(&slower, &base, CONFIDENCE).unwrap();
+        assert!(shift.level >= CONFIDENCE, "{shift:?}");
+        let decided = decide(shift, 0.1f64.ln_1p(), (1.0, 1.28), "×", "t", "");
+        assert_eq!(decided.outcome, Outcome::Regressed);
+        let few = Shift::between(&slower[..3], &base[..3], CONFIDENCE).unwrap();
+        assert!(few.level < CONFIDENCE, "three a side cannot reach 95%: {few:?}");
+    }
+
+    #[test]
+    fn one_stray_process_makes_a_shift_noisy_not_regressed() {
+        let base = [0.0, 0.01, -0.01, 0.005, 0.0, 0.002];
+        // One head process landed 30% slower, as bimodal modes do; the others did not move.
+        let head = [0.26, 0.01, -0.005, 0.0, 0.004, 0.003];
+        let shift = Shift::between(&head, &base, CONFIDENCE).unwrap();
+        let decided = decide(shift, 0.1f64.ln_1p(), (1.0, 1.0), "×", "t", "");
+        assert_eq!(decided.outcome, Outcome::Unchanged, "{}", decided.detail);
+    }
+}

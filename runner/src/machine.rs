@@ -1,0 +1,139 @@
+//! Which machine a run's times belong to. The platform key names the driver, the CPU model and
+//! the core count, but virtual machines of one kind may report their CPU only as "AMD EPYC",
+//! so one key covers several CPU generations, and in-run time ratios shift 15–40 % between
+//! them. A run therefore also records the CPU's identity as `/proc/cpuinfo` gives it (vendor,
+//! family, model, stepping, clock, cache) and two short calibration probes: a dependent chain
+//! of floating-point operations (ALU-bound) and a pointer chase through 64 MiB (memory-bound).
+//! `compare` gates time against committed baselines only when both agree with the blessed run's.
+
+use serde::{Deserialize, Serialize};
+
+/// How far a probe may differ from the blessed machine's and still count as the same machine:
+/// repeated probes of one machine agree within a few percent (each is the fastest of several
+/// trials), different CPU generations differ by more.
+pub const PROBE_TOLERANCE: f64 = 0.12;
+
+/// The CPU's identity and its calibration, recorded in every run's platform.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Machine {
+    /// `vendor family/model/stepping, MHz, cache`, e.g. `AuthenticAMD 26/2/1, 2596 MHz, 1024 KB`.
+    pub cpu: String,
+    /// Nanoseconds per step of a dependent floating-point chain (the fastest of several trials).
+    pub alu_ns: f64,
+    /// Nanoseconds per step of a dependent pointer chase through 64 MiB (the fastest trial).
+    pub memory_ns: f64,
+}
+
+impl Machine {
+    /// Reads the CPU's identity and runs the probes (about a quarter of a second).
+    pub fn measure() -> Machine {
+        Machine { cpu: cpu_identity(), alu_ns: alu_probe(5), memory_ns: memory_probe(3) }
+    }
+
+    /// `Ok` when `self` and `blessed` look like the same machine; otherwise why not.
+    pub fn same_as(&self, blessed: &Machine) -> Result<(), String> {
+        if self.cpu != blessed.cpu {
+            return Err(format!("CPU `{}`, the baseline's `{}`", self.cpu, blessed.cpu));
+        }
+        for (probe, now, then) in
+            [("ALU", self.alu_ns, blessed.alu_ns), ("memory", self.memory_ns, blessed.memory_ns)]
+        {
+            let change = now / then - 1.0;
+            // A NaN probe (a broken clock) is never a match.
+            if change.is_nan() || change.abs() > PROBE_TOLERANCE {
+                return Err(format!(
+                    "the {probe} probe took {now:.3} ns a step, the baseline's machine {then:.3} ns ({:+.0}%, more than ±{:.0}%)",
+                    change * 100.0,
+                    PROBE_TOLERANCE * 100.0
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The CPU's identity from `/proc/cpuinfo` (its first processor), or `unknown` where it cannot
+/// be read. The clock is rounded to 100 MHz: a VM reports it with jitter in the last digits.
+fn cpu_identity() -> String {
+    let Ok(text) = std::fs::read_to_string("/proc/cpuinfo") else { return "unknown".into() };
+    let first = text.split("\n\n").next().unwrap_or_default();
+    let field = |name: &str| {
+        first
+            .lines()
+            .find_map(|line| {
+                let (key, value) = line.split_once(':')?;
+                (key.trim() == name).then(|| value.trim().to_string())
+            })
+            .unwrap_or_else(|| "?".into())
+    };
+    let mhz = field("cpu MHz")
+        .parse::<f64>()
+        .map_or("?".into(), |mhz| format!("{:.0}", (mhz / 100.0).round() * 100.0));
+    format!(
+        "{} {}/{}/{}, {mhz} MHz, {}",
+        field("vendor_id"),
+        field("cpu family"),
+        field("model"),
+        field("stepping"),
+        field("cache size")
+    )
+}
+
+/// Nanoseconds per step of a dependent multiply-add chain that the compiler cannot shorten,
+/// the fastest of `trials`: interference only ever adds time.
+fn alu_probe(trials: usize) -> f64 {
+    const STEPS: u32 = 4_000_000;
+    let chain = || {
+        let mut x = std::hint::black_box(1.000_000_1f64);
+        let start = std::time::Instant::now();
+        for _ in 0..STEPS {
+            x = x * 0.999_999_9 + 1e-9;
+        }
+        std::hint::black_box(x);
+        start.elapsed().as_secs_f64() * 1e9 / f64::from(STEPS)
+    };
+    (0..trials).map(|_| chain()).fold(f64::INFINITY, f64::min)
+}
+
+/// Nanoseconds per step of a pointer chase through 64 MiB, the fastest of `trials`: each load
+/// waits for the one before, so this is memory latency, beyond every cache of these machines.
+/// The chain is one full-period linear congruential cycle over every entry (c odd, a ≡ 1 mod 4),
+/// built in one sequential pass, and its jumps defeat the prefetchers.
+fn memory_probe(trials: usize) -> f64 {
+    const ENTRIES: u64 = 8 << 20; // 64 MiB of u64
+    const STEPS: usize = 300_000;
+    let next: Vec<u64> = (0..ENTRIES)
+        .map(|i| i.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407) % ENTRIES)
+        .collect();
+    let chase = || {
+        let mut at = 0usize;
+        let start = std::time::Instant::now();
+        for _ in 0..STEPS {
+            at = next[at] as usize;
+        }
+        std::hint::black_box(at);
+        start.elapsed().as_secs_f64() * 1e9 / STEPS as f64
+    };
+    (0..trials).map(|_| chase()).fold(f64::INFINITY, f64::min)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_machine_matches_itself_and_not_another_cpu_or_speed() {
+        let here = Machine::measure();
+        assert!(here.alu_ns > 0.0 && here.alu_ns.is_finite(), "{here:?}");
+        assert!(here.memory_ns > here.alu_ns, "a cache miss costs more than an add: {here:?}");
+        assert!(here.cpu.contains('/'), "{here:?}");
+        assert_eq!(here.same_as(&here), Ok(()));
+        let other_cpu = Machine { cpu: "GenuineIntel 6/143/8, 2100 MHz, 107520 KB".into(), ..here.clone() };
+        assert!(here.same_as(&other_cpu).unwrap_err().contains("GenuineIntel"));
+        let slower = Machine { alu_ns: here.alu_ns * 1.3, ..here.clone() };
+        let reason = here.same_as(&slower).unwrap_err();
+        assert!(reason.contains("ALU") && reason.contains("-23%"), "{reason}");
+        let nan = Machine { memory_ns: f64::NAN, ..here.clone() };
+        assert!(here.same_as(&nan).is_err(), "a broken probe is never a match");
+    }
+}

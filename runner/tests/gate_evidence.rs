@@ -1,0 +1,445 @@
+//! What the gate refuses to call green: a compare that compared less than its baselines hold,
+//! time decided on too little evidence, baselines blessed from runs that cannot carry them,
+//! and time against the base build with the process as the unit. Real runs on lavapipe, real
+//! files and exit codes; the doctored records are copies of a real run with one field changed.
+
+mod support;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+use serde_json::{Value, json};
+use support::*;
+
+const MODES: &str = "deferred-1x1,reference-2x2,adaptive-2x2,reference-2x2-stalled";
+
+/// Runs `aabench run` into `<workspace>/<folder>` and returns the run folder.
+fn run(ws: &Workspace, folder: &str, repetitions: &str) -> PathBuf {
+    let output = ws.run(&["run", "--out", folder, "--modes", MODES, "--repetitions", repetitions]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let runs: Vec<PathBuf> =
+        std::fs::read_dir(ws.dir.join(folder)).unwrap().map(|e| e.unwrap().path()).collect();
+    assert_eq!(runs.len(), 1, "{runs:?}");
+    runs[0].clone()
+}
+
+fn arg(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+/// A copy of `record` under a new run id in `<workspace>/<folder>/run.json`.
+fn doctored(ws: &Workspace, folder: &str, record: &Value, edit: impl Fn(&mut Value)) -> PathBuf {
+    let mut copy = record.clone();
+    copy["run_id"] = json!(format!("{folder}-quick"));
+    edit(&mut copy);
+    let dir = ws.dir.join(folder);
+    std::fs::create_dir_all(&dir).unwrap();
+    write_json(&dir.join("run.json"), &copy);
+    dir
+}
+
+/// `aabench compare` with `args`, its outputs into `<workspace>/<out>`.
+fn compare(ws: &Workspace, runs: &[&Path], out: &str, args: &[&str]) -> (Output, Value) {
+    let mut all = vec!["compare"];
+    all.extend(runs.iter().map(|run| arg(run)));
+    all.extend(["--out", out]);
+    all.extend_from_slice(args);
+    let output = ws.run(&all);
+    let verdict = ws.dir.join(out).join("verdict.json");
+    let verdict = if verdict.is_file() { read_json(&verdict) } else { Value::Null };
+    (output, verdict)
+}
+
+fn outcomes<'a>(verdict: &'a Value, metric: &str, against: &str) -> Vec<(&'a str, &'a str)> {
+    verdict["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["metric"] == metric && c["against"] == against)
+        .map(|c| (c["mode"].as_str().unwrap(), c["outcome"].as_str().unwrap()))
+        .collect()
+}
+
+/// Mode `id` of the record's first scene.
+fn mode_mut<'a>(record: &'a mut Value, id: &str) -> &'a mut Value {
+    record["scenes"][0]["modes"].as_array_mut().unwrap().iter_mut().find(|m| m["mode"] == id).unwrap()
+}
+
+/// Multiplies every frame time of mode `id` by `factor`.
+fn scale_mode(record: &mut Value, id: &str, factor: f64) {
+    for sample in mode_mut(record, id)["frame_ms"]["samples"].as_array_mut().unwrap() {
+        *sample = json!(sample.as_f64().unwrap() * factor);
+    }
+}
+
+#[test]
+fn a_compare_that_compared_less_than_its_baselines_fails_and_lenient_reports_it() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("strict");
+    ws.manifest("a-edge", "edge", |_| {});
+    ws.manifest("b-plane", "plane", |_| {});
+    let full = run(&ws, "reports", "5");
+    assert_eq!(ws.run(&["bless", arg(&full)]).status.code(), Some(0));
+    let (same, _) = compare(&ws, &[&full], "gate-same", &[]);
+    assert_eq!(same.status.code(), Some(0), "{}", String::from_utf8_lossy(&same.stdout));
+
+    let record = read_json(&full.join("run.json"));
+    let key = record["platform"]["key"].as_str().unwrap().to_string();
+    std::fs::create_dir_all(ws.dir.join("empty-baselines")).unwrap();
+    std::fs::create_dir_all(ws.dir.join("other-baselines/another-platform")).unwrap();
+    copy_dir(&ws.dir.join("baselines").join(&key), &ws.dir.join("other-baselines/another-platform"));
+    let drop_scene = doctored(&ws, "no-plane", &record, |r| {
+        r["scenes"].as_array_mut().unwrap().pop();
+    });
+    let drop_mode = doctored(&ws, "no-adaptive", &record, |r| {
+        r["scenes"][0]["modes"].as_array_mut().unwrap().retain(|m| m["mode"] != "adaptive-2x2");
+    });
+    let no_scenes = doctored(&ws, "no-scenes", &record, |r| r["scenes"] = json!([]));
+    let shard = doctored(&ws, "shard", &record, |r| {
+        r["shard"] = json!({ "index": 1, "count": 2 });
+        r["scenes"].as_array_mut().unwrap().pop();
+    });
+    let unfinished = doctored(&ws, "unfinished", &record, |r| {
+        r["status"] = json!("running");
+        r["finished_at"] = Value::Null;
+    });
+    std::fs::write(ws.dir.join("a-edge-file"), "not a folder").unwrap();
+    let cases: [(&str, &Path, &str, &str); 9] = [
+        ("missing folder", &full, "no-such-folder", "cannot be read"),
+        ("a file", &full, "a-edge-file", "is not a folder"),
+        ("empty folder", &full, "empty-baselines", "holds no baselines for the quick tier"),
+        ("another platform", &full, "other-baselines", "only of `another-platform`"),
+        ("missing scene", &drop_scene, "baselines", "the scene is not in the run"),
+        ("missing mode", &drop_mode, "baselines", "not in the run"),
+        ("no scenes", &no_scenes, "baselines", "the run has no scenes"),
+        ("shard", &shard, "baselines", "shard 1/2 of a suite"),
+        ("unfinished", &unfinished, "baselines", "did not finish"),
+    ];
+    for (name, run, baselines, reason) in cases {
+        let out = format!("gate-{}", name.replace(' ', "-"));
+        let (output, verdict) = compare(&ws, &[run], &out, &["--baseline", baselines]);
+        let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
+        assert_eq!(output.status.code(), Some(1), "{name}: {stdout}{}", stderr(&output));
+        assert_eq!(verdict["regressed"], true, "{name}");
+        assert!(verdict.to_string().contains(reason), "{name}: {verdict}");
+        let summary = std::fs::read_to_string(ws.dir.join(&out).join("summary.md")).unwrap();
+        assert!(summary.contains("❌") && summary.contains(reason), "{name}: {summary}");
+        let junit = std::fs::read_to_string(ws.dir.join(&out).join("junit.xml")).unwrap();
+        assert!(junit.contains("<failure") && junit.contains(reason), "{name}: {junit}");
+
+        let lenient_out = format!("{out}-lenient");
+        let (lenient, verdict) = compare(&ws, &[run], &lenient_out, &["--baseline", baselines, "--lenient"]);
+        assert_eq!(lenient.status.code(), Some(0), "{name}: {}", String::from_utf8_lossy(&lenient.stdout));
+        assert_eq!(verdict["lenient"], true);
+        assert!(verdict.to_string().contains(reason), "{name}: lenient still reports it: {verdict}");
+    }
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let path = entry.unwrap().path();
+        let target = to.join(path.file_name().unwrap());
+        if path.is_dir() {
+            copy_dir(&path, &target)
+        } else {
+            std::fs::copy(&path, &target).map(drop).unwrap()
+        }
+    }
+}
+
+#[test]
+fn one_repetition_is_insufficient_and_bless_says_so() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("insufficient");
+    ws.manifest("edge", "edge", |_| {});
+    let first = run(&ws, "first", "1");
+    let blessed = ws.run(&["bless", arg(&first)]);
+    assert_eq!(blessed.status.code(), Some(0), "{}", stderr(&blessed));
+    assert!(
+        stderr(&blessed).contains("4 of 4 modes have fewer than the 5 timed frames"),
+        "{}",
+        stderr(&blessed)
+    );
+    let second = run(&ws, "second", "1");
+    let (output, verdict) = compare(&ws, &[&second], "gate", &["--fail-on", "all"]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stdout));
+    let times: Vec<&Value> = verdict["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| {
+            ["relative_time", "time_vs_reference", "frame_time"].contains(&c["metric"].as_str().unwrap())
+        })
+        .collect();
+    assert!(times.len() >= 8, "{times:?}");
+    assert!(times.iter().all(|c| c["outcome"] == "insufficient"), "{times:?}");
+    let summary = std::fs::read_to_string(ws.dir.join("gate/summary.md")).unwrap();
+    assert!(summary.contains("### Insufficient"), "{summary}");
+}
+
+#[test]
+fn bless_refuses_a_run_given_twice_and_a_run_that_did_not_finish() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("bless-refusals");
+    ws.manifest("edge", "edge", |_| {});
+    let first = run(&ws, "reports", "5");
+    let twice = ws.run(&["bless", arg(&first), arg(&first)]);
+    assert_eq!(twice.status.code(), Some(2));
+    assert!(stderr(&twice).contains("is given twice"), "{}", stderr(&twice));
+    assert!(!ws.dir.join("baselines").exists(), "a refused bless writes nothing");
+    let record = read_json(&first.join("run.json"));
+    let killed = doctored(&ws, "killed", &record, |r| {
+        r["status"] = json!("running");
+        r["finished_at"] = Value::Null;
+    });
+    let refused = ws.run(&["bless", arg(&first), arg(&killed)]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(stderr(&refused).contains("did not finish (status `running`)"), "{}", stderr(&refused));
+    assert!(!ws.dir.join("baselines").exists(), "a refused bless writes nothing");
+    let compared_twice = ws.run(&["compare", arg(&first), "--base-runs", arg(&first), "--lenient"]);
+    assert_eq!(compared_twice.status.code(), Some(2));
+    assert!(stderr(&compared_twice).contains("is given twice"), "{}", stderr(&compared_twice));
+}
+
+#[test]
+fn time_is_gated_against_the_base_build_process_by_process() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("base-build");
+    ws.manifest("edge", "edge", |_| {});
+    let measured = run(&ws, "reports", "5");
+    assert_eq!(ws.run(&["bless", arg(&measured)]).status.code(), Some(0));
+    let record = read_json(&measured.join("run.json"));
+    // Processes of one build differ a little, all modes together and each mode on its own:
+    // here by up to ±2% and ±1.5%, a fixed pattern per process.
+    let process = |folder: String, i: usize, slow: f64| {
+        doctored(&ws, &folder, &record, move |r| {
+            let machine = 1.0 + 0.01 * ((i * 7 % 5) as f64 - 2.0);
+            for (k, id) in MODES.split(',').enumerate() {
+                let own = 1.0 + 0.005 * (((i + k) * 3 % 7) as f64 - 3.0);
+                let slowdown = if id == "reference-2x2-stalled" { slow } else { 1.0 };
+                scale_mode(r, id, machine * own * slowdown);
+            }
+        })
+    };
+    let side = |name: &str, count: usize, slow: f64, offset: usize| -> Vec<PathBuf> {
+        (0..count).map(|i| process(format!("{name}-{i}"), i + offset, slow)).collect()
+    };
+    let base = side("base", 6, 1.0, 0);
+    let base_args: Vec<&str> = std::iter::once("--base-runs").chain(base.iter().map(|p| arg(p))).collect();
+
+    // A/A: the same build on both sides passes, every time check against the base unchanged.
+    let same = side("same", 6, 1.0, 3);
+    let same: Vec<&Path> = same.iter().map(PathBuf::as_path).collect();
+    let (output, verdict) = compare(&ws, &same, "gate-same", &base_args);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stdout));
+    let against_base = outcomes(&verdict, "relative_time", "base");
+    assert_eq!(against_base.len(), 4);
+    assert!(against_base.iter().all(|(_, o)| *o == "unchanged"), "{against_base:?}");
+    assert_eq!(verdict["base_run_ids"].as_array().map(Vec::len), Some(6));
+    assert!(verdict["notes"].to_string().contains("base build's processes on this machine decide"));
+
+    // 25% more time in one stalled mode: caught against the base, the others unchanged.
+    let slow = side("slow", 6, 1.25, 3);
+    let slow: Vec<&Path> = slow.iter().map(PathBuf::as_path).collect();
+    let (output, verdict) = compare(&ws, &slow, "gate-slow", &base_args);
+    assert_eq!(output.status.code(), Some(1), "{}", String::from_utf8_lossy(&output.stdout));
+    for (mode, outcome) in outcomes(&verdict, "relative_time", "base") {
+        let expected = if mode == "reference-2x2-stalled" { "regressed" } else { "unchanged" };
+        assert_eq!(outcome, expected, "{mode}");
+    }
+    let frame = outcomes(&verdict, "frame_time", "base");
+    assert!(frame.contains(&("reference-2x2-stalled", "regressed")), "{frame:?}");
+    // Time against the committed baseline is reported, not gated, when the base decides.
+    let gated_baseline_times = verdict["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["against"] == "baseline" && c["metric"] == "relative_time" && c["gated"] == true)
+        .count();
+    assert_eq!(gated_baseline_times, 0);
+
+    // Three processes a side cannot reach the confidence: insufficient, never a verdict.
+    let (output, verdict) =
+        compare(&ws, &slow[..3], "gate-few", &["--base-runs", arg(&base[0]), arg(&base[1]), arg(&base[2])]);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stdout));
+    let few = outcomes(&verdict, "relative_time", "base");
+    assert!(few.iter().all(|(_, o)| *o == "insufficient"), "{few:?}");
+}
+
+#[test]
+fn time_against_baselines_of_another_machine_is_informational() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("other-machine");
+    ws.manifest("edge", "edge", |_| {});
+    let measured = run(&ws, "reports", "5");
+    assert_eq!(ws.run(&["bless", arg(&measured)]).status.code(), Some(0));
+    let record = read_json(&measured.join("run.json"));
+    let machine = &record["platform"]["machine"];
+    assert!(
+        machine["alu_ns"].as_f64().unwrap() > 0.0 && machine["memory_ns"].as_f64().unwrap() > 0.0,
+        "{machine}"
+    );
+    let slow = doctored(&ws, "slow", &record, |r| scale_mode(r, "reference-2x2-stalled", 2.0));
+    // On the machine that blessed the baseline, the slowdown fails the gate.
+    let (here, verdict) = compare(&ws, &[&slow], "gate-here", &[]);
+    assert_eq!(here.status.code(), Some(1), "{}", String::from_utf8_lossy(&here.stdout));
+    assert_eq!(verdict["same_machine"], true);
+    // The same run from a machine whose ALU probe is 30% slower: reported, not failed.
+    let elsewhere = doctored(&ws, "elsewhere", &record, |r| {
+        scale_mode(r, "reference-2x2-stalled", 2.0);
+        let alu = r["platform"]["machine"]["alu_ns"].as_f64().unwrap();
+        r["platform"]["machine"]["alu_ns"] = json!(alu * 1.3);
+    });
+    let (there, verdict) = compare(&ws, &[&elsewhere], "gate-there", &[]);
+    assert_eq!(there.status.code(), Some(0), "{}", String::from_utf8_lossy(&there.stdout));
+    assert_eq!(verdict["same_machine"], false);
+    let notes = verdict["notes"].to_string();
+    assert!(notes.contains("informational") && notes.contains("ALU probe"), "{notes}");
+    let check = verdict["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["mode"] == "reference-2x2-stalled" && c["metric"] == "relative_time")
+        .unwrap();
+    assert_eq!((check["outcome"].as_str(), check["gated"].as_bool()), (Some("regressed"), Some(false)));
+    // Quality stays gated there: a doctored PSNR drop fails.
+    let worse = doctored(&ws, "worse", &record, |r| {
+        let psnr = &mut mode_mut(r, "adaptive-2x2")["vs_ground_truth"]["psnr_db"];
+        *psnr = json!(psnr.as_f64().unwrap() - 0.5);
+        let alu = r["platform"]["machine"]["alu_ns"].as_f64().unwrap();
+        r["platform"]["machine"]["alu_ns"] = json!(alu * 1.3);
+    });
+    let (worse, _) = compare(&ws, &[&worse], "gate-worse", &[]);
+    assert_eq!(worse.status.code(), Some(1), "{}", String::from_utf8_lossy(&worse.stdout));
+}
+
+#[test]
+fn the_truth_note_speaks_only_when_the_truth_image_changed() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("truth-note");
+    ws.manifest("edge", "edge", |_| {});
+    let measured = run(&ws, "reports", "5");
+    assert_eq!(ws.run(&["bless", arg(&measured)]).status.code(), Some(0));
+    let record = read_json(&measured.join("run.json"));
+    assert_eq!(record["scenes"][0]["truth"]["image_hash"].as_str().map(str::len), Some(16));
+    // A new key (any source edit does that), the same image: no note.
+    let rekeyed =
+        doctored(&ws, "rekeyed", &record, |r| r["scenes"][0]["truth"]["key"] = json!("0".repeat(64)));
+    let (_, verdict) = compare(&ws, &[&rekeyed], "gate-rekeyed", &[]);
+    assert!(!verdict["notes"].to_string().contains("ground truth"), "{}", verdict["notes"]);
+    let moved =
+        doctored(&ws, "moved", &record, |r| r["scenes"][0]["truth"]["image_hash"] = json!("0".repeat(16)));
+    let (_, verdict) = compare(&ws, &[&moved], "gate-moved", &[]);
+    assert!(verdict["notes"].to_string().contains("ground truth's image changed"), "{}", verdict["notes"]);
+}
+
+/// `blessed_at` and `run_ids` of every baseline file in the tier folder, and whether any
+/// temporary is inside it.
+fn baseline_state(ws: &Workspace) -> (Vec<String>, bool) {
+    let keys: Vec<PathBuf> = std::fs::read_dir(ws.dir.join("baselines"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| !p.to_string_lossy().contains(".tmp-"))
+        .collect();
+    let tier = keys[0].join("quick");
+    let mut states = Vec::new();
+    let mut temporary = false;
+    for entry in std::fs::read_dir(&tier).unwrap() {
+        let path = entry.unwrap().path();
+        if path.to_string_lossy().contains(".tmp-") {
+            temporary = true;
+            continue;
+        }
+        states.push(read_json(&path)["run_ids"].to_string());
+    }
+    (states, temporary)
+}
+
+#[test]
+fn a_killed_bless_leaves_all_old_or_all_new_baselines() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("bless-kill");
+    for (name, generator) in [("a-edge", "edge"), ("b-plane", "plane"), ("c-thin", "thin")] {
+        ws.manifest(name, generator, |_| {});
+    }
+    let old = run(&ws, "old", "5");
+    let new = run(&ws, "new", "5");
+    assert_eq!(ws.run(&["bless", arg(&old)]).status.code(), Some(0));
+    let (blessed, _) = baseline_state(&ws);
+    assert_eq!(blessed.len(), 3);
+    // Kills at several points of a bless, from before it reads the runs to after it is done.
+    for delay_ms in (0..40).step_by(3) {
+        let mut child =
+            ws.command(&["bless", arg(&new)]).stderr(Stdio::null()).stdout(Stdio::null()).spawn().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+        let _ = child.kill();
+        let _ = child.wait();
+        let (states, temporary) = baseline_state(&ws);
+        assert!(!temporary, "a temporary inside the baselines after a kill at {delay_ms} ms");
+        assert_eq!(states.len(), 3, "{states:?}");
+        assert!(states.iter().all(|s| *s == states[0]), "a mix of old and new at {delay_ms} ms: {states:?}");
+        // Back to the old baselines for the next kill.
+        assert_eq!(ws.run(&["bless", arg(&old)]).status.code(), Some(0));
+    }
+    // A staging folder left by a killed bless goes with the next bless once its owner is gone.
+    let key = std::fs::read_dir(ws.dir.join("baselines")).unwrap().next().unwrap().unwrap().path();
+    let staging = key.join("quick.tmp-4294967294");
+    std::fs::create_dir_all(&staging).unwrap();
+    std::fs::write(staging.join("a-edge.json"), "{}").unwrap();
+    let an_hour_ago = std::time::SystemTime::now() - std::time::Duration::from_secs(3600);
+    std::fs::File::open(&staging).unwrap().set_modified(an_hour_ago).unwrap();
+    let output = ws.run(&["bless", arg(&new)]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    assert!(stderr(&output).contains("removed 1 temporary"), "{}", stderr(&output));
+    assert!(!staging.exists());
+}
+
+#[test]
+fn fifos_in_place_of_runs_baselines_and_history_are_refused_at_once() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("fifos");
+    ws.manifest("edge", "edge", |_| {});
+    let measured = run(&ws, "reports", "5");
+    assert_eq!(ws.run(&["bless", arg(&measured)]).status.code(), Some(0));
+    let fifo = |path: &Path| {
+        let _ = std::fs::remove_file(path);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        assert!(Command::new("mkfifo").arg(path).status().unwrap().success());
+    };
+    let timed = |args: &[&str]| {
+        let start = std::time::Instant::now();
+        let output = ws.run(args);
+        assert!(start.elapsed() < std::time::Duration::from_secs(1), "{args:?} took {:?}", start.elapsed());
+        output
+    };
+    // A FIFO named run.json.
+    fifo(&ws.dir.join("piped/run.json"));
+    let output = timed(&["compare", "piped", "--out", "gate"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(
+        stderr(&output).contains("piped/run.json: cannot read: not a regular file"),
+        "{}",
+        stderr(&output)
+    );
+    // A FIFO as a baseline: compare and bless both refuse it by name.
+    let key = std::fs::read_dir(ws.dir.join("baselines")).unwrap().next().unwrap().unwrap().path();
+    let baseline = key.join("quick/edge.json");
+    let blessed = std::fs::read(&baseline).unwrap();
+    fifo(&baseline);
+    let output = timed(&["compare", arg(&measured), "--out", "gate"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(stderr(&output).contains("edge.json: cannot read: not a regular file"), "{}", stderr(&output));
+    let output = timed(&["bless", arg(&measured)]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(stderr(&output).contains("not a regular file"), "{}", stderr(&output));
+    std::fs::remove_file(&baseline).unwrap();
+    std::fs::write(&baseline, blessed).unwrap();
+    // A FIFO in the history folder: skipped with a warning, the report written.
+    std::fs::create_dir_all(ws.dir.join("history")).unwrap();
+    std::fs::copy(measured.join("run.json"), ws.dir.join("history/earlier.json")).unwrap();
+    fifo(&ws.dir.join("history/stray.json"));
+    let output = timed(&["report", arg(&measured), "--history", "history"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    assert!(stderr(&output).contains("stray.json: cannot read: not a regular file"), "{}", stderr(&output));
+}

@@ -7,7 +7,7 @@
 //! dither turns quantization into unbiased noise instead of banding that would shift with
 //! the anti-aliasing.
 
-use aabench_renderer::DisplayImage;
+use aabench_renderer::{DisplayImage, FrameImages};
 use serde::{Deserialize, Serialize, Serializer};
 
 /// 20·log10(255): the paper reports PSNR with peak 255 over an MSE taken on [0, 1] values.
@@ -228,6 +228,42 @@ mod tests {
         assert!(sample_stats(&[0], 2).is_err());
         assert!(sample_stats(&[5], 2).is_err());
     }
+}
+
+/// The one value every item has, or `None` when two differ (or there is none).
+fn flat<T: PartialEq + Copy>(mut items: impl Iterator<Item = T>) -> Option<T> {
+    let first = items.next()?;
+    items.all(|item| item == first).then_some(first)
+}
+
+/// Frames smaller than this many pixels are not judged blank: one pixel is always flat.
+pub const BLANK_MIN_PIXELS: usize = 16;
+
+/// Why a frame shows nothing, or `None`: every pixel's HDR colour the same (no sample hit
+/// visible geometry: back faces only, geometry far below a pixel, a camera that sees only the
+/// background), or every display pixel the same code (an exposure or a transfer function that
+/// rounds everything to one code). Alpha is left out: it carries the stall's result.
+pub fn blank_frame(images: &FrameImages) -> Option<String> {
+    let pixels = images.width as usize * images.height as usize;
+    if pixels < BLANK_MIN_PIXELS {
+        return None;
+    }
+    let hdr = flat(images.hdr.chunks_exact(4).map(|p| [p[0].to_bits(), p[1].to_bits(), p[2].to_bits()]));
+    if let Some([r, g, b]) = hdr {
+        let [r, g, b] = [r, g, b].map(f32::from_bits);
+        return Some(format!(
+            "blank frame: every pixel has the same HDR colour ({r}, {g}, {b}): no sample hit visible geometry \
+             (only back faces, geometry far below a pixel, or nothing in view); declare the scene `\"empty\": true` \
+             if that is meant"
+        ));
+    }
+    let display = flat(images.display.rgba.chunks_exact(4).map(|p| [p[0], p[1], p[2]].map(u32::from)));
+    display.map(|[r, g, b]| {
+        format!(
+            "blank frame: every display pixel has the code ({r}, {g}, {b}): the exposure, tonemap or transfer \
+             function leaves nothing to see; check the manifest's `tonemap.exposure` and `display` sections"
+        )
+    })
 }
 
 /// What every frame of every mode is checked for: NaN and infinite values in the HDR output

@@ -510,7 +510,7 @@ async fn finish_modes(
     let mut records: Vec<ModeRecord> = modes
         .iter()
         .zip(&runs)
-        .map(|(mode, run)| timing_record(*mode, run, plan.repetitions, interrupted))
+        .map(|(mode, run)| timing_record(*mode, run, plan.repetitions, interrupted, manifest.empty))
         .collect();
     let frame_median = |mode: Mode| -> Option<f64> {
         let i = modes.iter().position(|m| *m == mode)?;
@@ -609,7 +609,15 @@ fn comparison_reference(modes: &[Mode], images: &[Option<FrameImages>], mode: Mo
     })
 }
 
-fn timing_record(mode: Mode, run: &ModeRun, repetitions: u32, interrupted: bool) -> ModeRecord {
+/// The mode's record from its frames: timings, and whether it succeeded. A frame that shows
+/// nothing fails its mode unless the scene is `declared_empty`.
+fn timing_record(
+    mode: Mode,
+    run: &ModeRun,
+    repetitions: u32,
+    interrupted: bool,
+    declared_empty: bool,
+) -> ModeRecord {
     let ms = |seconds: f64| seconds * 1e3;
     let frame_ms = Summary::new(run.timings.iter().map(|t| ms(t.seconds())).collect());
     let passes = run.timings.first().map_or_else(Vec::new, |first| {
@@ -624,10 +632,13 @@ fn timing_record(mode: Mode, run: &ModeRun, repetitions: u32, interrupted: bool)
     let deterministic = (!run.hashes.is_empty()).then(|| run.hashes.windows(2).all(|w| w[0] == w[1]));
     let complete = run.timings.len() == repetitions as usize;
     let unstable = run.checks.problem(mode.m);
+    let blank = run.images.as_ref().filter(|_| !declared_empty).and_then(metrics::blank_frame);
     let (status, error) = match (&run.error, run.images.is_some()) {
         (Some(error), _) => (Status::Failed, Some(error.clone())),
         // Not a number is never a result: the display passes would hide it, so it fails here.
         (None, _) if unstable.is_some() => (Status::Failed, unstable),
+        // Nothing to see is no measurement of anti-aliasing.
+        (None, _) if blank.is_some() => (Status::Failed, blank),
         // Same inputs must give the same bits: a difference is a bug, not noise.
         (None, true) if deterministic == Some(false) => {
             (Status::Failed, Some("not deterministic: repetitions produced different images".into()))

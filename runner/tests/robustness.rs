@@ -413,3 +413,29 @@ fn a_merge_that_runs_out_of_disk_leaves_nothing_and_the_retry_succeeds() {
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
     assert_eq!(read_json(&out.join("run.json"))["scenes"].as_array().map(Vec::len), Some(2));
 }
+
+#[test]
+fn blank_frames_fail_their_modes_unless_the_scene_is_declared_empty() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("blank");
+    // The plane seen from behind: its triangles are in view, every one culled.
+    let behind = |m: &mut serde_json::Value| {
+        m["camera"] = json!({ "position": [0.0, 0.0, -3.0], "target": [0.0, 0.0, 0.0], "fov_y_degrees": 60 });
+    };
+    ws.manifest("a-back", "plane", behind);
+    ws.manifest("b-declared", "plane", |m| {
+        behind(m);
+        m["empty"] = json!(true);
+    });
+    ws.manifest("c-dark", "plane", |m| m["tonemap"] = json!({ "exposure": 1e-45 }));
+    let output = ws.run(&["run", "--modes", "deferred-1x1,adaptive-2x2", "--repetitions", "1"]);
+    assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
+    let record = ws.record();
+    let error =
+        |scene: usize, mode: usize| record["scenes"][scene]["modes"][mode]["error"].as_str().unwrap_or("");
+    for mode in 0..2 {
+        assert!(error(0, mode).contains("no sample hit visible geometry"), "{}", error(0, mode));
+        assert_eq!(record["scenes"][1]["modes"][mode]["status"], "ok", "declared empty");
+        assert!(error(2, mode).contains("every display pixel has the code (0, 0, 0)"), "{}", error(2, mode));
+    }
+}

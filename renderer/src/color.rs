@@ -122,10 +122,17 @@ impl Tonemap {
         let curve = Curve { contrast: a, shoulder: d, b, c };
         let in_f32 = |v: f64| v.is_finite() && v.abs() < 1e30 && (v == 0.0 || v.abs() > 1e-30);
         if !(in_f32(max) && in_f32(max.powf(d)) && in_f32(b) && in_f32(c)) {
+            // The curve spans mid_in^contrast … hdr_max^contrast: a tiny contrast shrinks that
+            // span to nothing, a huge one blows it past f32.
+            let advice = if max.powf(d) == mid.powf(d) {
+                "mid_in and hdr_max land on the same value, so the curve has no range: raise contrast"
+            } else {
+                "beyond what the shader's f32 arithmetic holds: lower contrast or hdr_max"
+            };
             return fail(
                 "contrast",
                 format!(
-                    "hdr_max^contrast = {max:e} with shoulder {d} gives b = {b:e}, c = {c:e}, beyond what                      the shader's f32 arithmetic holds; lower contrast or hdr_max"
+                    "hdr_max^contrast = {max:e} with shoulder {d} gives b = {b:e} and c = {c:e}: {advice}"
                 ),
             );
         }

@@ -165,6 +165,7 @@ impl SceneRenderer {
         settings: RenderSettings,
     ) -> Result<SceneRenderer, RenderError> {
         settings.color.validate()?;
+        fits_texture_array(scene, &gpu.device.limits())?;
         let frame = FrameUniforms::new(camera, lighting, settings.width, settings.height);
         let needs = SceneNeeds::of(scene, lighting);
         let gpu_scene = GpuScene::new(&gpu.device, &gpu.queue, scene, lighting, &frame);
@@ -392,6 +393,27 @@ impl SceneRenderer {
         let uniforms = FrameUniforms::for_tile(&self.camera, &self.lighting, width, height, tile);
         self.gpu.queue.write_buffer(&self.scene.frame, 0, bytemuck::bytes_of(&uniforms));
     }
+}
+
+/// Refuses a scene whose textures need more layers than the device's texture arrays hold,
+/// before anything is created: otherwise the upload fails with a raw validation error.
+fn fits_texture_array(scene: &Scene, limits: &wgpu::Limits) -> Result<(), RenderError> {
+    if !scene.is_textured() {
+        return Ok(());
+    }
+    let layout = crate::scene::textures::Layout::of(&scene.textures);
+    if layout.layers <= limits.max_texture_array_layers {
+        return Ok(());
+    }
+    Err(RenderError::Limit(format!(
+        "its {} textures need {} layers of {side}×{side} texels in the scene's texture array, and this device holds \
+         at most {} (max_texture_array_layers): use fewer textures, or smaller ones beside a large one (textures \
+         smaller than the largest share its layers)",
+        scene.textures.len(),
+        layout.layers,
+        limits.max_texture_array_layers,
+        side = layout.side
+    )))
 }
 
 /// The passes that turn the HDR image into the display image, in the order a frame runs them.

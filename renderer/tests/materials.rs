@@ -428,3 +428,22 @@ fn textures_of_different_sizes_packed_in_pages_look_as_if_each_had_a_layer() {
         "{differing} channel values differ by more than 2 codes"
     );
 }
+
+#[test]
+fn more_texture_layers_than_the_device_holds_is_refused_by_name() {
+    // 2 100 textures of one size: one layer each, past lavapipe's 2 048 array layers (as a
+    // file whose materials use that many would import).
+    let texel = png(4, 4, |_, _| [200, 100, 50, 255]);
+    let mut quad = Quad::new(json!({ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }));
+    quad.images = vec![texel];
+    let mut scene = load_gltf(&quad.write("many-textures")).unwrap();
+    scene.textures = vec![scene.textures[0].clone(); 2100];
+    let camera = Camera::look_at(DVec3::new(0.0, 0.0, 1.0), DVec3::ZERO, 90.0);
+    let (gpu, _guard) = gpu();
+    let error =
+        SceneRenderer::new(gpu, &scene, &camera, &dark(), settings(SIDE, SIDE)).unwrap_err().to_string();
+    assert!(
+        error.contains("its 2100 textures need 2100 layers") && error.contains("max_texture_array_layers"),
+        "{error}"
+    );
+}

@@ -60,6 +60,20 @@ pub fn write_atomic<T: Serialize>(path: &Path, value: &T) -> Result<(), String> 
         .map_err(|e| format!("{}: write: {e}", path.display()))
 }
 
+/// Makes sure `dir` is a folder to write into, creating it (and its parents) when missing.
+/// Errors name it and what is in the way: an existing file or device is not a folder.
+pub fn output_folder(dir: &Path) -> Result<(), String> {
+    match std::fs::metadata(dir) {
+        Ok(meta) if meta.is_dir() => Ok(()),
+        Ok(_) => Err(format!(
+            "{}: exists and is not a folder; give a folder (created when missing)",
+            dir.display()
+        )),
+        Err(_) => std::fs::create_dir_all(dir)
+            .map_err(|e| format!("{}: cannot create the folder: {e}", dir.display())),
+    }
+}
+
 /// The `*.json` entries directly in `dir`, in name order: each one is read, so a `*.json`
 /// that is no regular file (a FIFO, a folder) is an error naming it rather than skipped.
 pub fn files_in(dir: &Path) -> Result<Vec<PathBuf>, String> {

@@ -174,10 +174,10 @@ struct RunArgs {
     #[arg(long, default_value = "reports")]
     out: PathBuf,
     /// Timed repetitions per mode, 1 to 10 000 [default: the tier's].
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     repetitions: Option<u32>,
     /// Untimed rounds before timing (lavapipe compiles shaders at the first draw); at most 100.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=100))]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(0..=100))]
     warmup: u32,
     /// How adaptive modes shade their extra samples: compact (a dense list, the default) or
     /// loop (inside each pixel's invocation, the paper's simplest variant).
@@ -185,7 +185,7 @@ struct RunArgs {
     extra_samples: ExtraSamplesArg,
     /// Render only this slice of the scenes: `I/N` takes scenes I, I+N, I+2N, … (in manifest
     /// order). `aabench merge` joins the N shard runs into one.
-    #[arg(long, value_name = "I/N")]
+    #[arg(long, value_name = "I/N", allow_hyphen_values = true)]
     shard: Option<String>,
     /// Folder that caches ground truths [default: cache/truth/ beside each manifest].
     #[arg(long, value_name = "DIR")]
@@ -193,10 +193,15 @@ struct RunArgs {
     /// Memory the render targets of one scene's modes may take together, in GiB; a mode that
     /// would pass it fails before allocating, with its estimate [default: 90% of the memory
     /// available when the scene starts].
-    #[arg(long, value_name = "GIB")]
+    #[arg(long, value_name = "GIB", allow_negative_numbers = true)]
     memory_limit: Option<f64>,
     /// Longest a single frame may take, in seconds.
-    #[arg(long, value_name = "SECONDS", default_value_t = run::default_frame_timeout().as_secs_f64())]
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        allow_negative_numbers = true,
+        default_value_t = run::default_frame_timeout().as_secs_f64()
+    )]
     frame_timeout: f64,
 }
 
@@ -505,7 +510,12 @@ fn report(runs: &[PathBuf], history: Option<&Path>, verdict: Option<&Path>) -> u
             None
         };
         match aabench::report::write(&dir, &record, verdict.as_ref(), &history) {
-            Ok(path) => say!("wrote {}", path.display()),
+            Ok((path, left_out)) => {
+                for reason in left_out {
+                    tell!("aabench: warning: {reason}");
+                }
+                say!("wrote {}", path.display());
+            }
             Err(message) => return fail(message),
         }
     }

@@ -474,6 +474,9 @@ impl Manifest {
     /// Parses and validates manifest text; `path` names the file in errors and anchors
     /// relative paths.
     pub fn parse(path: &Path, text: &str) -> Result<Manifest, ManifestError> {
+        // Editors on some systems start UTF-8 files with a byte-order mark; JSON parsers may
+        // ignore it, and this one does.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let fail = |field: &str, message: String| ManifestError {
             path: path.to_path_buf(),
             field: field.to_string(),

@@ -196,7 +196,7 @@ pub fn new_run_id(tier: Tier, shard: Option<Shard>) -> String {
 /// name: creation itself is the test, so two runs started in the same second never share one.
 /// Returns the id taken and the folder.
 pub fn create_run_dir(out: &Path, id: &str) -> Result<(String, PathBuf), String> {
-    std::fs::create_dir_all(out).map_err(|e| format!("--out {}: cannot create: {e}", out.display()))?;
+    crate::json::output_folder(out).map_err(|e| format!("--out {e}"))?;
     for n in 1..10_000 {
         let candidate = if n == 1 { id.to_string() } else { format!("{id}-{n}") };
         let dir = out.join(&candidate);

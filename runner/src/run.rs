@@ -251,6 +251,10 @@ async fn run_scene(
         .await;
     match uploaded {
         Ok(Ok(budget)) => record.memory_limit_bytes = budget,
+        // What the device refuses of the file's content (too many textures) names the file.
+        Ok(Err(error @ aabench_renderer::RenderError::Limit(_))) => {
+            return fail(record, format!("{}: {error}", manifest.gltf_path().display()));
+        }
         Ok(Err(error)) => return fail(record, error.to_string()),
         Err(error) => return fail(record, error.to_string()),
     }

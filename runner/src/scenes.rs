@@ -2,6 +2,7 @@
 //! stale, import it, and settle its camera and lights (the manifest's, the file's, or
 //! defaults that frame and light any scene).
 
+use std::path::Path;
 use std::time::Instant;
 
 use aabench_renderer::scene::generate::GENERATOR_STAMP;
@@ -51,10 +52,37 @@ pub fn ensure_generated(manifest: &Manifest, force: bool) -> anyhow::Result<bool
             );
         }
     }
+    confined(manifest, &path)?;
     generated
         .write(&path)
         .with_context(|| format!("{}: generate: cannot write {}", manifest.path.display(), path.display()))?;
     Ok(true)
+}
+
+/// Refuses to generate into a folder that only looks as if it were inside the manifest's: the
+/// manifest's check of `gltf` is on the text, and a symbolic link on the way (`cache` → `/etc`)
+/// would lead the write elsewhere. The folders are created first, then resolved.
+fn confined(manifest: &Manifest, path: &Path) -> anyhow::Result<()> {
+    let folder = manifest.path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let target = path.parent().unwrap_or(folder);
+    std::fs::create_dir_all(target).with_context(|| {
+        format!("{}: generate: cannot create {}", manifest.path.display(), target.display())
+    })?;
+    let resolve = |p: &Path| {
+        p.canonicalize().with_context(|| format!("{}: generate: {}", manifest.path.display(), p.display()))
+    };
+    let (inside, resolved) = (resolve(folder)?, resolve(target)?);
+    if !resolved.starts_with(&inside) {
+        bail!(
+            "{}: gltf: `{}` leads to {} through a symbolic link, outside the manifest's folder {}: generated \
+             files stay inside it; give a path whose folders are real folders there",
+            manifest.path.display(),
+            manifest.gltf.display(),
+            resolved.display(),
+            inside.display()
+        );
+    }
+    Ok(())
 }
 
 /// Generates if needed, imports the glTF file and applies the manifest. Blocking.
@@ -153,6 +181,7 @@ pub fn default_rig() -> Vec<Light> {
 /// is set just beyond the farthest corner of the scene's bounds. Fails when no triangle of the
 /// scene lies even partly inside the view frustum: such a frame shows only background.
 fn camera(manifest: &Manifest, scene: &Scene) -> anyhow::Result<Camera> {
+    let from_file = manifest.camera.is_none() && scene.camera.is_some();
     let (mut camera, source) = match &manifest.camera {
         // Manifest coordinates are the file's; the scene's are relative to its origin.
         Some(spec) => {
@@ -183,7 +212,10 @@ fn camera(manifest: &Manifest, scene: &Scene) -> anyhow::Result<Camera> {
             .fold(0.0, f64::max);
         camera.far = (farthest * 1.05).max(camera.near * 2.0);
     }
-    camera.validate().map_err(|e| anyhow::anyhow!("{}: {source}: {e}", manifest.path.display()))?;
+    camera.validate().map_err(|e| {
+        let e = if from_file { e.of_file_camera() } else { e };
+        anyhow::anyhow!("{}: {source}: {e}", manifest.path.display())
+    })?;
     // Either tier's frame: the tiers may differ in aspect.
     let in_view = [manifest.resolution.quick, manifest.resolution.nightly]
         .iter()

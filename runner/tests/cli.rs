@@ -242,6 +242,12 @@ fn bad_arguments_exit_two_before_any_work() {
         (vec!["run", "--memory-limit", "0"], "positive number of GiB"),
         (vec!["run", "--frame-timeout", "0"], "positive number of seconds"),
         (vec!["run", "--shard", "3/2"], "--shard 3/2: expected I/N"),
+        // Negative numbers reach aabench's own checks instead of clap's "unexpected argument".
+        (vec!["run", "--memory-limit", "-1"], "--memory-limit -1 must be a positive number of GiB"),
+        (vec!["run", "--frame-timeout", "-1"], "--frame-timeout -1 must be a positive number of seconds"),
+        (vec!["run", "--shard", "-1/2"], "--shard -1/2: expected I/N"),
+        (vec!["run", "--repetitions", "-1"], "-1 is not in 1..=10000"),
+        (vec!["run", "--out", "/dev/full"], "--out /dev/full: exists and is not a folder"),
     ] {
         let output = ws.run(&args);
         assert_eq!(output.status.code(), Some(2), "{args:?}");

@@ -439,3 +439,97 @@ fn blank_frames_fail_their_modes_unless_the_scene_is_declared_empty() {
         assert!(error(2, mode).contains("every display pixel has the code (0, 0, 0)"), "{}", error(2, mode));
     }
 }
+
+#[test]
+fn messages_name_the_file_or_field_and_say_what_to_do() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("messages");
+    // A manifest saved with a UTF-8 byte-order mark reads like any other.
+    let edge = ws.manifest("a-edge", "edge", |_| {});
+    let text = std::fs::read(&edge).unwrap();
+    std::fs::write(&edge, [b"\xef\xbb\xbf".as_slice(), &text].concat()).unwrap();
+    // A contrast so small that the curve has no range.
+    ws.manifest("b-contrast", "plane", |m| {
+        m["dynamic_range"] = json!("hdr");
+        m["tonemap"] = json!({ "contrast": 1e-30 });
+    });
+    // A file camera on a node scaled to 0, in a glTF written here.
+    let positions: [f32; 9] = [-1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0];
+    let bytes: Vec<u8> = positions.iter().flat_map(|p| p.to_le_bytes()).collect();
+    std::fs::write(ws.dir.join("scenes/triangle.bin"), bytes).unwrap();
+    let document = json!({
+        "asset": { "version": "2.0" },
+        "buffers": [{ "byteLength": 36, "uri": "triangle.bin" }],
+        "bufferViews": [{ "buffer": 0, "byteLength": 36 }],
+        "accessors": [{ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                        "min": [-1, -1, 0], "max": [1, 1, 0] }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
+        "cameras": [{ "type": "perspective", "perspective": { "yfov": 1.0, "znear": 0.1 } }],
+        "nodes": [{ "mesh": 0 }, { "camera": 0, "translation": [0, 0, 3], "scale": [0, 0, 0] }],
+        "scenes": [{ "nodes": [0, 1] }],
+        "scene": 0
+    });
+    std::fs::write(ws.dir.join("scenes/triangle.gltf"), document.to_string()).unwrap();
+    write_json(
+        &ws.dir.join("scenes/c-camera.json"),
+        &json!({ "schema_version": 1, "name": "c-camera", "gltf": "triangle.gltf",
+                 "resolution": { "quick": [64, 48], "nightly": [64, 48] },
+                 "lights": [{ "position": [0.0, 0.0, 2.0], "intensity": 4.0, "range": 20.0 }] }),
+    );
+    // A generated file whose cache folder is a link out of the scenes folder.
+    let elsewhere = ws.dir.join("elsewhere");
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    ws.manifest("d-linked", "plane", |m| m["gltf"] = json!("linked/plane.glb"));
+    std::os::unix::fs::symlink(&elsewhere, ws.dir.join("scenes/linked")).unwrap();
+    // A FIFO where a manifest would be.
+    assert!(Command::new("mkfifo").arg(ws.dir.join("scenes/e-fifo.json")).status().unwrap().success());
+
+    let output = ws.run(&["run", "--modes", "deferred-1x1", "--repetitions", "1"]);
+    assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
+    let record = ws.record();
+    let error = |name: &str| -> String {
+        let scene = record["scenes"].as_array().unwrap().iter().find(|s| s["name"] == name);
+        scene.unwrap_or_else(|| panic!("no {name} in {record}"))["error"].as_str().unwrap_or("").to_owned()
+    };
+    assert_eq!(error("a-edge"), "", "the byte-order mark is skipped");
+    let contrast = error("b-contrast");
+    assert!(contrast.contains("tonemap.contrast") && contrast.contains("raise contrast"), "{contrast}");
+    assert!(!contrast.contains("  "), "no run of spaces: {contrast}");
+    let camera = error("c-camera");
+    assert!(camera.contains("triangle.gltf") && camera.contains("view direction"), "{camera}");
+    assert!(camera.contains("scale of 0") && !camera.contains("target"), "{camera}");
+    let linked = error("d-linked");
+    assert!(linked.contains("through a symbolic link") && linked.contains("gltf"), "{linked}");
+    assert_eq!(std::fs::read_dir(&elsewhere).unwrap().count(), 0, "nothing was written through the link");
+    let fifo = error("e-fifo");
+    assert!(fifo.contains("e-fifo.json") && fifo.contains("not a regular file"), "{fifo}");
+
+    // compare --out onto a file, and a report whose images no longer match the truth's size.
+    let run = ws.run_dir();
+    let file = ws.dir.join("a-file");
+    std::fs::write(&file, "x").unwrap();
+    let output = ws.run(&["compare", run.to_str().unwrap(), "--lenient", "--out", file.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(stderr(&output).contains("a-file: exists and is not a folder"), "{}", stderr(&output));
+
+    // A report whose adaptive image was replaced by one of another size: the crops are left
+    // out, and the page and stderr say why.
+    let crops = Workspace::new("crops");
+    crops.manifest("edge", "edge", |_| {});
+    let output = crops.run(&["run", "--modes", "reference-2x2,adaptive-2x2", "--repetitions", "1"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let run = crops.run_dir();
+    let record = crops.record();
+    let display =
+        mode(&record["scenes"][0], "adaptive-2x2")["images"]["display"].as_str().unwrap().to_owned();
+    image::RgbaImage::new(2, 2).save(run.join(&display)).unwrap();
+    let output = crops.run(&["report", run.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("no crops at 2×2") && stderr(&output).contains("is 2×2"),
+        "{}",
+        stderr(&output)
+    );
+    let page = std::fs::read_to_string(run.join("index.html")).unwrap();
+    assert!(page.contains("no crops at 2×2"), "the page says it too");
+}

@@ -35,6 +35,27 @@ pub(crate) fn vector(v: DVec3) -> String {
     format!("[{}, {}, {}]", number(v.x), number(v.y), number(v.z))
 }
 
+impl CameraError {
+    /// The same error said of a camera that a glTF node carries: its fields by glTF's names,
+    /// and a view or up direction as the node's transform makes it (a file camera has no
+    /// target).
+    pub fn of_file_camera(self) -> CameraError {
+        let (field, message) = match self.field {
+            "target" => (
+                "view direction",
+                "the camera node's transform turns its −Z axis into nothing (a scale of 0?), so it looks nowhere"
+                    .to_string(),
+            ),
+            "up" => ("up", format!("the camera node's +Y axis {}", self.message)),
+            "fov_y" => ("yfov", self.message),
+            "near" => ("znear", self.message),
+            "far" => ("zfar", self.message),
+            other => (other, self.message),
+        };
+        CameraError { field, message }
+    }
+}
+
 impl std::fmt::Display for CameraError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "{}: {}", self.field, self.message)

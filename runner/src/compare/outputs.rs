@@ -9,7 +9,7 @@ use crate::report::html::escape as xml;
 
 /// Writes summary.md, junit.xml and verdict.json into `dir`, each atomically.
 pub fn write_all(verdict: &Verdict, dir: &Path) -> Result<Vec<PathBuf>, String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    crate::json::output_folder(dir).map_err(|e| format!("--out {e}"))?;
     let write = |name: &str, text: &str| -> Result<PathBuf, String> {
         let path = dir.join(name);
         aabench_renderer::scene::write::write_atomic(&path, text.as_bytes())

@@ -22,20 +22,22 @@ const CROP: u32 = 64;
 const ZOOM: u32 = 4;
 
 /// Writes `<run_dir>/index.html` (and its crops under `<run_dir>/report/`). `history` holds
-/// earlier runs of the same tier, any order; the run itself is added when missing.
+/// earlier runs of the same tier, any order; the run itself is added when missing. Returns the
+/// page and what it had to leave out, one line each (also said on the page).
 pub fn write(
     run_dir: &Path,
     run: &RunRecord,
     verdict: Option<&Verdict>,
     history: &[RunRecord],
-) -> Result<PathBuf, String> {
+) -> Result<(PathBuf, Vec<String>), String> {
     let mut page = String::new();
+    let mut left_out = Vec::new();
     head(&mut page, run);
     summary(&mut page, run, verdict);
     adaptive_costs(&mut page, run);
     let history = history_runs(run, history);
     for scene in &run.scenes {
-        scene_section(&mut page, run_dir, scene, verdict, &history)?;
+        scene_section(&mut page, run_dir, scene, verdict, &history, &mut left_out)?;
     }
     page.push_str(
         "<footer>Written by <code>aabench report</code>. Times are wall-clock medians of interleaved \
@@ -45,7 +47,7 @@ pub fn write(
     let path = run_dir.join("index.html");
     aabench_renderer::scene::write::write_atomic(&path, page.as_bytes())
         .map_err(|e| format!("{}: write: {e}", path.display()))?;
-    Ok(path)
+    Ok((path, left_out))
 }
 
 fn head(page: &mut String, run: &RunRecord) {
@@ -111,6 +113,7 @@ fn scene_section(
     scene: &SceneRecord,
     verdict: Option<&Verdict>,
     history: &[&RunRecord],
+    left_out: &mut Vec<String>,
 ) -> Result<(), String> {
     let _ = writeln!(page, "<section id=\"{0}\">\n<h2>{0}</h2>", escape(&scene.name));
     let resolution = scene.resolution.map_or("?".into(), |[w, h]| format!("{w}×{h}"));
@@ -145,7 +148,7 @@ fn scene_section(
             writeln!(page, "<figure class=\"plot\">{}</figure>", plots::error_against_time(&title, &points)?);
     }
     verdict_table(page, &checks);
-    images(page, run_dir, scene)?;
+    images(page, run_dir, scene, left_out)?;
     history_plots(page, scene, history)?;
     page.push_str("</section>\n");
     Ok(())
@@ -335,7 +338,12 @@ fn short_label(mode: &str) -> String {
 /// The truth, deferred-1x1, and per M: reference, adaptive (and its `-area` variant where the
 /// run has it), their differences and the sample counts, then 1:1 crops around adaptive's
 /// largest error against the truth.
-fn images(page: &mut String, run_dir: &Path, scene: &SceneRecord) -> Result<(), String> {
+fn images(
+    page: &mut String,
+    run_dir: &Path,
+    scene: &SceneRecord,
+    left_out: &mut Vec<String>,
+) -> Result<(), String> {
     page.push_str("<h3>Images</h3>\n<div class=\"row\">");
     if let Some(image) = scene.truth.as_ref().and_then(|t| t.image.as_deref()) {
         figure(page, image, TRUTH_ID);
@@ -378,7 +386,7 @@ fn images(page: &mut String, run_dir: &Path, scene: &SceneRecord) -> Result<(), 
         page.push_str("</div>\n");
         if let Some(worst) = adaptive.or(area) {
             let shown: Vec<&ModeRecord> = [reference, adaptive, area].into_iter().flatten().collect();
-            crops(page, run_dir, scene, m, &shown, worst)?;
+            crops(page, run_dir, scene, m, &shown, worst, left_out)?;
         }
     }
     Ok(())
@@ -402,6 +410,7 @@ fn crops(
     m: u32,
     modes: &[&ModeRecord],
     worst: &ModeRecord,
+    left_out: &mut Vec<String>,
 ) -> Result<(), String> {
     let Some(truth_file) = scene.truth.as_ref().and_then(|t| t.image.clone()) else { return Ok(()) };
     let Some(worst_file) = worst.images.display.clone() else { return Ok(()) };
@@ -411,13 +420,29 @@ fn crops(
             .map_err(|e| format!("{}: {e}", run_dir.join(relative).display()))
     };
     let (truth, worst_image) = (open(&truth_file)?, open(&worst_file)?);
-    if truth.dimensions() != worst_image.dimensions() {
-        return Ok(());
+    let sources: Vec<(String, String)> = std::iter::once((TRUTH_ID.to_string(), truth_file))
+        .chain(modes.iter().filter_map(|mode| Some((mode.mode.clone(), mode.images.display.clone()?))))
+        .collect();
+    let mut opened = Vec::new();
+    for (name, file) in sources {
+        let image = open(&file)?;
+        if image.dimensions() != truth.dimensions() {
+            // The files were replaced after the run: the crops would compare different frames.
+            let (w, h) = image.dimensions();
+            let reason = format!(
+                "{}: no crops at {m}×{m}: {file} is {w}×{h}, the truth {}×{} (an image replaced after the run?)",
+                scene.name,
+                truth.width(),
+                truth.height()
+            );
+            let _ = writeln!(page, "<p class=\"meta\">{}</p>", escape(&reason));
+            left_out.push(reason);
+            return Ok(());
+        }
+        opened.push((name, image));
     }
     let side = CROP.min(truth.width()).min(truth.height());
     let (x, y) = worst_window(&truth, &worst_image, side);
-    let mut sources: Vec<(String, String)> = vec![(TRUTH_ID.into(), truth_file)];
-    sources.extend(modes.iter().filter_map(|mode| Some((mode.mode.clone(), mode.images.display.clone()?))));
     let folder = Path::new("report").join(&scene.name);
     std::fs::create_dir_all(run_dir.join(&folder))
         .map_err(|e| format!("{}: {e}", run_dir.join(&folder).display()))?;
@@ -426,8 +451,7 @@ fn crops(
         "<p class=\"meta\">Crops at ({x}, {y}), {side}×{side}: where {} differs most from the truth (1:1, then ×{ZOOM}).</p>\n<div class=\"row crops\">",
         escape(&worst.mode)
     );
-    for (name, file) in sources {
-        let image = open(&file)?;
+    for (name, image) in opened {
         let crop = image::imageops::crop_imm(&image, x, y, side, side).to_image();
         let relative = folder.join(format!("crop-{m}x{m}-{name}.png"));
         crate::images::write_png(&run_dir.join(&relative), side, side, crop.as_raw())

@@ -44,19 +44,9 @@ pub(super) fn checks(
                 continue;
             }
             let template = |metric: &str| Check {
-                scene: scene.name.clone(),
-                mode: id.into(),
-                metric: metric.into(),
                 against: Against::Base,
-                outcome: Outcome::Unchanged,
-                baseline: None,
-                current: None,
-                change: None,
-                interval: None,
-                threshold: None,
                 unit: "relative".into(),
-                detail: String::new(),
-                gated: true,
+                ..Check::new(&scene.name, id, metric, Outcome::Unchanged, String::new())
             };
             let relative = |record: &SceneRecord| {
                 let anchor = record.round_anchor(&anchors, id)?;

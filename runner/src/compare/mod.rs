@@ -165,12 +165,12 @@ impl Check {
         self.gated && self.outcome.fails()
     }
 
-    /// A check of the run as a whole (`scene` and `mode` `*`).
-    fn of_run(outcome: Outcome, detail: String) -> Check {
+    /// A check with no numbers yet, gated, against the baseline.
+    fn new(scene: &str, mode: &str, metric: &str, outcome: Outcome, detail: String) -> Check {
         Check {
-            scene: "*".into(),
-            mode: "*".into(),
-            metric: "run".into(),
+            scene: scene.into(),
+            mode: mode.into(),
+            metric: metric.into(),
             against: Against::Baseline,
             outcome,
             baseline: None,
@@ -182,6 +182,11 @@ impl Check {
             detail,
             gated: true,
         }
+    }
+
+    /// A check of the run as a whole (`scene` and `mode` `*`).
+    fn of_run(outcome: Outcome, detail: String) -> Check {
+        Check::new("*", "*", "run", outcome, detail)
     }
 }
 
@@ -483,21 +488,7 @@ fn input_notes(scene: &SceneRecord, baseline: &SceneRecord) -> Vec<String> {
 }
 
 fn status_check(scene: &SceneRecord, mode: &str, outcome: Outcome, detail: &str) -> Check {
-    Check {
-        scene: scene.name.clone(),
-        mode: mode.into(),
-        metric: "status".into(),
-        against: Against::Baseline,
-        outcome,
-        baseline: None,
-        current: None,
-        change: None,
-        interval: None,
-        threshold: None,
-        unit: String::new(),
-        detail: detail.into(),
-        gated: true,
-    }
+    Check::new(&scene.name, mode, "status", outcome, detail.into())
 }
 
 /// The checks of one scene: `processes` are its records in each process of the run (the
@@ -587,21 +578,7 @@ struct ModeContext<'a> {
 
 impl ModeContext<'_> {
     fn check(&self, metric: &str, outcome: Outcome, unit: &str, detail: String) -> Check {
-        Check {
-            scene: self.scene.name.clone(),
-            mode: self.mode.mode.clone(),
-            metric: metric.into(),
-            against: Against::Baseline,
-            outcome,
-            baseline: None,
-            current: None,
-            change: None,
-            interval: None,
-            threshold: None,
-            unit: unit.into(),
-            detail,
-            gated: true,
-        }
+        Check { unit: unit.into(), ..Check::new(&self.scene.name, &self.mode.mode, metric, outcome, detail) }
     }
 
     fn quality_checks(&self) -> Vec<Check> {

@@ -4,7 +4,7 @@
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
-use super::{Against, Check, Outcome, Verdict};
+use super::{Against, Check, FailOn, Outcome, Verdict};
 use crate::report::html::escape as xml;
 
 /// Writes summary.md, junit.xml and verdict.json into `dir`, each atomically.
@@ -50,10 +50,14 @@ pub fn summary(verdict: &Verdict) -> String {
     };
     let processes = match verdict.run_ids.len() {
         0 | 1 => String::new(),
-        n => format!(" ({n} processes)"),
+        n => format!(" and {} more processes of its build", n - 1),
     };
-    let _ = writeln!(out, "Run `{}`{processes} ({} tier) against {against}.", verdict.run_id, verdict.tier);
-    let time = if !verdict.base_run_ids.is_empty() {
+    let _ = writeln!(out, "Run `{}`{processes}, {} tier, against {against}.", verdict.run_id, verdict.tier);
+    let time = if verdict.fail_on == FailOn::Quality {
+        "nothing: it is reported, not gated (`--fail-on quality`)".to_string()
+    } else if verdict.fail_on == FailOn::All {
+        "the baselines and any base runs, whichever machine blessed them (`--fail-on all`)".to_string()
+    } else if !verdict.base_run_ids.is_empty() {
         format!(
             "the base build's {} processes on this machine (the process is the unit of evidence)",
             verdict.base_run_ids.len()

@@ -4,7 +4,9 @@
 //! them. A run therefore also records the CPU's identity as `/proc/cpuinfo` gives it (vendor,
 //! family, model, stepping, clock, cache) and two short calibration probes: a dependent chain
 //! of floating-point operations (ALU-bound) and a pointer chase through 64 MiB (memory-bound).
-//! `compare` gates time against committed baselines only when both agree with the blessed run's.
+//! `compare` gates time against committed baselines only when the identity and the ALU probe
+//! agree with the blessed run's (the memory probe is recorded, not compared: it varies with
+//! how the kernel backs its buffer).
 
 use serde::{Deserialize, Serialize};
 
@@ -35,18 +37,18 @@ impl Machine {
         if self.cpu != blessed.cpu {
             return Err(format!("CPU `{}`, the baseline's `{}`", self.cpu, blessed.cpu));
         }
-        for (probe, now, then) in
-            [("ALU", self.alu_ns, blessed.alu_ns), ("memory", self.memory_ns, blessed.memory_ns)]
-        {
-            let change = now / then - 1.0;
-            // A NaN probe (a broken clock) is never a match.
-            if change.is_nan() || change.abs() > PROBE_TOLERANCE {
-                return Err(format!(
-                    "the {probe} probe took {now:.3} ns a step, the baseline's machine {then:.3} ns ({:+.0}%, more than ±{:.0}%)",
-                    change * 100.0,
-                    PROBE_TOLERANCE * 100.0
-                ));
-            }
+        // Only the ALU probe decides: the memory probe's latency depends on how the kernel backs
+        // its buffer (huge pages or not) and varied 67–150 ns between processes of one machine.
+        let change = self.alu_ns / blessed.alu_ns - 1.0;
+        // A NaN probe (a broken clock) is never a match.
+        if change.is_nan() || change.abs() > PROBE_TOLERANCE {
+            return Err(format!(
+                "the ALU probe took {:.3} ns a step, the baseline's machine {:.3} ns ({:+.0}%, more than ±{:.0}%)",
+                self.alu_ns,
+                blessed.alu_ns,
+                change * 100.0,
+                PROBE_TOLERANCE * 100.0
+            ));
         }
         Ok(())
     }
@@ -133,7 +135,7 @@ mod tests {
         let slower = Machine { alu_ns: here.alu_ns * 1.3, ..here.clone() };
         let reason = here.same_as(&slower).unwrap_err();
         assert!(reason.contains("ALU") && reason.contains("-23%"), "{reason}");
-        let nan = Machine { memory_ns: f64::NAN, ..here.clone() };
+        let nan = Machine { alu_ns: f64::NAN, ..here.clone() };
         assert!(here.same_as(&nan).is_err(), "a broken probe is never a match");
     }
 }

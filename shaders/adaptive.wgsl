@@ -9,7 +9,9 @@
 //   gather        averages S with the pixel's extra samples (gather_loop shades them itself in a
 //                 loop instead: the paper's simplest variant, kept for comparison); a pixel that
 //                 takes all M² samples leaves S out and equals the reference. The `-area`
-//                 variant weights each sample by the share of the pixel nearest to it
+//                 variant weights each sample by the share of the pixel nearest to it (its
+//                 cell); the `-cells` variant also shades each sample for its cell as a whole
+//                 (adaptive.rs: Reconstruction::Cells)
 //
 // The metric is specified by its CPU twin in renderer/src/adaptive.rs; keep the two in step.
 // Passes bind group 2 by name (renderer/src/bindings.rs): each variable below is a port of the
@@ -53,11 +55,32 @@ fn compact_index(texel: vec2<u32>) -> u32 {
     return block * 16u + (texel.y % 4u) * 4u + texel.x % 4u;
 }
 
+// Each sample stands for its cell of the pixel (the `-cells` variant): S is the pixel's
+// centre, and extra samples are shaded at their cells' centroids with their cells' footprints.
+override CELLS: bool;
+
 // The first rank a pixel of n samples shades after S. A pixel that takes its whole window is
 // shaded exactly like the reference: rank 0 again, at the reference's footprint, instead of
-// reusing S (whose footprint spans the pixel). Any other pixel reuses S, as the paper does.
+// reusing S (whose footprint spans the pixel). Any other pixel reuses S, as the paper does,
+// except under CELLS, where S stands for the whole pixel and so for no cell of one that takes
+// more samples (adaptive.rs: Reconstruction::reshades_first).
 fn first_extra_rank(n: u32) -> u32 {
-    return select(1u, 0u, n == M * M);
+    return select(1u, 0u, n == M * M || (CELLS && n > 1u));
+}
+
+// Entry (n − 1)·M² + rank: the cell of sample `rank` among the first n, as (its share of the
+// pixel, its centroid less the sample's position in G-buffer texels, its side in G-buffer
+// texels) (adaptive.rs: sample_cells). Read by the `-area` and `-cells` variants.
+@group(2) @binding(11) var<storage, read> sample_cells: array<vec4<f32>>;
+
+fn sample_cell(n: u32, rank: u32) -> vec4<f32> {
+    return sample_cells[(n - 1u) * M * M + rank];
+}
+
+// Sample `rank` of the pixel's first n, shaded for its cell.
+fn shade_cell(texel: vec2<i32>, n: u32, rank: u32) -> vec4<f32> {
+    let cell = sample_cell(n, rank);
+    return shade_offset(texel, cell.yz, cell.w);
 }
 
 // Rank → row-major window cell, from the paper's Fig. 3 matrices: eight 4-bit cells per word,
@@ -68,6 +91,17 @@ override ORDER_HIGH: u32;
 fn window_cell(rank: u32) -> u32 {
     let word = select(ORDER_HIGH, ORDER_LOW, rank < 8u);
     return (word >> (4u * (rank % 8u))) & 15u;
+}
+
+// Window cell → rank, the paper's matrix itself, packed the same way (adaptive.rs:
+// packed_dither_matrix).
+override RANK_LOW: u32;
+override RANK_HIGH: u32;
+
+fn texel_rank(texel: vec2<i32>) -> u32 {
+    let cell = u32(texel.y % i32(M)) * M + u32(texel.x % i32(M));
+    let word = select(RANK_HIGH, RANK_LOW, cell < 8u);
+    return (word >> (4u * (cell % 8u))) & 15u;
 }
 
 // S, the shade-first image.
@@ -108,7 +142,11 @@ fn footprint(n: u32) -> f32 {
 
 @fragment
 fn shade_first(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
-    return shade(window_texel(vec2<i32>(position.xy), 0u), footprint(1u));
+    let texel = window_texel(vec2<i32>(position.xy), 0u);
+    if CELLS {
+        return shade_cell(texel, 1u, 0u);
+    }
+    return shade(texel, footprint(1u));
 }
 
 // ---- evaluate: reads S and the G-buffer
@@ -230,6 +268,50 @@ fn geometry_k(pixel: vec2<i32>) -> f32 {
     return max(C_DEPTH * variance, C_NORMAL * cone);
 }
 
+// The shading metric also counts the contrast of base-colour textures below the pixel's scale
+// (the `-cells` variant): S reads textures filtered over the whole pixel, so a checker whose
+// cells are a pixel wide is a flat grey to it, although the samples inside the pixel, and the
+// reference's, see black and white.
+override TEXTURE_DETAIL: bool;
+
+// The luminance of the base colour at `texel` filtered at the reference's footprint (one
+// G-buffer texel), or -1 where the sample has no base-colour texture.
+fn fine_albedo(texel: vec2<i32>) -> f32 {
+#ifdef TEXTURED
+    let s = load_surface(texel);
+    if s.material == BACKGROUND || materials[s.material].texture < 0 {
+        return -1.0;
+    }
+    let material = materials[s.material];
+    let c = surface_coords(s, SLOT_BASE, 1.0);
+    return luminance(texture_lookup(scene_textures, material.texture, c.uv, c.dx, c.dy).rgb * material.base_color.rgb);
+#else
+    return -1.0;
+#endif
+}
+
+// The luma range that the base-colour texture spans inside the pixel, from the window's four
+// corner samples read at the reference's footprint. A sample's colour is its albedo times its
+// light, so with the light of S it is S scaled by the albedo over the pixel's mean albedo: the
+// range of the metric's square-root luma is then luma(S) · (√a_max − √a_min) / √a_mean.
+fn texture_range(pixel: vec2<i32>) -> f32 {
+    let origin = pixel * i32(M);
+    let last = i32(M) - 1;
+    let a = vec4<f32>(
+        fine_albedo(origin),
+        fine_albedo(origin + vec2<i32>(last, 0)),
+        fine_albedo(origin + vec2<i32>(0, last)),
+        fine_albedo(origin + vec2<i32>(last, last)),
+    );
+    if min(min(a.x, a.y), min(a.z, a.w)) < 0.0 {
+        return 0.0;
+    }
+    let high = max(max(a.x, a.y), max(a.z, a.w));
+    let low = min(min(a.x, a.y), min(a.z, a.w));
+    let mean = max(dot(a, vec4<f32>(0.25)), 1e-6);
+    return first_luma(pixel) * (sqrt(high) - sqrt(low)) / sqrt(mean);
+}
+
 fn shading_k(pixel: vec2<i32>) -> f32 {
     let c = first_luma(pixel);
     let l = first_luma(pixel + vec2<i32>(-1, 0));
@@ -238,7 +320,10 @@ fn shading_k(pixel: vec2<i32>) -> f32 {
     let d = first_luma(pixel + vec2<i32>(0, 1));
     let l_max = max(max(max(c, l), max(r, u)), d);
     let l_min = min(min(min(c, l), min(r, u)), d);
-    let range = l_max - l_min;
+    var range = l_max - l_min;
+    if TEXTURE_DETAIL {
+        range = max(range, texture_range(pixel));
+    }
     if range < max(T_MIN, l_max * T_EDGE) {
         return 0.0;
     }
@@ -256,7 +341,9 @@ fn evaluate(@builtin(position) position: vec4<f32>) -> @location(0) u32 {
     if USE_GEOMETRY {
         k = max(k, geometry_k(pixel));
     }
-    if USE_SHADING {
+    // A window that geometry fills already (a silhouette takes k = 1) needs no shading
+    // metric: the count is clamped to the window either way, so skipping it changes no count.
+    if USE_SHADING && k * f32(total) + 0.5 < f32(total - 1u) {
         k = max(k, shading_k(pixel));
     }
     // 1 + round(k · M²), clamped to the window; k is finite and ≥ 0 (geometry_k, shading_k).
@@ -360,20 +447,22 @@ fn compact_rows(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f3
 @fragment
 fn shade_extra(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
     let entry = list_entries[compact_index(vec2<u32>(position.xy))];
-    return shade(entry_texel(entry), footprint(entry_count(entry)));
+    let texel = entry_texel(entry);
+    if CELLS {
+        return shade_cell(texel, entry_count(entry), texel_rank(texel));
+    }
+    return shade(texel, footprint(entry_count(entry)));
 }
 
 // ---- gather: S, the counts, each pixel's first list index and the extra samples
 
 @group(2) @binding(9) var<storage, read> list_offsets: array<u32>;
 @group(2) @binding(10) var extra_samples: texture_2d<f32>;
-// Entry (n − 1)·M² + rank: the share of the pixel nearest to sample `rank` among the first n
-// (adaptive.rs: area_weights). Read where AREA_WEIGHTS is set.
-@group(2) @binding(11) var<storage, read> area_weights: array<f32>;
 
-// Average each pixel's samples weighted by the area each stands for (the `-area` variant),
-// instead of alike (the paper). A pixel of 1 or M² samples is averaged alike either way.
-override AREA_WEIGHTS: bool;
+// Average each pixel's samples weighted by the area of their cells (the `-area` and `-cells`
+// variants), instead of alike (the paper). A pixel of 1 or M² samples is averaged alike
+// either way (adaptive.rs: Reconstruction::weighted).
+override WEIGHTED: bool;
 
 // A pixel's samples, summed as they arrive and averaged at the end: alike, in the paper's
 // order of operations, or weighted by area. `first_rank` is 1 where S is reused, else 0.
@@ -385,18 +474,17 @@ struct Average {
 
 // The paper's path keeps its exact operations (no multiplication by 1) and reads no weight.
 fn start_average(pixel: vec2<i32>, n: u32, first_rank: u32) -> Average {
-    // Area weights differ from 1/n only for 1 < n < M², where S is always reused.
-    let weighted = AREA_WEIGHTS && first_rank == 1u && n > 1u;
+    let weighted = WEIGHTED && n > 1u && n < M * M;
     let s = select(vec4<f32>(0.0), textureLoad(first, pixel, 0), first_rank == 1u);
     if weighted {
-        return Average(s * area_weights[(n - 1u) * M * M], n, true);
+        return Average(s * sample_cell(n, 0u).x, n, true);
     }
     return Average(s, n, false);
 }
 
 fn add_sample(average: ptr<function, Average>, rank: u32, sample: vec4<f32>) {
     if (*average).weighted {
-        (*average).sum += sample * area_weights[((*average).n - 1u) * M * M + rank];
+        (*average).sum += sample * sample_cell((*average).n, rank).x;
     } else {
         (*average).sum += sample;
     }
@@ -428,7 +516,12 @@ fn gather_loop(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32>
     var average = start_average(pixel, n, first_rank);
     let scale = footprint(n);
     for (var rank = first_rank; rank < n; rank += 1u) {
-        add_sample(&average, rank, shade(window_texel(pixel, rank), scale));
+        let texel = window_texel(pixel, rank);
+        if CELLS {
+            add_sample(&average, rank, shade_cell(texel, n, rank));
+        } else {
+            add_sample(&average, rank, shade(texel, scale));
+        }
     }
     return finish_average(average);
 }

@@ -40,16 +40,27 @@ pub fn sample_order(m: u32) -> Vec<u32> {
 /// first: the shaders' `ORDER_LOW` and `ORDER_HIGH` constants. Decoding them is a shift and a
 /// mask, where a table in a storage buffer cost a load per sample of S and per list entry.
 pub fn packed_sample_order(m: u32) -> [u32; 2] {
+    pack_nibbles(&sample_order(m))
+}
+
+/// The dither matrix (window cell → rank) packed as [`packed_sample_order`] is: the shaders'
+/// `RANK_LOW` and `RANK_HIGH`.
+pub fn packed_dither_matrix(m: u32) -> [u32; 2] {
+    pack_nibbles(dither_matrix(m).unwrap_or(&[0]))
+}
+
+/// Up to sixteen values below 16, eight to a word, the first in the lowest bits.
+fn pack_nibbles(values: &[u32]) -> [u32; 2] {
     let mut words = [0u32; 2];
-    for (rank, cell) in sample_order(m).into_iter().enumerate() {
-        words[rank / 8] |= cell << (4 * (rank % 8));
+    for (i, &value) in values.iter().enumerate() {
+        words[i / 8] |= value << (4 * (i % 8));
     }
     words
 }
 
-/// How a pixel's samples are averaged (a mode's `-area` suffix picks `Area`).
+/// How a pixel's samples stand for it (a mode's `-area` or `-cells` suffix picks the variant).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Weights {
+pub enum Reconstruction {
     /// Every sample alike, as the paper does.
     Equal,
     /// Each sample by the area of the pixel nearer to it than to the pixel's other samples (its
@@ -57,14 +68,49 @@ pub enum Weights {
     /// corner no longer lets the corner stand for half the pixel. A pixel with one sample or all
     /// M² is averaged exactly as under `Equal`.
     Area,
+    /// Each sample stands for its cell as a whole: weighted by the cell's area, shaded at the
+    /// cell's centroid on the sample's tangent plane, its textures filtered over a square of the
+    /// cell's area. One sample is then the pixel's centre with the pixel's footprint, as in
+    /// deferred shading, at every M; a texture edge inside a pixel of n samples is filtered
+    /// rather than point-sampled n times. The first sample of a pixel that takes more than one
+    /// is shaded again for its own cell instead of reusing S, which stands for the whole pixel.
+    Cells,
 }
 
-/// The area weights of every prefix of the M×M dither order: entry `(n − 1)·M² + rank` is the
-/// share of the pixel whose nearest sample, among the first n, is that of `rank` (0 past n).
-/// Each row sums to 1. Cells are found exactly, by clipping the pixel with the bisector of each
-/// pair of samples (points equally near two samples, a set of measure zero, count for both).
-/// M is 2, 3 or 4.
-pub fn area_weights(m: u32) -> Vec<f32> {
+impl Reconstruction {
+    /// Whether a pixel of `n` of `m`² samples reads [`sample_cells`] rather than averaging
+    /// alike.
+    pub fn weighted(self, m: u32, n: u32) -> bool {
+        self != Reconstruction::Equal && n > 1 && n < m * m
+    }
+
+    /// Whether a pixel of `n` of `m`² samples shades its first sample again instead of
+    /// reusing S: every full window does (to equal the reference), and under `Cells` every
+    /// pixel of more than one sample.
+    pub fn reshades_first(self, m: u32, n: u32) -> bool {
+        n == m * m || (self == Reconstruction::Cells && n > 1)
+    }
+}
+
+/// One sample's cell in a prefix of the dither order: the part of the pixel nearer to it than
+/// to the prefix's other samples.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SampleCell {
+    /// The cell's share of the pixel.
+    pub weight: f32,
+    /// The cell's centroid less the sample's position, in G-buffer texels.
+    pub centroid: [f32; 2],
+    /// The side of a square of the cell's area, in G-buffer texels: M for a whole pixel, 1 for
+    /// one texel's cell (the reference's footprint).
+    pub footprint: f32,
+}
+
+/// The cells of every prefix of the M×M dither order: entry `(n − 1)·M² + rank` is the cell of
+/// the sample of `rank` among the first n (all zero past n). Each row's weights sum to 1.
+/// Cells are found exactly, by clipping the pixel with the bisector of each pair of samples
+/// (points equally near two samples, a set of measure zero, count for both). M is 2, 3 or 4.
+pub fn sample_cells(m: u32) -> Vec<SampleCell> {
     assert!(dither_matrix(m).is_some(), "no dither order for M = {m}");
     let cells = (m * m) as usize;
     let order = sample_order(m);
@@ -72,7 +118,7 @@ pub fn area_weights(m: u32) -> Vec<f32> {
         let cell = order[rank];
         [(f64::from(cell % m) + 0.5) / f64::from(m), (f64::from(cell / m) + 0.5) / f64::from(m)]
     };
-    let mut table = vec![0.0; cells * cells];
+    let mut table = vec![SampleCell { weight: 0.0, centroid: [0.0; 2], footprint: 0.0 }; cells * cells];
     for n in 1..=cells {
         for rank in 0..n {
             let p = centre(rank);
@@ -80,10 +126,21 @@ pub fn area_weights(m: u32) -> Vec<f32> {
             for other in (0..n).filter(|&o| o != rank) {
                 cell = clip_nearer(&cell, p, centre(other));
             }
-            table[(n - 1) * cells + rank] = polygon_area(&cell) as f32;
+            let (area, centroid) = area_and_centroid(&cell);
+            let texels = f64::from(m);
+            table[(n - 1) * cells + rank] = SampleCell {
+                weight: area as f32,
+                centroid: [((centroid[0] - p[0]) * texels) as f32, ((centroid[1] - p[1]) * texels) as f32],
+                footprint: (area.sqrt() * texels) as f32,
+            };
         }
     }
     table
+}
+
+/// The weights alone of [`sample_cells`]: the `-area` variant's.
+pub fn area_weights(m: u32) -> Vec<f32> {
+    sample_cells(m).iter().map(|cell| cell.weight).collect()
 }
 
 /// The part of convex polygon `polygon` nearer to `p` than to `q` (Sutherland–Hodgman against
@@ -109,15 +166,17 @@ fn clip_nearer(polygon: &[[f64; 2]], p: [f64; 2], q: [f64; 2]) -> Vec<[f64; 2]> 
     out
 }
 
-/// The shoelace formula.
-fn polygon_area(polygon: &[[f64; 2]]) -> f64 {
-    let twice: f64 = (0..polygon.len())
-        .map(|i| {
-            let (a, b) = (polygon[i], polygon[(i + 1) % polygon.len()]);
-            a[0] * b[1] - b[0] * a[1]
-        })
-        .sum();
-    twice.abs() / 2.0
+/// The area and centroid of a simple polygon (the shoelace formula and its first moments).
+fn area_and_centroid(polygon: &[[f64; 2]]) -> (f64, [f64; 2]) {
+    let (mut twice, mut cx, mut cy) = (0.0, 0.0, 0.0);
+    for (i, &a) in polygon.iter().enumerate() {
+        let b = polygon[(i + 1) % polygon.len()];
+        let cross = a[0] * b[1] - b[0] * a[1];
+        twice += cross;
+        cx += (a[0] + b[0]) * cross;
+        cy += (a[1] + b[1]) * cross;
+    }
+    (twice.abs() / 2.0, [cx / (3.0 * twice), cy / (3.0 * twice)])
 }
 
 /// How the extra samples are shaded.
@@ -423,6 +482,46 @@ mod tests {
         let table = area_weights(2);
         assert_eq!(&table[4..6], &[0.5, 0.5]);
         assert!(table[8..11].iter().zip([0.375, 0.375, 0.25]).all(|(a, b)| (a - b).abs() < 1e-6));
+    }
+
+    #[test]
+    fn the_cells_of_each_prefix_tile_the_pixel_around_its_centre() {
+        for m in 2..=4u32 {
+            let cells = (m * m) as usize;
+            let table = sample_cells(m);
+            let order = sample_order(m);
+            let texels = f64::from(m);
+            for n in 1..=cells {
+                let row = &table[(n - 1) * cells..n * cells];
+                // The cells' centroids, weighted by area, are the pixel's centre (M/2, M/2).
+                let mut moment = [0.0f64; 2];
+                for (rank, cell) in row[..n].iter().enumerate() {
+                    let sample = [f64::from(order[rank] % m) + 0.5, f64::from(order[rank] / m) + 0.5];
+                    for axis in 0..2 {
+                        moment[axis] +=
+                            f64::from(cell.weight) * (sample[axis] + f64::from(cell.centroid[axis]));
+                    }
+                    let side = f64::from(cell.weight).sqrt() * texels;
+                    assert!((f64::from(cell.footprint) - side).abs() < 1e-5, "{m}×{m} n = {n}: {cell:?}");
+                }
+                for axis in 0..2 {
+                    assert!((moment[axis] - texels / 2.0).abs() < 1e-5, "{m}×{m} n = {n}: {moment:?}");
+                }
+            }
+            // One sample stands for the whole pixel: its centre, a pixel wide.
+            let first = [f64::from(order[0] % m) + 0.5, f64::from(order[0] / m) + 0.5];
+            let whole = table[0];
+            assert!((f64::from(whole.footprint) - texels).abs() < 1e-6, "{m}×{m}: {whole:?}");
+            for (position, offset) in first.iter().zip(whole.centroid) {
+                assert!((position + f64::from(offset) - texels / 2.0).abs() < 1e-6, "{m}×{m}: {whole:?}");
+            }
+            // All M² samples: each its own texel, as the reference shades it.
+            for cell in &table[(cells - 1) * cells..] {
+                assert!((cell.footprint - 1.0).abs() < 1e-6 && cell.centroid.iter().all(|c| c.abs() < 1e-6));
+            }
+        }
+        // 3×3's first sample is the centre: its whole-pixel cell needs no offset.
+        assert_eq!(sample_cells(3)[0].centroid, [0.0, 0.0]);
     }
 
     #[test]

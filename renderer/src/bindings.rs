@@ -335,7 +335,7 @@ mod tests {
         let names: Vec<&str> = bindings.iter().map(|b| b.name.as_str()).collect();
         assert_eq!(
             names,
-            ["first", "counts", "list_offsets", "extra_samples", "area_weights"],
+            ["first", "counts", "list_offsets", "extra_samples", "sample_cells"],
             "{bindings:?}"
         );
         let first = texture(&gpu, wgpu::TextureFormat::Rgba16Float);
@@ -354,7 +354,7 @@ mod tests {
                     Some(Bound::Texture { texture: a.clone(), filterable: false, view_format: None })
                 }
                 "counts" => Some(Bound::Texture { texture: b.clone(), filterable: false, view_format: None }),
-                "list_offsets" | "area_weights" => Some(Bound::Buffer(offsets.clone())),
+                "list_offsets" | "sample_cells" => Some(Bound::Buffer(offsets.clone())),
                 _ => None,
             }
         };

@@ -125,12 +125,19 @@ pub(crate) fn frame_graph(
                 resolve
             }
         }
-        Technique::Adaptive(metrics, weights) => {
-            let first = add(&mut g, ShadeFirstNode { m, stalled, shadows: cubes });
+        Technique::Adaptive(metrics, reconstruction) => {
+            let cells = reconstruction == crate::Reconstruction::Cells;
+            let first = add(&mut g, ShadeFirstNode { m, stalled, cells, shadows: cubes });
             sources.feed(&mut g, first);
             g.retain(first, "first", Output::First);
-            let evaluate = add(&mut g, EvaluateNode { m, metrics, settings: settings.adaptive });
-            g.connect_all(gbuffer, evaluate, &[gbuffer::NORMAL, gbuffer::DEPTH]);
+            let textured = needs.features.textured;
+            let texture_detail = cells;
+            let evaluate = add(
+                &mut g,
+                EvaluateNode { m, metrics, textured, texture_detail, settings: settings.adaptive },
+            );
+            let read = if textured { &gbuffer::PORTS[..] } else { &[gbuffer::NORMAL, gbuffer::DEPTH][..] };
+            g.connect_all(gbuffer, evaluate, read);
             g.connect(first, "first", evaluate, "first");
             g.retain(evaluate, "counts", Output::SampleCounts);
             let extra = match settings.adaptive.extra_samples {
@@ -141,15 +148,15 @@ pub(crate) fn frame_graph(
                 Extra::List(list) => Some(list),
                 Extra::Loop { .. } => None,
             };
-            let gather = add(&mut g, GatherNode { m, extra, weights });
+            let gather = add(&mut g, GatherNode { m, extra, reconstruction });
             g.connect(first, "first", gather, "first");
             g.connect(evaluate, "counts", gather, "counts");
             match list {
                 None => sources.feed(&mut g, gather),
                 Some(list) => {
-                    let compact = add(&mut g, CompactNode { m, list });
+                    let compact = add(&mut g, CompactNode { m, cells, list });
                     g.connect(evaluate, "counts", compact, "counts");
-                    let extra = add(&mut g, ShadeExtraNode { m, stalled, list, shadows: cubes });
+                    let extra = add(&mut g, ShadeExtraNode { m, stalled, cells, list, shadows: cubes });
                     sources.feed(&mut g, extra);
                     g.connect(compact, "entries", extra, "list_entries");
                     g.connect(compact, "totals", extra, "list_totals");

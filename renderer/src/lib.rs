@@ -20,7 +20,7 @@ mod render;
 pub mod scene;
 pub mod shaders;
 
-pub use adaptive::{AdaptiveSettings, ExtraSamples, Weights};
+pub use adaptive::{AdaptiveSettings, ExtraSamples, Reconstruction};
 pub use color::ColorSettings;
 pub use gpu::{Gpu, PlatformInfo};
 pub use mode::{Metrics, Mode, Technique};

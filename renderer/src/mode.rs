@@ -1,10 +1,10 @@
 //! Render modes and their ids: `deferred-1x1`, `reference-4x4-stalled`, `adaptive-3x3-geometry`,
-//! `adaptive-3x3-area`.
+//! `adaptive-3x3-area`, `adaptive-4x4-cells`.
 
 use std::fmt;
 use std::str::FromStr;
 
-use crate::adaptive::Weights;
+use crate::adaptive::Reconstruction;
 
 /// Which of the adaptive metrics decide the sample count (the paper's Fig. 8 ablation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -25,9 +25,9 @@ pub enum Technique {
     Fxaa,
     /// All M² samples of an M·w × M·h G-buffer shaded, box-filtered.
     Reference,
-    /// Holländer et al. 2013: the same G-buffer, samples shaded where the metrics ask, averaged
-    /// with the weights.
-    Adaptive(Metrics, Weights),
+    /// Holländer et al. 2013: the same G-buffer, samples shaded where the metrics ask, and the
+    /// pixel reconstructed from them.
+    Adaptive(Metrics, Reconstruction),
 }
 
 /// A technique at a supersampling factor, with or without the expensive (stalled) shader.
@@ -60,23 +60,35 @@ impl Mode {
 
     /// Adaptive 2×2–4×4 as the paper has it, plain and stalled.
     pub fn adaptive_modes() -> Vec<Mode> {
-        Self::adaptive(Metrics::Both, Weights::Equal)
+        Self::adaptive(Metrics::Both, Reconstruction::Equal)
     }
 
     /// Adaptive 2×2–4×4 with one metric each: the ablation of the paper's Fig. 8.
     pub fn ablation_modes() -> Vec<Mode> {
-        let mut modes = Self::adaptive(Metrics::Geometry, Weights::Equal);
-        modes.extend(Self::adaptive(Metrics::Shading, Weights::Equal));
+        let mut modes = Self::adaptive(Metrics::Geometry, Reconstruction::Equal);
+        modes.extend(Self::adaptive(Metrics::Shading, Reconstruction::Equal));
         modes
     }
 
-    /// Adaptive 2×2–4×4 beyond the paper, beside it: samples weighted by their area.
+    /// Adaptive 2×2–4×4 beyond the paper, beside it: samples weighted by their area, and
+    /// samples that stand for their cells.
     pub fn variant_modes() -> Vec<Mode> {
-        Self::adaptive(Metrics::Both, Weights::Area)
+        let mut modes = Self::adaptive(Metrics::Both, Reconstruction::Area);
+        modes.extend(Self::adaptive(Metrics::Both, Reconstruction::Cells));
+        modes
     }
 
-    fn adaptive(metrics: Metrics, weights: Weights) -> Vec<Mode> {
-        let technique = Technique::Adaptive(metrics, weights);
+    /// How an adaptive mode reconstructs its pixels (`Equal` for every other mode, whose
+    /// pixels are the plain average of their samples).
+    pub fn reconstruction(&self) -> Reconstruction {
+        match self.technique {
+            Technique::Adaptive(_, reconstruction) => reconstruction,
+            _ => Reconstruction::Equal,
+        }
+    }
+
+    fn adaptive(metrics: Metrics, reconstruction: Reconstruction) -> Vec<Mode> {
+        let technique = Technique::Adaptive(metrics, reconstruction);
         [false, true]
             .into_iter()
             .flat_map(|stalled| (2..=4).map(move |m| Mode::new(technique, m, stalled)))
@@ -94,14 +106,16 @@ impl fmt::Display for Mode {
             Technique::Adaptive(..) => "adaptive",
         };
         write!(f, "{name}-{m}x{m}", m = self.m)?;
-        if let Technique::Adaptive(metrics, weights) = self.technique {
+        if let Technique::Adaptive(metrics, reconstruction) = self.technique {
             match metrics {
                 Metrics::Both => {}
                 Metrics::Geometry => f.write_str("-geometry")?,
                 Metrics::Shading => f.write_str("-shading")?,
             }
-            if weights == Weights::Area {
-                f.write_str("-area")?;
+            match reconstruction {
+                Reconstruction::Equal => {}
+                Reconstruction::Area => f.write_str("-area")?,
+                Reconstruction::Cells => f.write_str("-cells")?,
             }
         }
         if self.stalled {
@@ -114,7 +128,7 @@ impl fmt::Display for Mode {
 /// A mode id that does not parse, with the reason.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry, adaptive-4x4-area)"
+    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry, adaptive-4x4-area, adaptive-4x4-cells)"
 )]
 pub struct ModeError {
     pub id: String,
@@ -152,18 +166,20 @@ impl FromStr for Mode {
         if stalled {
             rest.pop();
         }
-        let weights = if technique == "adaptive" && rest.last() == Some(&"area") {
-            rest.pop();
-            Weights::Area
-        } else {
-            Weights::Equal
+        let reconstruction = match (technique, rest.last()) {
+            ("adaptive", Some(&"area")) => Reconstruction::Area,
+            ("adaptive", Some(&"cells")) => Reconstruction::Cells,
+            _ => Reconstruction::Equal,
         };
+        if reconstruction != Reconstruction::Equal {
+            rest.pop();
+        }
         let technique = match (technique, rest.as_slice()) {
             ("deferred", []) => Technique::Deferred,
             ("reference", []) => Technique::Reference,
-            ("adaptive", []) => Technique::Adaptive(Metrics::Both, weights),
-            ("adaptive", ["geometry"]) => Technique::Adaptive(Metrics::Geometry, weights),
-            ("adaptive", ["shading"]) => Technique::Adaptive(Metrics::Shading, weights),
+            ("adaptive", []) => Technique::Adaptive(Metrics::Both, reconstruction),
+            ("adaptive", ["geometry"]) => Technique::Adaptive(Metrics::Geometry, reconstruction),
+            ("adaptive", ["shading"]) => Technique::Adaptive(Metrics::Shading, reconstruction),
             ("deferred" | "reference" | "adaptive", _) => return Err(fail("unexpected suffix")),
             ("fxaa", _) => return Err(fail("FXAA has no size: `fxaa` or `fxaa-stalled`")),
             _ => return Err(fail("the technique must be deferred, fxaa, reference or adaptive")),
@@ -198,14 +214,15 @@ mod tests {
         let all =
             [Mode::baseline_modes(), Mode::adaptive_modes(), Mode::ablation_modes(), Mode::variant_modes()]
                 .concat();
-        assert_eq!(all.len(), 10 + 6 + 12 + 6);
+        assert_eq!(all.len(), 10 + 6 + 12 + 12);
         assert!(all.iter().any(|m| m.to_string() == "fxaa-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-3x3-area-stalled"));
+        assert!(all.iter().any(|m| m.to_string() == "adaptive-4x4-cells"));
         for mode in all {
             assert_eq!(mode.to_string().parse::<Mode>(), Ok(mode));
         }
         let combined = "adaptive-2x2-geometry-area".parse::<Mode>().unwrap();
-        assert_eq!(combined.technique, Technique::Adaptive(Metrics::Geometry, Weights::Area));
+        assert_eq!(combined.technique, Technique::Adaptive(Metrics::Geometry, Reconstruction::Area));
         assert_eq!(combined.to_string(), "adaptive-2x2-geometry-area");
     }
 
@@ -223,6 +240,8 @@ mod tests {
         check("fxaa-2x2", "FXAA has no size");
         check("reference-2x2-geometry", "unexpected suffix");
         check("reference-2x2-area", "unexpected suffix");
+        check("reference-2x2-cells", "unexpected suffix");
+        check("adaptive-2x2-cells-area", "unexpected suffix");
         check("adaptive-2x2-area-geometry", "unexpected suffix");
         check("supersample-2x2", "technique must be");
     }

@@ -82,7 +82,7 @@ pub(crate) struct Pipelines {
     group_layouts: HashMap<Vec<wgpu::BindGroupLayoutEntry>, wgpu::BindGroupLayout>,
     render: HashMap<RenderKey, wgpu::RenderPipeline>,
     compute: HashMap<ComputeKey, wgpu::ComputePipeline>,
-    area_weights: HashMap<u32, wgpu::Buffer>,
+    sample_cells: HashMap<u32, wgpu::Buffer>,
     texel_sampler: Option<wgpu::Sampler>,
 }
 
@@ -96,7 +96,7 @@ impl Pipelines {
             group_layouts: HashMap::new(),
             render: HashMap::new(),
             compute: HashMap::new(),
-            area_weights: HashMap::new(),
+            sample_cells: HashMap::new(),
             texel_sampler: None,
         }
     }
@@ -200,17 +200,17 @@ impl Pipelines {
             .clone()
     }
 
-    /// The area weights of the M×M dither order's prefixes (`adaptive::area_weights`) as a
-    /// storage buffer.
-    pub fn area_weights(&mut self, m: u32) -> wgpu::Buffer {
+    /// The cells of the M×M dither order's prefixes (`adaptive::sample_cells`) as a storage
+    /// buffer.
+    pub fn sample_cells(&mut self, m: u32) -> wgpu::Buffer {
         use wgpu::util::DeviceExt;
         let device = &self.device;
-        self.area_weights
+        self.sample_cells
             .entry(m)
             .or_insert_with(|| {
                 device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("area weights"),
-                    contents: bytemuck::cast_slice(&crate::adaptive::area_weights(m)),
+                    label: Some("sample cells"),
+                    contents: bytemuck::cast_slice(&crate::adaptive::sample_cells(m)),
                     usage: wgpu::BufferUsages::STORAGE,
                 })
             })

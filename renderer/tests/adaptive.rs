@@ -100,6 +100,44 @@ fn a_flat_plane_facing_the_camera_takes_one_sample_and_matches_the_reference() {
 }
 
 #[test]
+fn one_sample_standing_for_its_cell_is_the_deferred_pixel_at_every_m() {
+    // S of `-cells` is shaded at the pixel's centre with the pixel's footprint, where the
+    // paper's S sits on the window's rank-0 texel: a quarter of a pixel off at 2×2, an eighth
+    // at 4×4. On a smoothly lit plane that takes one sample everywhere, the cells variant is
+    // then deferred shading itself.
+    let (mut renderer, _gpu) = renderer(Generator::Plane, &softly_lit(), settings(96, 64));
+    let deferred = render(&mut renderer, "deferred-1x1");
+    for m in 2..=4 {
+        let cells = render(&mut renderer, &format!("adaptive-{m}x{m}-cells"));
+        assert!(counts(&cells).iter().all(|&n| n == 1), "{m}×{m}: a flat plane got extra samples");
+        let steps = max_step(&cells, &deferred);
+        assert!(steps <= 1, "{m}×{m}: {steps} steps from deferred-1x1");
+    }
+    // In linear HDR, where a step of the display encoding does not hide it, the paper's S
+    // at 2×2 sits a quarter pixel off (which is what the test above could miss).
+    let deviation = |image: &FrameImages| -> f64 {
+        let rgb = |hdr: &[f32]| hdr.chunks(4).flat_map(|p| p[..3].to_vec()).collect::<Vec<f32>>();
+        rgb(&image.hdr).iter().zip(rgb(&deferred.hdr)).map(|(a, b)| f64::from((a - b).abs())).sum()
+    };
+    let paper = deviation(&render(&mut renderer, "adaptive-2x2"));
+    let cells = deviation(&render(&mut renderer, "adaptive-2x2-cells"));
+    assert!(paper > 100.0 * cells, "HDR deviation from deferred: paper {paper}, cells {cells}");
+}
+
+#[test]
+fn forcing_every_sample_under_cells_reproduces_the_reference_within_one_step() {
+    let mut forced = settings(128, 96);
+    forced.adaptive.force_all_samples = true;
+    let (mut renderer, _gpu) = renderer(Generator::Thin, &lit(), forced);
+    for m in 2..=4 {
+        let cells = render(&mut renderer, &format!("adaptive-{m}x{m}-cells"));
+        let reference = render(&mut renderer, &format!("reference-{m}x{m}"));
+        let steps = max_step(&cells, &reference);
+        assert!(steps <= 1, "{m}×{m}: {steps} steps from the reference");
+    }
+}
+
+#[test]
 fn forcing_every_sample_reproduces_the_reference_within_one_step() {
     for generator in [Generator::Atrium, Generator::Thin, Generator::Specular] {
         for strategy in [ExtraSamples::Compact, ExtraSamples::Loop] {
@@ -204,7 +242,7 @@ fn gpu_sample_counts_match_the_cpu_twin() {
 #[test]
 fn compact_and_loop_shading_agree_within_one_step() {
     // Both the paper's average and the area-weighted one, whose weights follow each sample's rank.
-    for mode in ["adaptive-3x3", "adaptive-4x4-area"] {
+    for mode in ["adaptive-3x3", "adaptive-4x4-area", "adaptive-2x2-cells"] {
         let mut images = Vec::new();
         for strategy in [ExtraSamples::Compact, ExtraSamples::Loop] {
             let mut s = settings(128, 96);

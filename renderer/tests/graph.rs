@@ -6,7 +6,9 @@ mod support;
 
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::{Light, LightKind, Lighting, Shadow};
-use aabench_renderer::{AdaptiveSettings, ColorSettings, ExtraSamples, Metrics, Mode, Technique, Weights};
+use aabench_renderer::{
+    AdaptiveSettings, ColorSettings, ExtraSamples, Metrics, Mode, Reconstruction, Technique,
+};
 use glam::Vec3;
 use support::*;
 
@@ -87,8 +89,9 @@ fn modes_share_their_allocations_through_the_pool() {
         let prepared = renderer.prepare(mode).unwrap();
         each.push(prepared.graph().allocated_bytes);
     }
-    let adaptive =
-        renderer.prepare(Mode::new(Technique::Adaptive(Metrics::Both, Weights::Equal), 2, false)).unwrap();
+    let adaptive = renderer
+        .prepare(Mode::new(Technique::Adaptive(Metrics::Both, Reconstruction::Equal), 2, false))
+        .unwrap();
     assert_eq!(
         adaptive.graph().passes,
         ["gbuffer", "shade_first", "evaluate", "compact", "shade_extra", "gather", "display"]

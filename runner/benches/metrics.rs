@@ -3,7 +3,7 @@
 
 use aabench::metrics;
 use aabench_renderer::adaptive::{self, MetricSet, WindowSample};
-use aabench_renderer::{AdaptiveSettings, DisplayImage};
+use aabench_renderer::{AdaptiveSettings, DisplayImage, Reconstruction};
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
@@ -29,7 +29,7 @@ fn quality(c: &mut Criterion) {
     });
     let counts: Vec<u8> = (0..WIDTH * HEIGHT).map(|p| 1 + (p % 16) as u8).collect();
     c.bench_function("sample_stats 1024x768 at 4x4", |bench| {
-        bench.iter(|| metrics::sample_stats(black_box(&counts), 4).unwrap())
+        bench.iter(|| metrics::sample_stats(black_box(&counts), 4, Reconstruction::Equal).unwrap())
     });
 }
 

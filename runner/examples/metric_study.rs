@@ -10,7 +10,9 @@
 //! - **error by sample count**: the share of the squared error (8-bit display codes, against
 //!   the 8×8 truth) carried by pixels shaded with n samples, next to their share of pixels.
 //!
-//! `cargo run --release --example metric_study -- scenes/atrium.json [quick|nightly]`
+//! `cargo run --release --example metric_study -- scenes/atrium.json [quick|nightly] [VARIANT]`
+//!
+//! VARIANT (`area`, `cells`) studies `adaptive-MxM-VARIANT` instead of the paper's mode.
 
 use std::path::Path;
 use std::sync::Arc;
@@ -33,11 +35,12 @@ const PLANE_RESIDUAL: f64 = 1e-5;
 
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
-    let path = args.next().context("usage: metric_study MANIFEST [quick|nightly]")?;
+    let path = args.next().context("usage: metric_study MANIFEST [quick|nightly] [VARIANT]")?;
     let tier = match args.next().as_deref() {
         Some("nightly") => Tier::Nightly,
         _ => Tier::Quick,
     };
+    let suffix = args.next().map(|variant| format!("-{variant}")).unwrap_or_default();
     let manifest = Manifest::load(Path::new(&path))?;
     let loaded = scenes::load(&manifest)?;
     let settings = render_settings(&manifest, tier, ExtraSamples::Compact);
@@ -46,9 +49,9 @@ fn main() -> anyhow::Result<()> {
     let mut renderer =
         SceneRenderer::new(gpu, &loaded.scene, &loaded.camera, &loaded.lighting, settings.clone())?;
     let truth = renderer.render_truth(TRUTH_M, TILE_BYTES)?.images.display;
-    println!("# {} ({}, {}×{})\n", manifest.name, tier.name(), settings.width, settings.height);
+    println!("# {} ({}, {}×{}){suffix}\n", manifest.name, tier.name(), settings.width, settings.height);
     for m in 2..=4 {
-        let prepared = renderer.prepare(format!("adaptive-{m}x{m}").parse()?)?;
+        let prepared = renderer.prepare(format!("adaptive-{m}x{m}{suffix}").parse()?)?;
         prepared.render()?;
         let images = prepared.read_images()?;
         let counts = images.sample_counts.context("an adaptive mode has counts")?;

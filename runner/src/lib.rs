@@ -3,6 +3,7 @@
 
 pub mod baseline;
 pub mod compare;
+pub mod front;
 pub mod gate;
 pub mod images;
 pub mod inputs;

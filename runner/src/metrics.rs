@@ -7,7 +7,7 @@
 //! dither turns quantization into unbiased noise instead of banding that would shift with
 //! the anti-aliasing.
 
-use aabench_renderer::{DisplayImage, FrameImages};
+use aabench_renderer::{DisplayImage, FrameImages, Reconstruction};
 use serde::{Deserialize, Serialize, Serializer};
 
 /// 20·log10(255): the paper reports PSNR with peak 255 over an MSE taken on [0, 1] values.
@@ -106,14 +106,19 @@ pub struct SampleStats {
     /// Pixels that took all M² samples. Their S is shaded again at the reference's footprint
     /// (so they equal the reference), one sample of work that `shaded` does not count.
     pub full_pixels: u64,
-    /// Every shading evaluation over M²·w·h, in percent: (shaded + full_pixels) / total.
+    /// Pixels whose S was shaded again, one sample of work each that `shaded` does not count:
+    /// the full pixels, and under `-cells` every pixel of more than one sample.
+    #[serde(default)]
+    pub reshaded: u64,
+    /// Every shading evaluation over M²·w·h, in percent: (shaded + reshaded) / total.
     pub work_percent: f64,
     /// histogram[i]: pixels that shaded i + 1 samples, for i + 1 in 1…M².
     pub histogram: Vec<u64>,
 }
 
-/// Statistics of a sample-count map. Counts outside [1, M²] are a bug upstream: `Err` says so.
-pub fn sample_stats(counts: &[u8], m: u32) -> Result<SampleStats, String> {
+/// Statistics of a sample-count map of a mode that reconstructs pixels as `reconstruction`
+/// says. Counts outside [1, M²] are a bug upstream: `Err` says so.
+pub fn sample_stats(counts: &[u8], m: u32, reconstruction: Reconstruction) -> Result<SampleStats, String> {
     let window = (m * m) as usize;
     let mut histogram = vec![0u64; window];
     for (pixel, &n) in counts.iter().enumerate() {
@@ -124,6 +129,10 @@ pub fn sample_stats(counts: &[u8], m: u32) -> Result<SampleStats, String> {
     }
     let shaded: u64 = counts.iter().map(|&n| u64::from(n)).sum();
     let full_pixels = histogram[window - 1];
+    let reshaded = (1..=window as u32)
+        .filter(|&n| reconstruction.reshades_first(m, n))
+        .map(|n| histogram[n as usize - 1])
+        .sum();
     let total = (window * counts.len()) as u64;
     let percent = |count: u64| 100.0 * count as f64 / total.max(1) as f64;
     Ok(SampleStats {
@@ -131,7 +140,8 @@ pub fn sample_stats(counts: &[u8], m: u32) -> Result<SampleStats, String> {
         shaded,
         total,
         full_pixels,
-        work_percent: percent(shaded + full_pixels),
+        reshaded,
+        work_percent: percent(shaded + reshaded),
         histogram,
     })
 }
@@ -221,12 +231,15 @@ mod tests {
 
     #[test]
     fn sample_stats_count_and_reject_out_of_range() {
-        let stats = sample_stats(&[1, 1, 4, 2], 2).unwrap();
+        let stats = sample_stats(&[1, 1, 4, 2], 2, Reconstruction::Equal).unwrap();
         assert_eq!(stats.histogram, vec![2, 1, 0, 1]);
         assert_eq!((stats.shaded, stats.total, stats.full_pixels), (8, 16, 1));
         assert_eq!((stats.shaded_percent, stats.work_percent), (50.0, 56.25));
-        assert!(sample_stats(&[0], 2).is_err());
-        assert!(sample_stats(&[5], 2).is_err());
+        let cells = sample_stats(&[1, 1, 4, 2], 2, Reconstruction::Cells).unwrap();
+        assert_eq!((cells.shaded, cells.full_pixels, cells.reshaded), (8, 1, 2));
+        assert_eq!(cells.work_percent, 100.0 * 10.0 / 16.0);
+        assert!(sample_stats(&[0], 2, Reconstruction::Equal).is_err());
+        assert!(sample_stats(&[5], 2, Reconstruction::Equal).is_err());
     }
 }
 

@@ -211,6 +211,10 @@ pub struct ModeRecord {
     /// Against the ground truth (`truth-8x8`).
     pub vs_ground_truth: Option<Quality>,
     pub adaptive: Option<AdaptiveCost>,
+    /// Its place against the scene's error-against-run-time front, among the modes with the
+    /// same stall (absent where it has no frame time or no PSNR against the truth).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub front: Option<crate::front::FrontPlace>,
     /// The mode's compiled pass graph: passes run and the allocations they share.
     #[serde(default)]
     pub graph: Option<GraphRecord>,

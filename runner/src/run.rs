@@ -559,7 +559,10 @@ async fn finish_modes(
                 Some((i, _)) => Some(&images[i].as_ref().expect("reference images").display),
                 None => truth.as_deref(),
             };
-            let samples = own.sample_counts.as_ref().map(|counts| metrics::sample_stats(counts, mode.m));
+            let samples = own
+                .sample_counts
+                .as_ref()
+                .map(|counts| metrics::sample_stats(counts, mode.m, mode.reconstruction()));
             let mut files = ImageFiles::default();
             let written = write_mode_images(&scene_dir, &scene_name, mode, own, diff_against, &mut files);
             (files, samples, vs_reference, vs_truth, written)
@@ -585,6 +588,7 @@ async fn finish_modes(
             Err(panic) => fail_mode(record, format!("image task panicked: {panic}")),
         }
     }
+    crate::front::place(&mut records);
     records
 }
 
@@ -667,6 +671,7 @@ fn timing_record(
         vs_reference: None,
         vs_ground_truth: None,
         adaptive: None,
+        front: None,
         graph: run.graph.clone(),
         checks: (run.checks.frames > 0).then_some(run.checks),
     }
@@ -695,17 +700,17 @@ fn adaptive_cost(modes: &[Mode], runs: &[ModeRun], mode: Mode, run: &ModeRun) ->
     let reference_run = &runs[modes.iter().position(|m| *m == reference)?];
     let own = frame_median(run)?;
     let counts = run.images.as_ref()?.sample_counts.as_ref()?;
-    let stats = metrics::sample_stats(counts, mode.m).ok()?;
+    let stats = metrics::sample_stats(counts, mode.m, mode.reconstruction()).ok()?;
     // Shading work beyond S, as a fraction of the reference's.
     let pixels = counts.len() as f64;
-    let extra_fraction = ((stats.shaded + stats.full_pixels) as f64 - pixels) / stats.total as f64;
+    let extra_fraction = ((stats.shaded + stats.reshaded) as f64 - pixels) / stats.total as f64;
     // Every frame of the scene pays for its shadow cubes, the reference's too.
     let limit = pass_median(run, "shadow").unwrap_or(0.0)
         + pass_median(run, "gbuffer")?
         + pass_median(run, "shade_first")?
         + pass_median(run, "evaluate")?
         + extra_fraction * pass_median(reference_run, "shade")?;
-    let extra_samples = stats.shaded + stats.full_pixels - counts.len() as u64;
+    let extra_samples = stats.shaded + stats.reshaded - counts.len() as u64;
     let samples = (extra_samples > 0).then(|| -> Option<SampleCost> {
         let extra_sample_ns = pass_median(run, "shade_extra")? * 1e6 / extra_samples as f64;
         let reference_sample_ns = pass_median(reference_run, "shade")? * 1e6 / stats.total as f64;
@@ -772,8 +777,8 @@ fn report_scene(progress: &Progress, scene: &SceneRecord) {
         )),
     }
     progress.line(&format!(
-        "  {:<28} {:>10} {:>21} {:>8} {:>9} {:>9} {:>10}",
-        "mode", "median ms", "interval ms", "×1x1", "samples%", "PSNR ref", "PSNR truth"
+        "  {:<28} {:>10} {:>21} {:>8} {:>9} {:>9} {:>10}  {}",
+        "mode", "median ms", "interval ms", "×1x1", "samples%", "PSNR ref", "PSNR truth", "front"
     ));
     let db = |q: &Option<Quality>| q.as_ref().map_or("-".into(), |q| format!("{:.2}", q.psnr_db.value()));
     for mode in &scene.modes {
@@ -782,7 +787,7 @@ fn report_scene(progress: &Progress, scene: &SceneRecord) {
             continue;
         };
         progress.line(&format!(
-            "  {:<28} {:>10.1} {:>21} {:>8} {:>9} {:>9} {:>10}{}",
+            "  {:<28} {:>10.1} {:>21} {:>8} {:>9} {:>9} {:>10}  {}{}",
             mode.mode,
             frame.median,
             format!("[{:.1}, {:.1}]", frame.ci_low, frame.ci_high),
@@ -790,6 +795,7 @@ fn report_scene(progress: &Progress, scene: &SceneRecord) {
             mode.samples.as_ref().map_or("-".into(), |s| format!("{:.1}", s.shaded_percent)),
             db(&mode.vs_reference),
             db(&mode.vs_ground_truth),
+            mode.front.as_ref().map_or("-".into(), |place| place.describe()),
             mode.error.as_ref().map_or(String::new(), |e| format!("  ({e})")),
         ));
     }

@@ -50,9 +50,25 @@ fn load_surface(texel: vec2<i32>) -> Surface {
 
 // World position of the sample at `texel` seen at view depth `depth`.
 fn world_position(texel: vec2<i32>, depth: f32) -> vec3<f32> {
+    return world_position_at(vec2<f32>(texel) + 0.5, depth);
+}
+
+// World position of the point `point` (in G-buffer texels, a texel's centre at + 0.5) seen at
+// view depth `depth`.
+fn world_position_at(point: vec2<f32>, depth: f32) -> vec3<f32> {
+    return (frame.inv_view * vec4<f32>(view_ray(point) * depth, 1.0)).xyz;
+}
+
+// The view-space ray through `point` (as in world_position_at) that reaches view depth 1.
+fn view_ray(point: vec2<f32>) -> vec3<f32> {
     let size = vec2<f32>(textureDimensions(gb_uv));
-    let tile_ndc = (vec2<f32>(texel) + 0.5) / size * vec2<f32>(2.0, -2.0) + vec2<f32>(-1.0, 1.0);
+    let tile_ndc = point / size * vec2<f32>(2.0, -2.0) + vec2<f32>(-1.0, 1.0);
     let ndc = tile_ndc * frame.tile.xy + frame.tile.zw;
-    let view = vec3<f32>(ndc * frame.projection.xy, -1.0) * depth;
-    return (frame.inv_view * vec4<f32>(view, 1.0)).xyz;
+    return vec3<f32>(ndc * frame.projection.xy, -1.0);
+}
+
+// The same ray in world space: a direction, free of the camera's position (whose size would
+// cost a far scene its precision).
+fn world_ray(point: vec2<f32>) -> vec3<f32> {
+    return (frame.inv_view * vec4<f32>(view_ray(point), 0.0)).xyz;
 }

@@ -109,6 +109,33 @@ fn surface_coords(s: Surface, slot: u32, footprint: f32) -> TexCoords {
 // samples share an M×M window (adaptive.wgsl: footprint).
 fn shade(texel: vec2<i32>, footprint: f32) -> vec4<f32> {
     let s = load_surface(texel);
+    return shade_surface(texel, s, world_position(texel, s.depth), footprint);
+}
+
+// The sample at `texel` shaded as if taken `offset` G-buffer texels away on its own surface:
+// the UV moves along its derivatives and the position along the sample's tangent plane, to
+// where the view ray through the offset point meets it. A ray that meets the plane at a
+// grazing angle, behind the camera or at more than twice or less than half the sample's depth
+// leaves the position where it was (the offset is under a pixel; such a plane is an edge,
+// which takes its samples where they lie).
+fn shade_offset(texel: vec2<i32>, offset: vec2<f32>, footprint: f32) -> vec4<f32> {
+    var s = load_surface(texel);
+    s.uv += s.uv_dx * offset.x + s.uv_dy * offset.y;
+    let centre = vec2<f32>(texel) + 0.5;
+    let ray = world_ray(centre + offset);
+    let facing = dot(ray, s.normal);
+    // The view depth at which the offset ray meets the plane through the sample.
+    let depth = s.depth * dot(world_ray(centre), s.normal) / facing;
+    var point = centre;
+    if abs(facing) > 1e-6 && depth > 0.5 * s.depth && depth < 2.0 * s.depth {
+        point += offset;
+        s.depth = depth;
+    }
+    return shade_surface(texel, s, world_position_at(point, s.depth), footprint);
+}
+
+// Shading of surface `s` at `position`; `texel` seeds the stall.
+fn shade_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f32) -> vec4<f32> {
     let stalled = stall(texel);
     if s.material == BACKGROUND {
         return vec4<f32>(frame.background.rgb, stalled);
@@ -136,7 +163,6 @@ fn shade(texel: vec2<i32>, footprint: f32) -> vec4<f32> {
 #endif
     let a = roughness * roughness;
     let a2 = a * a;
-    let position = world_position(texel, s.depth);
     let v = normalize(frame.eye.xyz - position);
 #ifdef OCCLUSION
     var ambient = frame.ambient.rgb;

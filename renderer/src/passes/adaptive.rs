@@ -3,7 +3,9 @@
 use super::{
     BuildContext, Compute, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, gbuffer, shading_inputs,
 };
-use crate::adaptive::{DepthMetric, LIST_TEXEL_BITS, Weights, packed_sample_order};
+use crate::adaptive::{
+    DepthMetric, LIST_TEXEL_BITS, Reconstruction, packed_dither_matrix, packed_sample_order,
+};
 use crate::bindings::Bound;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
 use crate::mode::Metrics;
@@ -32,6 +34,17 @@ fn window(m: u32) -> Constants {
     debug_assert!((2..=4).contains(&m), "adaptive M = {m}");
     let [low, high] = packed_sample_order(m);
     Constants::new().with("M", m).with("ORDER_LOW", low).with("ORDER_HIGH", high)
+}
+
+/// The table of cells that the `-area` and `-cells` variants read: constant data, owned by the
+/// pass rather than a frame resource. The passes that can read it bind it in every mode.
+fn cells_table(ctx: &mut BuildContext, m: u32) -> [(&'static str, Bound); 1] {
+    [("sample_cells", Bound::Buffer(ctx.pipelines.sample_cells(m)))]
+}
+
+/// Whether each sample stands for its cell (the `-cells` variant), for the passes that read it.
+fn cells_flag(cells: bool) -> Constants {
+    Constants::new().flag("CELLS", cells)
 }
 
 /// The list of extra samples: at most M² entries per pixel (a full window shades rank 0
@@ -89,6 +102,8 @@ fn buffer(bytes: u64) -> Resource {
 pub(crate) struct ShadeFirstNode {
     pub m: u32,
     pub stalled: bool,
+    /// S at the pixel's centre with the pixel's footprint (`Reconstruction::Cells`).
+    pub cells: bool,
     pub shadows: Option<Resource>,
 }
 
@@ -100,10 +115,12 @@ impl Node for ShadeFirstNode {
     }
 
     fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
-        let constants = ctx.shading_constants(self.stalled).extend(&window(self.m));
+        let constants =
+            ctx.shading_constants(self.stalled).extend(&window(self.m)).extend(&cells_flag(self.cells));
         let program =
             Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some("shade_first"), constants };
-        Ok(Box::new(ctx.screen(io, "shade_first", program, "first", FULLSCREEN.1, &[])?))
+        let owned = cells_table(ctx, self.m);
+        Ok(Box::new(ctx.screen(io, "shade_first", program, "first", FULLSCREEN.1, &owned)?))
     }
 }
 
@@ -113,22 +130,27 @@ impl Node for ShadeFirstNode {
 pub(crate) struct EvaluateNode {
     pub m: u32,
     pub metrics: Metrics,
+    /// The scene has textures: the shader then reads the G-buffer's UVs (for the texture
+    /// detail below, even where it is off).
+    pub textured: bool,
+    /// The shading metric counts texture contrast below the pixel's scale (`-cells`).
+    pub texture_detail: bool,
     pub settings: AdaptiveSettings,
 }
 
 impl Node for EvaluateNode {
     fn decl(&self) -> PassDecl {
-        let gbuffer = gbuffer::outputs();
+        let [uv, normal, uv_grad, depth] = gbuffer::outputs();
         let read = |port: Port| Port { access: Access::Loaded, ..port };
-        PassDecl {
-            name: "evaluate",
-            ports: vec![
-                read(gbuffer[1]),
-                read(gbuffer[3]),
-                Port::new("first", first(), Access::Loaded),
-                Port::new("counts", counts(), Access::Attachment),
-            ],
+        let mut ports = vec![read(normal), read(depth)];
+        if self.textured {
+            ports.extend([read(uv), read(uv_grad)]);
         }
+        ports.extend([
+            Port::new("first", first(), Access::Loaded),
+            Port::new("counts", counts(), Access::Attachment),
+        ]);
+        PassDecl { name: "evaluate", ports }
     }
 
     fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
@@ -142,7 +164,8 @@ impl Node for EvaluateNode {
             .with("T_EDGE", s.t_edge)
             .flag("USE_GEOMETRY", self.metrics != Metrics::Shading)
             .flag("USE_SHADING", self.metrics != Metrics::Geometry)
-            .flag("FORCE_ALL", s.force_all_samples);
+            .flag("FORCE_ALL", s.force_all_samples)
+            .flag("TEXTURE_DETAIL", self.texture_detail && self.metrics != Metrics::Geometry);
         let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some("evaluate"), constants };
         let owned =
             [("texel_sampler", Bound::Sampler { sampler: ctx.pipelines.texel_sampler(), filtering: false })];
@@ -154,6 +177,8 @@ impl Node for EvaluateNode {
 #[derive(Debug)]
 pub(crate) struct CompactNode {
     pub m: u32,
+    /// Pixels of more than one sample list their first sample too (`Reconstruction::Cells`).
+    pub cells: bool,
     pub list: List,
 }
 
@@ -179,7 +204,8 @@ impl Node for CompactNode {
         let row_groups = rows.div_ceil(64);
         let mut steps = Vec::new();
         for (entry, workgroups) in [("scan_rows", row_groups), ("scan_total", 1), ("emit", row_groups)] {
-            steps.push(ctx.compute_step(io, SHADER, entry, window(self.m), [workgroups, 1, 1])?);
+            let constants = window(self.m).extend(&cells_flag(self.cells));
+            steps.push(ctx.compute_step(io, SHADER, entry, constants, [workgroups, 1, 1])?);
         }
         Ok(Box::new(Compute { name: "compact", steps }))
     }
@@ -190,6 +216,8 @@ impl Node for CompactNode {
 pub(crate) struct ShadeExtraNode {
     pub m: u32,
     pub stalled: bool,
+    /// Each sample shaded for its cell (`Reconstruction::Cells`).
+    pub cells: bool,
     pub list: List,
     pub shadows: Option<Resource>,
 }
@@ -206,11 +234,18 @@ impl Node for ShadeExtraNode {
     }
 
     fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
-        let constants =
-            ctx.shading_constants(self.stalled).extend(&window(self.m)).extend(&self.list.constants());
+        let [low, high] = packed_dither_matrix(self.m);
+        let constants = ctx
+            .shading_constants(self.stalled)
+            .extend(&window(self.m))
+            .extend(&self.list.constants())
+            .extend(&cells_flag(self.cells))
+            .with("RANK_LOW", low)
+            .with("RANK_HIGH", high);
         let program =
             Program { shader: SHADER, vertex: COMPACT_ROWS.0, fragment: Some("shade_extra"), constants };
-        Ok(Box::new(ctx.screen(io, "shade_extra", program, "extra", COMPACT_ROWS.1, &[])?))
+        let owned = cells_table(ctx, self.m);
+        Ok(Box::new(ctx.screen(io, "shade_extra", program, "extra", COMPACT_ROWS.1, &owned)?))
     }
 }
 
@@ -228,7 +263,7 @@ pub(crate) enum Extra {
 pub(crate) struct GatherNode {
     pub m: u32,
     pub extra: Extra,
-    pub weights: Weights,
+    pub reconstruction: Reconstruction,
 }
 
 impl Node for GatherNode {
@@ -257,10 +292,11 @@ impl Node for GatherNode {
                 ("gather_loop", ctx.shading_constants(*stalled).extend(&window(self.m)))
             }
         };
-        let constants = constants.flag("AREA_WEIGHTS", self.weights == Weights::Area);
+        let constants = constants
+            .flag("WEIGHTED", self.reconstruction != Reconstruction::Equal)
+            .extend(&cells_flag(self.reconstruction == Reconstruction::Cells));
         let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some(entry), constants };
-        // Constant data, owned by the pass rather than a frame resource.
-        let owned = [("area_weights", Bound::Buffer(ctx.pipelines.area_weights(self.m)))];
+        let owned = cells_table(ctx, self.m);
         Ok(Box::new(ctx.screen(io, "gather", program, "color", FULLSCREEN.1, &owned)?))
     }
 }

@@ -289,6 +289,7 @@ pub fn compare(request: &Request) -> Verdict {
             Some(_) if scene.modes.is_empty() => {}
             Some(baseline) => {
                 notes.extend(input_notes(scene, baseline.scene()));
+                notes.extend(front_notes(scene, baseline.scene()));
                 checks.extend(compare_scene(&processes, baseline, baselines.same_platform, &mut notes));
             }
             None => checks.extend(scene.modes.iter().map(|mode| {
@@ -485,6 +486,26 @@ fn input_notes(scene: &SceneRecord, baseline: &SceneRecord) -> Vec<String> {
         }
     }
     notes
+}
+
+/// Notes on modes that left or joined the scene's error-against-run-time front since the
+/// baseline: informational, since the front moves with any mode's time or error.
+fn front_notes(scene: &SceneRecord, baseline: &SceneRecord) -> Vec<String> {
+    scene
+        .modes
+        .iter()
+        .filter_map(|mode| {
+            let now = mode.front.as_ref()?;
+            let then = baseline.mode(&mode.mode)?.front.as_ref()?;
+            match (then.on_front, now.on_front) {
+                (true, false) => {
+                    Some(format!("{}: {} left the front: {}", scene.name, mode.mode, now.describe()))
+                }
+                (false, true) => Some(format!("{}: {} joined the front", scene.name, mode.mode)),
+                _ => None,
+            }
+        })
+        .collect()
 }
 
 fn status_check(scene: &SceneRecord, mode: &str, outcome: Outcome, detail: &str) -> Check {

@@ -216,8 +216,8 @@ fn mode_table(page: &mut String, scene: &SceneRecord, checks: &[&Check]) {
     let _ = writeln!(
         page,
         "<table><thead><tr><th>mode</th><th>frame ms</th><th>interval ms</th><th>×1x1</th><th>samples %</th>\
-         <th>MSE ×1e-5 vs truth</th><th>PSNR vs ref</th><th>PSNR vs truth</th><th>speed-up vs ref</th>\
-         <th>efficiency</th>{gate}</tr></thead><tbody>"
+         <th>MSE ×1e-5 vs truth</th><th>PSNR vs ref</th><th>PSNR vs truth</th><th>front</th>\
+         <th>speed-up vs ref</th><th>efficiency</th>{gate}</tr></thead><tbody>"
     );
     let db = |q: &Option<crate::metrics::Quality>| {
         q.as_ref().map_or("–".into(), |q| {
@@ -230,7 +230,7 @@ fn mode_table(page: &mut String, scene: &SceneRecord, checks: &[&Check]) {
         let frame = mode.frame_ms.as_ref();
         let _ = write!(
             page,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
             escape(&mode.mode),
             cell(frame.map(|f| format!("{:.1}", f.median))),
             cell(frame.map(|f| format!("{:.1}–{:.1}", f.ci_low, f.ci_high))),
@@ -239,6 +239,7 @@ fn mode_table(page: &mut String, scene: &SceneRecord, checks: &[&Check]) {
             cell(mode.vs_ground_truth.as_ref().map(|q| format!("{:.3}", q.mse_e5))),
             db(&mode.vs_reference),
             db(&mode.vs_ground_truth),
+            cell(mode.front.as_ref().map(|place| escape(&place.describe()))),
             cell(mode.adaptive.as_ref().map(|a| format!("{:.2}×", a.speedup))),
             cell(mode.adaptive.as_ref().map(|a| format!("{:.2}", a.efficiency))),
         );
@@ -302,7 +303,7 @@ fn error_points(scene: &SceneRecord) -> Vec<Point> {
                 "deferred" => Kind::Deferred,
                 "fxaa" => Kind::Fxaa,
                 "reference" => Kind::Reference,
-                _ if mode.mode.split('-').any(|part| part == "area") => Kind::Variant,
+                _ if mode.mode.split('-').any(|part| part == "area" || part == "cells") => Kind::Variant,
                 _ => Kind::Adaptive,
             };
             (error > 0.0).then(|| Point {
@@ -313,6 +314,7 @@ fn error_points(scene: &SceneRecord) -> Vec<Point> {
                 time_low: frame.ci_low,
                 time_high: frame.ci_high,
                 error,
+                on_front: mode.front.as_ref().is_some_and(|place| place.on_front),
             })
         })
         .collect()
@@ -335,9 +337,9 @@ fn short_label(mode: &str) -> String {
     parts.iter().map(|p| p.replace('x', "×")).collect::<Vec<_>>().join(" ")
 }
 
-/// The truth, deferred-1x1, and per M: reference, adaptive (and its `-area` variant where the
-/// run has it), their differences and the sample counts, then 1:1 crops around adaptive's
-/// largest error against the truth.
+/// The truth, deferred-1x1, and per M: reference, adaptive (and its `-area` and `-cells`
+/// variants where the run has them), their differences and the sample counts, then 1:1 crops
+/// around adaptive's largest error against the truth.
 fn images(
     page: &mut String,
     run_dir: &Path,
@@ -363,29 +365,37 @@ fn images(
         let reference = pick(format!("reference-{m}x{m}"));
         let adaptive = pick(format!("adaptive-{m}x{m}"));
         let area = pick(format!("adaptive-{m}x{m}-area"));
-        if reference.is_none() && adaptive.is_none() && area.is_none() {
+        let cells = pick(format!("adaptive-{m}x{m}-cells"));
+        let adaptives: Vec<&ModeRecord> = [adaptive, area, cells].into_iter().flatten().collect();
+        if reference.is_none() && adaptives.is_empty() {
             continue;
         }
         page.push_str("<div class=\"row\">");
-        for mode in [reference, adaptive, area].into_iter().flatten() {
+        for mode in reference.iter().chain(&adaptives) {
             if let Some(image) = &mode.images.display {
                 figure(page, image, &mode.mode);
             }
         }
-        for mode in [adaptive, area].into_iter().flatten() {
+        for mode in &adaptives {
             if let Some(image) = &mode.images.difference {
                 figure(page, image, &format!("|{} − reference| (32 steps full scale)", mode.mode));
             }
         }
-        // The area variant takes the paper's samples: one heatmap serves both.
-        if let Some((mode, image)) =
-            adaptive.or(area).and_then(|mode| Some((mode, mode.images.samples.as_ref()?)))
-        {
-            figure(page, image, &format!("{}: samples per pixel, 1 (dark) to {} (red)", mode.mode, m * m));
+        // The area variant takes the paper's samples: one heatmap serves both; cells take
+        // their own.
+        for mode in [adaptive.or(area), cells].into_iter().flatten() {
+            if let Some(image) = &mode.images.samples {
+                figure(
+                    page,
+                    image,
+                    &format!("{}: samples per pixel, 1 (dark) to {} (red)", mode.mode, m * m),
+                );
+            }
         }
         page.push_str("</div>\n");
-        if let Some(worst) = adaptive.or(area) {
-            let shown: Vec<&ModeRecord> = [reference, adaptive, area].into_iter().flatten().collect();
+        if let Some(&worst) = adaptives.first() {
+            let shown: Vec<&ModeRecord> =
+                reference.iter().copied().chain(adaptives.iter().copied()).collect();
             crops(page, run_dir, scene, m, &shown, worst, left_out)?;
         }
     }
@@ -534,10 +544,11 @@ fn history_plots(page: &mut String, scene: &SceneRecord, history: &[&RunRecord])
     };
     let adaptive: Vec<String> =
         (2..=4).flat_map(|m| [format!("adaptive-{m}x{m}"), format!("adaptive-{m}x{m}-stalled")]).collect();
-    // Quality does not depend on stalling; the area variant's time is charted nowhere here
-    // (it is adaptive's within a few per cent).
-    let quality: Vec<String> =
-        (2..=4).flat_map(|m| [format!("adaptive-{m}x{m}"), format!("adaptive-{m}x{m}-area")]).collect();
+    // Quality does not depend on stalling; the variants' time is charted nowhere here (the
+    // error-against-time plot holds it).
+    let quality: Vec<String> = (2..=4)
+        .flat_map(|m| ["", "-area", "-cells"].map(|variant| format!("adaptive-{m}x{m}{variant}")))
+        .collect();
     let timed: Vec<String> =
         ["deferred-1x1", "reference-4x4", "adaptive-4x4", "reference-4x4-stalled", "adaptive-4x4-stalled"]
             .map(String::from)

@@ -46,10 +46,13 @@ pub enum Generator {
     /// textures (one 4096², 99 of 256², half of them normal maps without tangents), no camera
     /// and no lights.
     Gallery,
+    /// A checkered ground at a grazing angle, a striped wall along the view and a finely
+    /// checkered panel: texture aliasing on flat, rough surfaces.
+    Texture,
 }
 
 impl Generator {
-    pub const ALL: [Generator; 10] = [
+    pub const ALL: [Generator; 11] = [
         Generator::Atrium,
         Generator::Thin,
         Generator::Specular,
@@ -60,6 +63,7 @@ impl Generator {
         Generator::Subpixel,
         Generator::Degenerate,
         Generator::Gallery,
+        Generator::Texture,
     ];
 
     /// The `asset.generator` string of a current file made by this generator and seed.
@@ -136,6 +140,7 @@ impl Generated {
             Generator::Subpixel => scenes::subpixel(&mut builder),
             Generator::Degenerate => scenes::degenerate(&mut builder),
             Generator::Gallery => scenes::gallery(&mut builder),
+            Generator::Texture => scenes::texture(&mut builder),
         }
         let mut writer = builder.finish();
         if self.placement != Placement::IDENTITY {
@@ -163,6 +168,7 @@ impl fmt::Display for Generator {
             Generator::Subpixel => "subpixel",
             Generator::Degenerate => "degenerate",
             Generator::Gallery => "gallery",
+            Generator::Texture => "texture",
         })
     }
 }

@@ -267,6 +267,27 @@ pub(super) fn shadow_room(b: &mut Builder) {
     b.camera([-4.3, 2.3, 3.6], [1.0, 0.7, -1.0], 70.0, 40.0);
 }
 
+/// Texture aliasing alone: a checkered ground 300 m deep seen from 1.2 m up, so its cells are
+/// magnified at the camera's feet, a few pixels wide some metres on and far below a pixel at
+/// the horizon; a striped wall along the view at a grazing angle; and a finely checkered panel
+/// facing the camera whose cells are about two pixels wide at the quick tier. All of it is flat
+/// and rough: the only edges are the panel's and the horizon, so what aliases is the texture.
+pub(super) fn texture(b: &mut Builder) {
+    let fine = b.texture("checker-16", &textures::checker(TEXTURE_SIZE, 16));
+    let finer = b.texture("checker-32", &textures::checker(TEXTURE_SIZE, 32));
+    let stripes = b.texture("stripes-64", &textures::stripes(TEXTURE_SIZE, 64));
+    let ground = b.material(MaterialDesc::new("ground", [1.0; 3], 0.9).textured(fine));
+    let wall = b.material(MaterialDesc::new("wall", [1.0; 3], 0.9).textured(stripes));
+    let panel = b.material(MaterialDesc::new("panel", [1.0; 3], 0.9).textured(finer));
+    // One repeat of the 16-cell checker per metre: cells 6.25 cm wide.
+    b.mesh(ground).append(&mesh::floor(300.0, 300.0, 30, 30, 1.0), Affine3A::IDENTITY);
+    let long_wall = mesh::wall(150.0, 5.0, 75, 2, 0.5);
+    b.mesh(wall).append(&long_wall, turned(-std::f32::consts::FRAC_PI_2, 3.5, 2.5, -70.0));
+    // 2 m × 1.5 m, 32 cells across a 2 m repeat.
+    b.mesh(panel).append(&mesh::wall(2.0, 1.5, 1, 1, 0.5), at(-1.4, 1.6, -5.0));
+    b.camera([0.0, 1.2, 4.0], [0.0, 0.6, -20.0], 60.0, 400.0);
+}
+
 /// One untextured plane, 200 m wide, facing the camera 3 m away.
 pub(super) fn plane(b: &mut Builder) {
     let grey = b.material(MaterialDesc::new("grey", [0.6, 0.6, 0.6], 0.8));

@@ -113,8 +113,12 @@ fn missing_and_unreadable_external_files_are_named() {
         "{message}"
     );
 
-    let escaping = folder.one_node("escape.gltf", |d| d["buffers"][0]["uri"] = json!("../../etc/passwd"));
-    assert!(error(&escaping).contains("leaves the glTF file's folder"), "{}", error(&escaping));
+    let absolute = folder.one_node("absolute.gltf", |d| d["buffers"][0]["uri"] = json!("/etc/passwd"));
+    assert!(error(&absolute).contains("is an absolute path"), "{}", error(&absolute));
+    // A relative reference resolves against the file's folder, out of it too, as glTF says.
+    std::fs::create_dir_all(folder.dir.join("models")).unwrap();
+    let beside = folder.one_node("models/beside.gltf", |d| d["buffers"][0]["uri"] = json!("../tri.bin"));
+    assert_eq!(load_gltf(&beside).unwrap().triangle_count(), 1);
     let scheme = folder.one_node("scheme.gltf", |d| d["buffers"][0]["uri"] = json!("file:///etc/passwd"));
     assert!(error(&scheme).contains("has a scheme"), "{}", error(&scheme));
 
@@ -247,6 +251,14 @@ fn files_that_panicked_the_gltf_crate_are_errors() {
     assert_eq!((scene.textures[0].width, scene.textures[0].height), (2, 2));
     let nothing = textured("no-source.gltf", json!({ "name": "empty" }));
     assert!(error(&nothing).contains("images[0]: has neither a bufferView nor a uri"), "{}", error(&nothing));
+    // An empty file is named as such, not as an undetermined format.
+    std::fs::write(folder.dir.join("empty.png"), b"").unwrap();
+    let empty = textured("empty-image.gltf", json!({ "uri": "empty.png" }));
+    assert!(
+        error(&empty).contains("images[0] (uri empty.png): the image is empty (0 bytes)"),
+        "{}",
+        error(&empty)
+    );
 }
 
 /// Accessors and references the gltf crate's readers would panic on (found by

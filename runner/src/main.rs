@@ -164,7 +164,8 @@ enum Command {
 struct RunArgs {
     /// Manifests or folders of manifests [default: scenes/].
     paths: Vec<PathBuf>,
-    /// quick: small images, 3 repetitions (CI); nightly: 1024×768, 7 repetitions.
+    /// quick: 256×192 for the suite's scenes, 25 repetitions (the CI gate); nightly: 1024×768,
+    /// 7 repetitions.
     #[arg(long, value_enum, default_value = "quick")]
     tier: Tier,
     /// Comma-separated mode ids or groups: baseline, adaptive, ablation, variant [default: the tier's].

@@ -517,7 +517,7 @@ impl Manifest {
         }
     }
 
-    /// The glTF file, relative to the manifest's folder.
+    /// The glTF file: `gltf` relative to the manifest's folder, or as given where absolute.
     pub fn gltf_path(&self) -> PathBuf {
         self.path.parent().unwrap_or(Path::new(".")).join(&self.gltf)
     }
@@ -577,10 +577,17 @@ impl Manifest {
                 );
             }
         }
-        if aabench_renderer::scene::escapes(&self.gltf) {
+        // A file the user names is read wherever it lies; one that aabench generates is written,
+        // and writes stay inside the manifest's folder.
+        if self.generate.is_some() && escapes(&self.gltf) {
             return fail(
                 "gltf",
-                format!("`{}` leaves the manifest's folder: give a path inside it", self.gltf.display()),
+                format!(
+                    "`{}` leaves the manifest's folder, and `generate` would write it there: generated \
+                     files stay inside the manifest's folder (a file of your own may lie anywhere: \
+                     remove `generate`)",
+                    self.gltf.display()
+                ),
             );
         }
         if let Some(camera) = &self.camera {
@@ -690,6 +697,26 @@ impl Manifest {
     }
 }
 
+/// Whether a path leaves the folder it is relative to: absolute, or more `..` than folders
+/// before them (judged on the text: a symbolic link on the way is `scenes::confined`'s to
+/// catch).
+fn escapes(path: &Path) -> bool {
+    use std::path::Component;
+    let mut depth = 0i64;
+    for component in path.components() {
+        match component {
+            Component::Prefix(_) | Component::RootDir => return true,
+            Component::ParentDir => depth -= 1,
+            Component::Normal(_) => depth += 1,
+            Component::CurDir => {}
+        }
+        if depth < 0 {
+            return true;
+        }
+    }
+    false
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -714,6 +741,18 @@ mod tests {
         assert_eq!(error.field, field, "{text}");
         assert!(text.starts_with("scenes/edge.json: "), "{text}");
         assert!(error.message.contains(reason), "{text}");
+    }
+
+    #[test]
+    fn a_file_of_ones_own_is_read_from_anywhere() {
+        let own = |gltf: &str| {
+            let mut json: serde_json::Value = serde_json::from_str(VALID).unwrap();
+            json.as_object_mut().unwrap().remove("generate");
+            json["gltf"] = serde_json::json!(gltf);
+            Manifest::parse(Path::new("scenes/mine.json"), &json.to_string()).unwrap().gltf_path()
+        };
+        assert_eq!(own("../assets/Sponza/Sponza.gltf"), Path::new("scenes/../assets/Sponza/Sponza.gltf"));
+        assert_eq!(own("/data/assets/box.glb"), Path::new("/data/assets/box.glb"));
     }
 
     #[test]
@@ -791,7 +830,8 @@ mod tests {
             "unknown variant",
         );
         check(|j| j["stall_iterations"] = json!(1_000_001), "stall_iterations", "65 535 loop iterations");
-        check(|j| j["gltf"] = json!("../elsewhere.glb"), "gltf", "leaves the manifest's folder");
+        check(|j| j["gltf"] = json!("../elsewhere.glb"), "gltf", "generated files stay inside");
+        check(|j| j["gltf"] = json!("/tmp/elsewhere.glb"), "gltf", "generated files stay inside");
         check(
             |j| j["camera"] = json!({"position": [1e300, 0, 1], "target": [0, 0, 0], "fov_y_degrees": 60}),
             "camera.position",

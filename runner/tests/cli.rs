@@ -359,3 +359,20 @@ fn a_killed_run_leaves_the_scenes_that_finished() {
         3
     );
 }
+
+#[test]
+fn run_help_states_each_tiers_repetitions() {
+    let ws = Workspace::new("help");
+    let output = ws.run(&["run", "--help"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let help = String::from_utf8_lossy(&output.stdout).split_whitespace().collect::<Vec<_>>().join(" ");
+    for tier in [aabench::plan::Tier::Quick, aabench::plan::Tier::Nightly] {
+        let said = format!("{}: ", tier.name());
+        let line = help.split(&said).nth(1).unwrap_or_else(|| panic!("no `{said}` in: {help}"));
+        let repetitions = format!("{} repetitions", tier.repetitions());
+        assert!(
+            line.split(';').next().unwrap().contains(&repetitions),
+            "{said}… lacks `{repetitions}`: {help}"
+        );
+    }
+}

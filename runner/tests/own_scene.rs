@@ -66,6 +66,39 @@ fn a_three_line_manifest_frames_and_lights_a_file_in_any_unit() {
     }
 }
 
+#[test]
+fn manifests_in_one_folder_read_assets_from_another_and_write_only_beside_themselves() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("assets-anywhere");
+    std::fs::create_dir_all(ws.dir.join("assets/cube")).unwrap();
+    let asset = ws.dir.join("assets/cube/cube.glb");
+    cube_file(&asset, 1.0);
+    let relative = json!({ "schema_version": 1, "name": "relative", "gltf": "../assets/cube/cube.glb" });
+    let absolute = json!({ "schema_version": 1, "name": "absolute", "gltf": asset });
+    std::fs::write(ws.dir.join("scenes/relative.json"), relative.to_string()).unwrap();
+    std::fs::write(ws.dir.join("scenes/absolute.json"), absolute.to_string()).unwrap();
+    let listed = |dir: &str| {
+        let mut names: Vec<String> = std::fs::read_dir(ws.dir.join(dir))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    };
+    let output = ws.run(&["run", "scenes", "--modes", "deferred-1x1,adaptive-2x2", "--repetitions", "1"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let record = ws.record();
+    let scenes = record["scenes"].as_array().unwrap();
+    assert_eq!(scenes.len(), 2, "the folder's two manifests");
+    for scene in scenes {
+        assert_eq!(scene["status"], "ok", "{scene}");
+        assert!(scene["truth"]["image"].is_string(), "{scene}");
+    }
+    // The asset folder is read, never written: the truth cache lies beside the manifests.
+    assert_eq!(listed("assets/cube"), ["cube.glb"]);
+    assert!(ws.dir.join("scenes/cache/truth").is_dir());
+}
+
 /// A floor with a box standing on it and `lights` point lights of the file's own above it.
 fn lit_box_file(path: &std::path::Path, lights: usize) {
     let mut floor = MeshData::default();

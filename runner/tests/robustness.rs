@@ -28,7 +28,8 @@ fn generate_never_overwrites_a_file_that_aabench_did_not_write() {
     assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
     assert_eq!(std::fs::read(&manifest).unwrap(), before);
 
-    // Paths that leave the manifest's folder are refused when the manifest loads.
+    // Generated files whose paths leave the manifest's folder are refused when the manifest
+    // loads (a file of one's own is read from anywhere: own_scene.rs).
     ws.manifest("abs", "edge", |m| m["gltf"] = json!("/tmp/elsewhere.glb"));
     ws.manifest("up", "edge", |m| m["gltf"] = json!("../outside.glb"));
     for name in ["abs", "up"] {

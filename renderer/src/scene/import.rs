@@ -63,7 +63,8 @@ pub fn regular_file(path: &Path) -> Result<(), String> {
 }
 
 /// Checks every buffer and image the file names by URI before anything reads them: the URI
-/// stays inside the file's folder, and names a regular file that exists.
+/// is a relative reference (resolved against the file's folder, `..` included, as glTF says)
+/// that names a regular file that exists.
 fn check_external_files(document: &gltf::Document, base: &Path) -> Result<(), String> {
     let buffers = document.buffers().filter_map(|b| match b.source() {
         gltf::buffer::Source::Uri(uri) => Some((format!("buffers[{}]", b.index()), uri)),
@@ -86,31 +87,14 @@ fn check_external_files(document: &gltf::Document, base: &Path) -> Result<(), St
             ));
         }
         let relative = PathBuf::from(percent_decode(uri).map_err(|e| format!("{what}.uri: {e}"))?);
-        if escapes(&relative) {
-            return Err(format!("{what}.uri: `{uri}` leaves the glTF file's folder"));
+        if relative.has_root() {
+            return Err(format!(
+                "{what}.uri: `{uri}` is an absolute path; glTF resources are named relative to the file"
+            ));
         }
         regular_file(&base.join(&relative)).map_err(|e| format!("{what}.uri: {e}"))?;
     }
     Ok(())
-}
-
-/// Whether a relative path leaves the folder it is relative to: absolute, or more `..` than
-/// folders before them (judged on the text, as a URI is).
-pub fn escapes(path: &Path) -> bool {
-    use std::path::Component;
-    let mut depth = 0i64;
-    for component in path.components() {
-        match component {
-            Component::Prefix(_) | Component::RootDir => return true,
-            Component::ParentDir => depth -= 1,
-            Component::Normal(_) => depth += 1,
-            Component::CurDir => {}
-        }
-        if depth < 0 {
-            return true;
-        }
-    }
-    false
 }
 
 /// `%XX` escapes of a URI decoded (glTF URIs are RFC 3986 references; a `%` not followed by
@@ -1121,6 +1105,9 @@ fn decode_image(
             (std::borrow::Cow::Owned(bytes), what)
         }
     };
+    if bytes.is_empty() {
+        return Err(format!("{what}: the image is empty (0 bytes)"));
+    }
     let reader = || {
         image::ImageReader::new(std::io::Cursor::new(&bytes[..]))
             .with_guessed_format()

@@ -11,7 +11,7 @@ mod upload;
 pub mod write;
 
 pub use camera::{Camera, CameraError, FrameUniforms, MAX_COORDINATE, Tile};
-pub use import::{MAX_TEXTURE_SIDE, escapes, load_gltf, percent_decode, read_generator, regular_file};
+pub use import::{MAX_TEXTURE_SIDE, load_gltf, percent_decode, read_generator, regular_file};
 pub use shadow::{MAX_SHADOW_LIGHTS, Shadow, ShadowCubes};
 pub use upload::{
     GpuScene, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MAX_LIGHTS, SLOT_BASE, SLOT_EMISSIVE,

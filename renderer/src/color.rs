@@ -420,6 +420,37 @@ pub fn grain_unit(x: u32, y: u32, channel: u32) -> f64 {
     (f64::from(h >> 8) + 0.5) / f64::from(1u32 << 24)
 }
 
+/// Automatic exposure's target: the log-average luminance maps to this, the tonemap's default
+/// mid grey (`Tonemap::mid_in`).
+pub const EXPOSURE_KEY: f64 = 0.18;
+
+/// The range automatic exposure stays within: 2⁻²⁰ … 2²⁰ (a scene lit at 10⁶ lux, or by a
+/// candle, still comes out seen).
+pub const METERED_EXPOSURE_RANGE: [f32; 2] = [1.0 / 1_048_576.0, 1_048_576.0];
+
+/// The exposure that maps the log-average luminance exp(mean(ln L)) of a linear HDR image
+/// (RGBA, sanitized first) to `key`, clamped to `range`: Reinhard et al.'s key value, the
+/// auto-exposure of a camera that meters the whole frame. Black pixels are left out: no
+/// exposure shows them, and counting them with a floor (Reinhard's δ) would tie the result to
+/// the light's unit, where leaving them out makes it follow the light level exactly (a scene
+/// at 1000 times the light meters a thousandth of the exposure). An image with no light at all
+/// meters 1.
+pub fn metered_exposure(hdr: &[[f32; 4]], key: f64, range: [f32; 2]) -> f32 {
+    let (log_sum, lit) = hdr
+        .iter()
+        .map(|p| {
+            let [r, g, b] = [p[0], p[1], p[2]].map(|c| sanitize(f64::from(c)));
+            0.2126 * r + 0.7152 * g + 0.0722 * b
+        })
+        .filter(|&luminance| luminance > 0.0)
+        .fold((0.0, 0usize), |(sum, count), luminance| (sum + luminance.ln(), count + 1));
+    if lit == 0 {
+        return 1.0;
+    }
+    let average = (log_sum / lit as f64).exp();
+    ((key / average) as f32).clamp(range[0], range[1])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -510,5 +541,26 @@ mod tests {
             let range = (0..n).map(|i| settings.grain(i, 7, 0));
             assert!(range.clone().all(|g| (-1.0..=1.0).contains(&g)));
         }
+    }
+
+    #[test]
+    fn metering_maps_the_log_average_to_the_key_and_follows_the_light_level() {
+        // Half black, half grey 2 and 8: the black half is left out, the rest averages to 4.
+        let mut image = vec![[0.0, 0.0, 0.0, 0.0]; 8];
+        image.extend([[2.0, 2.0, 2.0, 0.0], [8.0, 8.0, 8.0, 0.0]].repeat(4));
+        let exposure = metered_exposure(&image, EXPOSURE_KEY, METERED_EXPOSURE_RANGE);
+        assert!((f64::from(exposure) - 0.18 / 4.0).abs() < 1e-6, "{exposure}");
+        // A thousand times the light: a thousandth of the exposure.
+        let bright: Vec<[f32; 4]> = image.iter().map(|p| p.map(|c| c * 1000.0)).collect();
+        let ratio =
+            f64::from(exposure) / f64::from(metered_exposure(&bright, EXPOSURE_KEY, METERED_EXPOSURE_RANGE));
+        assert!((ratio - 1000.0).abs() < 1e-3, "{ratio}");
+        // No light meters 1; non-finite pixels stay finite; the range holds.
+        let dark = [[0.0, f32::NAN, -1.0, 0.0]; 4];
+        assert_eq!(metered_exposure(&dark, EXPOSURE_KEY, METERED_EXPOSURE_RANGE), 1.0);
+        let infinite = metered_exposure(&[[f32::INFINITY; 4]], EXPOSURE_KEY, METERED_EXPOSURE_RANGE);
+        assert!((f64::from(infinite) - 0.18 / HALF_MAX).abs() < 1e-9, "{infinite}");
+        assert_eq!(metered_exposure(&[[1e30; 4]], EXPOSURE_KEY, [1e-3, 1e3]), 1e-3);
+        assert_eq!(metered_exposure(&[[1e-30; 4]], EXPOSURE_KEY, [1e-3, 1e3]), 1e3);
     }
 }

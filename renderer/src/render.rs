@@ -360,21 +360,54 @@ impl SceneRenderer {
         Ok(Truth { images, m, tiles: tiles.len() })
     }
 
-    /// Renders one tile of the truth into allocations of its own, freed afterwards, and copies
-    /// its images into place in `out`.
-    fn render_truth_tile(&mut self, m: u32, tile: Tile, out: &mut FrameImages) -> Result<(), RenderError> {
+    /// Meters the scene's exposure: renders deferred-1x1 once at exposure 1 and returns the
+    /// exposure that maps the log-average luminance of its HDR image to `key`
+    /// ([`crate::color::metered_exposure`]), clamped to `range`. Every frame rendered after,
+    /// the truth's and each mode's, takes that exposure. On an error the exposure stays 1.
+    pub fn meter_exposure(&mut self, key: f64, range: [f32; 2]) -> Result<f32, RenderError> {
+        self.lighting.exposure = 1.0;
+        let (width, height) = (self.settings.width, self.settings.height);
+        let metered = self
+            .render_alone(Mode::new(Technique::Deferred, 1, false), Tile::whole(width, height), "metering")
+            .and_then(|outputs| Ok(half_texels(&self.gpu.read_texture(&outputs[&Output::Hdr])?)))
+            .map(|hdr| crate::color::metered_exposure(&hdr, key, range));
+        if let Ok(exposure) = metered {
+            self.lighting.exposure = exposure;
+        }
+        self.write_frame_uniforms(Tile::whole(width, height));
+        metered
+    }
+
+    /// The exposure frames render at: the scene's, or the metered one.
+    pub fn exposure(&self) -> f32 {
+        self.lighting.exposure
+    }
+
+    /// Renders `mode` once, the frame uniforms pointed at `tile`, into allocations of its own
+    /// that are freed once the returned outputs are dropped.
+    fn render_alone(
+        &mut self,
+        mode: Mode,
+        tile: Tile,
+        label: &str,
+    ) -> Result<BTreeMap<Output, wgpu::Texture>, RenderError> {
         self.write_frame_uniforms(tile);
-        let mode = Mode::new(Technique::Reference, m, false);
         let graph = frame_graph(&self.needs, mode, &self.settings, &self.gpu.device.limits())?;
-        let plan = graph.compile(Dims { width: tile.width, height: tile.height, m })?;
+        let plan = graph.compile(Dims { width: tile.width, height: tile.height, m: mode.m })?;
         let allocated = Pool::default().acquire(&self.gpu.device, &plan)?;
         let passes = self.build(&graph, &plan, &allocated)?;
-        let mut encoder = self.gpu.encoder("truth");
+        let mut encoder = self.gpu.encoder(label);
         for pass in &passes {
             pass.encode(&mut encoder);
         }
         self.gpu.submit_timed(encoder)?;
-        let outputs = outputs(&plan, &allocated);
+        Ok(outputs(&plan, &allocated))
+    }
+
+    /// Renders one tile of the truth into allocations of its own, freed afterwards, and copies
+    /// its images into place in `out`.
+    fn render_truth_tile(&mut self, m: u32, tile: Tile, out: &mut FrameImages) -> Result<(), RenderError> {
+        let outputs = self.render_alone(Mode::new(Technique::Reference, m, false), tile, "truth")?;
         let tile_display = read_display(&self.gpu, &outputs[&Output::Display])?.rgba;
         let tile_hdr: Vec<f32> =
             half_texels(&self.gpu.read_texture(&outputs[&Output::Hdr])?).into_iter().flatten().collect();

@@ -23,7 +23,7 @@ use aabench::run::render_settings;
 use aabench::scenes;
 use aabench::truth::{TILE_BYTES, TRUTH_M};
 use aabench_renderer::adaptive::{self, MetricSet, WindowSample};
-use aabench_renderer::{ExtraSamples, Gpu, SceneRenderer};
+use aabench_renderer::{ExtraSamples, Gpu, SceneRenderer, color};
 use anyhow::Context;
 
 /// Normals closer than this cone (sqrt(1 − cos), 0.5°) count as one plane's: the G-buffer
@@ -44,10 +44,13 @@ fn main() -> anyhow::Result<()> {
     let manifest = Manifest::load(Path::new(&path))?;
     let loaded = scenes::load(&manifest)?;
     let settings = render_settings(&manifest, tier, ExtraSamples::Compact);
-    let exposure = f64::from(loaded.lighting.exposure);
     let gpu = Arc::new(Gpu::new()?);
     let mut renderer =
         SceneRenderer::new(gpu, &loaded.scene, &loaded.camera, &loaded.lighting, settings.clone())?;
+    if manifest.tonemap.exposure.is_none() {
+        renderer.meter_exposure(color::EXPOSURE_KEY, color::METERED_EXPOSURE_RANGE)?;
+    }
+    let exposure = f64::from(renderer.exposure());
     let truth = renderer.render_truth(TRUTH_M, TILE_BYTES)?.images.display;
     println!("# {} ({}, {}×{}){suffix}\n", manifest.name, tier.name(), settings.width, settings.height);
     for m in 2..=4 {

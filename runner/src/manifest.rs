@@ -285,8 +285,10 @@ pub enum DynamicRange {
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TonemapSpec {
-    #[serde(default = "one")]
-    pub exposure: f32,
+    /// A linear scale before tonemapping; omitted, the run meters it per scene (automatic
+    /// exposure: `SceneRenderer::meter_exposure`).
+    #[serde(default)]
+    pub exposure: Option<f32>,
     pub mid_in: Option<f64>,
     pub mid_out: Option<f64>,
     pub hdr_max: Option<f64>,
@@ -295,10 +297,6 @@ pub struct TonemapSpec {
     pub crosstalk: Option<f64>,
     pub saturation: Option<f64>,
     pub cross_saturation: Option<f64>,
-}
-
-fn one() -> f32 {
-    1.0
 }
 
 impl Default for TonemapSpec {
@@ -666,8 +664,9 @@ impl Manifest {
                 return fail(&format!("adaptive.{name}"), format!("{value} must be in [0, 1]"));
             }
         }
-        let exposure = self.tonemap.exposure;
-        if !(exposure > 0.0 && exposure <= MAX_EXPOSURE) {
+        if let Some(exposure) = self.tonemap.exposure
+            && !(exposure > 0.0 && exposure <= MAX_EXPOSURE)
+        {
             return fail("tonemap.exposure", format!("{exposure} must be > 0 and at most {MAX_EXPOSURE:e}"));
         }
         self.validate_color()?;

@@ -148,9 +148,20 @@ pub struct SceneRecord {
     pub inputs: Option<SceneInputs>,
     /// The tolerances `compare` applies to this scene (the manifest's `gate` section).
     pub gate: Tolerances,
+    /// The exposure its frames rendered at, the truth's included.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub exposure: Option<ExposureRecord>,
     /// The ground truth every mode's `vs_ground_truth` is measured against.
     pub truth: Option<TruthRecord>,
     pub modes: Vec<ModeRecord>,
+}
+
+/// The linear scale a scene's frames took before tonemapping.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ExposureRecord {
+    pub value: f32,
+    /// Metered from one deferred-1x1 frame because the manifest gives no `tonemap.exposure`.
+    pub metered: bool,
 }
 
 impl SceneRecord {

@@ -10,6 +10,7 @@ use std::time::{Duration, Instant, SystemTime};
 
 use aabench_renderer::{
     AdaptiveSettings, DisplayImage, ExtraSamples, FrameImages, FrameTiming, Mode, RenderSettings, Technique,
+    color,
 };
 
 use crate::images;
@@ -20,8 +21,8 @@ use crate::metrics::{self, FrameChecks, Quality};
 use crate::plan::{RunPlan, SceneEntry, Tier, fallback_name};
 use crate::progress::Progress;
 use crate::record::{
-    AdaptiveCost, GraphRecord, ImageFiles, ModeRecord, PassRecord, Platform, RUN_SCHEMA, RunRecord,
-    RunSettings, SampleCost, SceneRecord, Status, fnv1a,
+    AdaptiveCost, ExposureRecord, GraphRecord, ImageFiles, ModeRecord, PassRecord, Platform, RUN_SCHEMA,
+    RunRecord, RunSettings, SampleCost, SceneRecord, Status, fnv1a,
 };
 use crate::scenes;
 use crate::stats::Summary;
@@ -167,6 +168,7 @@ fn empty_scene_at(manifest: &Path) -> SceneRecord {
         stall_iterations: 0,
         inputs: None,
         gate: Default::default(),
+        exposure: None,
         truth: None,
         modes: Vec::new(),
     }
@@ -230,6 +232,7 @@ async fn run_scene(
     let settings = render_settings(manifest, plan.tier, plan.extra_samples);
     progress.status(&format!("[{}] uploading", manifest.name));
     let memory_limit = plan.memory_limit;
+    let metered = manifest.tonemap.exposure.is_none();
     let uploaded = worker
         .call(plan.frame_timeout, move |state| {
             let scenes::LoadedScene { scene, camera, lighting, .. } = loaded;
@@ -245,12 +248,19 @@ async fn run_scene(
             // After the upload, so that the scene's own memory is no longer available.
             let budget = memory_limit.or_else(|| available_memory().map(|bytes| bytes / 10 * 9));
             renderer.set_memory_budget(budget);
+            if metered {
+                renderer.meter_exposure(color::EXPOSURE_KEY, color::METERED_EXPOSURE_RANGE)?;
+            }
+            let exposure = ExposureRecord { value: renderer.exposure(), metered };
             state.renderer = Some(renderer);
-            Ok::<_, aabench_renderer::RenderError>(budget)
+            Ok::<_, aabench_renderer::RenderError>((budget, exposure))
         })
         .await;
     match uploaded {
-        Ok(Ok(budget)) => record.memory_limit_bytes = budget,
+        Ok(Ok((budget, exposure))) => {
+            record.memory_limit_bytes = budget;
+            record.exposure = Some(exposure);
+        }
         // What the device refuses of the file's content (too many textures) names the file.
         Ok(Err(error @ aabench_renderer::RenderError::Limit(_))) => {
             return fail(record, format!("{}: {error}", manifest.gltf_path().display()));

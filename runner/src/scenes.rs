@@ -99,7 +99,8 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
         lights: lights(manifest, &scene)?,
         ambient: Vec3::from(manifest.ambient),
         background: Vec3::from(manifest.background),
-        exposure: manifest.tonemap.exposure,
+        // Metered once the scene is uploaded where the manifest gives none.
+        exposure: manifest.tonemap.exposure.unwrap_or(1.0),
     };
     Ok(LoadedScene { scene, camera, lighting, seconds: start.elapsed().as_secs_f64() })
 }

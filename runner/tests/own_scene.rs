@@ -99,8 +99,74 @@ fn manifests_in_one_folder_read_assets_from_another_and_write_only_beside_themse
     assert!(ws.dir.join("scenes/cache/truth").is_dir());
 }
 
+#[test]
+fn automatic_exposure_renders_a_sun_of_6830_lux_as_one_of_6_8() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("exposure");
+    for (name, lux) in [("noon", 6830.0), ("dusk", 6.83)] {
+        let mut writer = box_scene();
+        writer.add_directional_light(glam::DVec3::new(-0.4, -1.0, -0.6), [1.0, 0.97, 0.9], lux);
+        writer.write(&ws.dir.join(format!("scenes/{name}.glb"))).unwrap();
+        // No ambient and a black sky: the sun is all the light, so the exposure alone differs.
+        let manifest = json!({ "schema_version": 1, "name": name, "gltf": format!("{name}.glb"),
+            "ambient": [0, 0, 0], "background": [0, 0, 0] });
+        std::fs::write(ws.dir.join(format!("scenes/{name}.json")), manifest.to_string()).unwrap();
+    }
+    let output = ws.run(&["run", "--modes", "deferred-1x1", "--repetitions", "1"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let record = ws.record();
+    let image = |name: &str| {
+        let scene = record["scenes"].as_array().unwrap().iter().find(|s| s["name"] == name).unwrap();
+        assert_eq!(scene["exposure"]["metered"], true, "{scene}");
+        let png = ws.run_dir().join(mode(scene, "deferred-1x1")["images"]["display"].as_str().unwrap());
+        (scene["exposure"]["value"].as_f64().unwrap(), image::open(&png).unwrap().to_rgb8())
+    };
+    let ((noon_exposure, noon), (dusk_exposure, dusk)) = (image("noon"), image("dusk"));
+    let ratio = dusk_exposure / noon_exposure;
+    assert!((ratio / 1000.0 - 1.0).abs() < 0.01, "exposures {dusk_exposure} / {noon_exposure} = {ratio}");
+    let steps: Vec<i32> = noon
+        .pixels()
+        .zip(dusk.pixels())
+        .flat_map(|(a, b)| (0..3).map(move |c| i32::from(a[c]) - i32::from(b[c])))
+        .collect();
+    let worst = steps.iter().map(|d| d.abs()).max().unwrap();
+    assert!(worst <= 2, "the two suns differ by up to {worst} steps");
+    // Metered, the sunlit floor is a mid grey, neither blown out nor black.
+    let mut floor: Vec<u8> =
+        noon.pixels().filter(|p| p[0].abs_diff(p[2]) < 8 && p[1] > 0).map(|p| p[1]).collect();
+    floor.sort_unstable();
+    let lit = floor.len();
+    assert!(lit > noon.pixels().len() / 20, "the floor covers {lit} pixels");
+    let median = floor[lit / 2];
+    assert!((80..=180).contains(&median), "the metered floor's median code is {median}");
+
+    // The same noon at the old default exposure of 1 is what users saw: almost all white.
+    let fixed = json!({ "schema_version": 1, "name": "fixed", "gltf": "noon.glb",
+        "ambient": [0, 0, 0], "background": [0, 0, 0], "tonemap": { "exposure": 1.0 } });
+    std::fs::write(ws.dir.join("scenes/fixed.json"), fixed.to_string()).unwrap();
+    std::fs::remove_dir_all(ws.dir.join("reports")).unwrap();
+    let output = ws.run(&["run", "scenes/fixed.json", "--modes", "deferred-1x1", "--repetitions", "1"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let record = ws.record();
+    let scene = &record["scenes"][0];
+    assert_eq!(scene["exposure"], json!({ "value": 1.0, "metered": false }));
+    let png = ws.run_dir().join(mode(scene, "deferred-1x1")["images"]["display"].as_str().unwrap());
+    let white =
+        image::open(&png).unwrap().to_rgb8().pixels().filter(|p| p.0.iter().all(|&c| c >= 250)).count();
+    assert!(white > lit / 2, "exposure 1 under a 6830 lux sun should blow the lit scene out ({white} white)");
+}
+
 /// A floor with a box standing on it and `lights` point lights of the file's own above it.
 fn lit_box_file(path: &std::path::Path, lights: usize) {
+    let mut writer = box_scene();
+    for i in 0..lights {
+        writer.add_point_light([-3.0 + 0.01 * i as f64, 4.5, -2.0], [1.0; 3], 40.0 / lights as f32, 30.0);
+    }
+    writer.write(path).unwrap();
+}
+
+/// A floor 12 m on a side with a red 2 m box standing on it, no lights.
+fn box_scene() -> GltfWriter {
     let mut floor = MeshData::default();
     for (x, z) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (1.0, -1.0)] {
         floor.positions.push([x * 6.0, 0.0, z * 6.0]);
@@ -130,10 +196,7 @@ fn lit_box_file(path: &std::path::Path, lights: usize) {
     }
     let red = writer.add_material(&MaterialDesc::new("box", [0.8, 0.2, 0.2], 0.8));
     writer.add_mesh("box", &block, red);
-    for i in 0..lights {
-        writer.add_point_light([-3.0 + 0.01 * i as f64, 4.5, -2.0], [1.0; 3], 40.0 / lights as f32, 30.0);
-    }
-    writer.write(path).unwrap();
+    writer
 }
 
 #[test]
@@ -143,8 +206,10 @@ fn the_files_point_lights_cast_shadows_when_the_manifest_asks() {
     lit_box_file(&ws.dir.join("scenes/box.glb"), 1);
     let camera = json!({ "position": [0, 12, 9], "target": [0, 0, 0], "fov_y_degrees": 50 });
     for (name, shadows) in [("plain", None), ("shadowed", Some(json!({ "resolution": 256 })))] {
+        // One exposure for both: metered, the shadowed scene would take a brighter one.
         let mut manifest = json!({ "schema_version": 1, "name": name, "gltf": "box.glb", "camera": camera,
-                                   "resolution": { "quick": [96, 72] }, "ambient": [0.02, 0.02, 0.02] });
+                                   "resolution": { "quick": [96, 72] }, "ambient": [0.02, 0.02, 0.02],
+                                   "tonemap": { "exposure": 1.0 } });
         if let Some(shadows) = shadows {
             manifest["file_light_shadows"] = shadows;
         }

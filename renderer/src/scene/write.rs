@@ -252,6 +252,18 @@ impl GltfWriter {
         }));
     }
 
+    /// Adds a `KHR_lights_punctual` directional light (intensity in lux) shining along
+    /// `direction`, which the node's rotation turns the light's −Z onto.
+    pub fn add_directional_light(&mut self, direction: DVec3, color: [f32; 3], intensity: f32) {
+        self.lights.push(json!({"type": "directional", "color": color, "intensity": intensity}));
+        let rotation = glam::DQuat::from_rotation_arc(DVec3::NEG_Z, direction.normalize());
+        self.nodes.push(json!({
+            "name": "sun",
+            "rotation": rotation.to_array(),
+            "extensions": {"KHR_lights_punctual": {"light": self.lights.len() - 1}},
+        }));
+    }
+
     /// Puts every node under one root node that scales by `scale` and then moves by
     /// `translation`; the geometry keeps its coordinates.
     pub fn place(&mut self, scale: f64, translation: [f64; 3]) {

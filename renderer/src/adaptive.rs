@@ -184,7 +184,7 @@ fn area_and_centroid(polygon: &[[f64; 2]]) -> (f64, [f64; 2]) {
 pub enum ExtraSamples {
     /// List every (pixel, rank) pair that needs shading with a prefix sum, then shade the list
     /// as one dense fragment per sample and gather per pixel. Costs scale with the samples
-    /// shaded, without idle SIMD lanes. The default: fastest on lavapipe (see the README).
+    /// shaded, without idle SIMD lanes. The default: fastest on lavapipe (see `docs/design-notes.md`).
     Compact,
     /// Shade a pixel's extra samples in a loop inside its gather invocation, as the paper's
     /// simplest variant does. Neighbours with different counts leave SIMD lanes idle.
@@ -204,7 +204,7 @@ pub enum DepthMetric {
 
 impl DepthMetric {
     /// The default `c_depth` of each: tuned so that the generated metre-scale scenes take
-    /// about the samples they took under the world-unit metric (README, "Tuning").
+    /// about the samples they took under the world-unit metric (`docs/design-notes.md`).
     pub fn default_c_depth(self) -> f32 {
         match self {
             DepthMetric::Relative => DEFAULT_C_DEPTH_RELATIVE,
@@ -246,7 +246,7 @@ pub struct AdaptiveSettings {
 impl Default for AdaptiveSettings {
     fn default() -> Self {
         AdaptiveSettings {
-            // Tuned on the generated scenes at 1024×768 (README, "Tuning").
+            // Tuned on the generated scenes at 1024×768 (`docs/design-notes.md`).
             depth_metric: DepthMetric::Relative,
             c_depth: DepthMetric::Relative.default_c_depth(),
             c_normal: 1.0,

@@ -327,6 +327,9 @@ mod tests {
         })
     }
 
+    /// The gather pass's bindings are matched to resources by name. Swapping two textures'
+    /// resources is refused naming the variable and the wrong format; a buffer where WGSL
+    /// declares a texture, and a name nothing offers, are refused too.
     #[test]
     fn bindings_are_matched_by_name_and_a_swap_is_refused_naming_the_variable() {
         let gpu = Gpu::new().expect("lavapipe");

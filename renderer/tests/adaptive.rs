@@ -1,5 +1,13 @@
 //! Adaptive supersampling on lavapipe: where samples go, that the GPU metric is its CPU twin,
 //! and that forcing every sample reproduces the reference.
+//!
+//! Only pixels along an edge get more than one sample; a flat plane, lit or 5 km away, gets
+//! one; sample counts stay in [1, M²] with finite output on the generated scenes, under normal
+//! and extreme lighting, and at tiny and odd resolutions. The full method takes the larger of
+//! its two ablations per pixel, the `-area` variant reweighs only pixels between one sample and
+//! all, and the compact and loop strategies agree. The CPU twin's own cases (adversarial
+//! windows, zero constants on a silhouette, the area weights' hand-worked values) are unit
+//! tests in `src/adaptive.rs`, and `tests/properties.rs` checks it over hostile inputs.
 
 mod support;
 
@@ -35,6 +43,8 @@ fn edge_pixels(gbuffer: &GBufferImages, m: u32, ring: i64) -> Vec<bool> {
         .collect()
 }
 
+/// At 2×2, 3×3 and 4×4, every window the edge runs through gets all M² samples, and any other
+/// pixel with more than one lies next to a window along the edge.
 #[test]
 fn only_pixels_along_a_straight_edge_get_more_than_one_sample() {
     let (mut renderer, _gpu) = renderer(Generator::Edge, &ambient_only(), settings(96, 64));
@@ -83,6 +93,8 @@ fn softly_lit() -> Lighting {
     }
 }
 
+/// A flat, smoothly lit plane takes one sample per pixel and stays within one 8-bit step of
+/// the reference at every M.
 #[test]
 fn a_flat_plane_facing_the_camera_takes_one_sample_and_matches_the_reference() {
     let (mut renderer, _gpu) = renderer(Generator::Plane, &softly_lit(), settings(96, 64));
@@ -137,6 +149,8 @@ fn forcing_every_sample_under_cells_reproduces_the_reference_within_one_step() {
     }
 }
 
+/// With every sample forced, adaptive-MxM is within one step of reference-MxM on the atrium,
+/// thin and specular scenes, with both the compact and the loop strategy, at M = 2, 3 and 4.
 #[test]
 fn forcing_every_sample_reproduces_the_reference_within_one_step() {
     for generator in [Generator::Atrium, Generator::Thin, Generator::Specular] {
@@ -156,6 +170,8 @@ fn forcing_every_sample_reproduces_the_reference_within_one_step() {
     }
 }
 
+/// On every generated scene but the gallery, under normal lighting and under a point light of
+/// intensity 10⁶, counts stay in [1, M²] and the HDR output is finite.
 #[test]
 fn sample_counts_stay_in_the_window_on_every_generated_scene() {
     let harsh = Lighting {
@@ -169,7 +185,7 @@ fn sample_counts_stay_in_the_window_on_every_generated_scene() {
         }],
         ..lit()
     };
-    // The gallery (a million triangles, no camera) is measured on its own (README).
+    // The gallery (a million triangles, no camera) is measured on its own (`docs/own-scene.md`).
     for generator in Generator::ALL.into_iter().filter(|&g| g != Generator::Gallery) {
         for lighting in [lit(), harsh.clone()] {
             let (mut renderer, _gpu) = renderer(generator, &lighting, settings(96, 72));
@@ -216,6 +232,9 @@ fn cpu_counts(
     (ks, ambiguous)
 }
 
+/// The GPU's sample counts equal the CPU twin's pixel for pixel, leaving out only pixels whose
+/// k lies within a rounding hair of a boundary or of the shading threshold (f32 against f64);
+/// more than 95% of pixels are checked.
 #[test]
 fn gpu_sample_counts_match_the_cpu_twin() {
     let base = settings(128, 96);
@@ -239,6 +258,8 @@ fn gpu_sample_counts_match_the_cpu_twin() {
     }
 }
 
+/// The compact and loop strategies give the same counts and images within one step, for the
+/// paper's average, the area-weighted one and the cells variant.
 #[test]
 fn compact_and_loop_shading_agree_within_one_step() {
     // Both the paper's average and the area-weighted one, whose weights follow each sample's rank.
@@ -255,6 +276,9 @@ fn compact_and_loop_shading_agree_within_one_step() {
     }
 }
 
+/// The `-area` variant keeps the sample counts, and every pixel of 1 or M² samples bit for bit.
+/// Its two-sample pixels at 3×3 equal 7/9·S + 2/9·x, where x is the extra sample recovered
+/// from the paper's (S + x) / 2, within f16 precision.
 #[test]
 fn area_weights_reweigh_only_pixels_between_one_sample_and_all() {
     let (mut renderer, _gpu) = renderer(Generator::Atrium, &lit(), settings(128, 96));
@@ -310,6 +334,8 @@ fn the_full_method_takes_the_larger_of_the_two_ablations() {
     assert!(differ > 100, "the two metrics should disagree somewhere ({differ} pixels)");
 }
 
+/// A slightly tilted plane 5 km away takes one sample per pixel at every M; catastrophic
+/// cancellation in the depth variance would give it all of them.
 #[test]
 fn a_slightly_tilted_plane_five_kilometres_away_needs_no_extra_samples() {
     // True depth spread per pixel is about a centimetre; E[d²] − E[d]² in f32 at 5000 m
@@ -330,6 +356,8 @@ fn a_slightly_tilted_plane_five_kilometres_away_needs_no_extra_samples() {
     }
 }
 
+/// Every mode but the stalled variants renders finite HDR with counts in [1, M²] at 1×1, 2×3
+/// and 317×211.
 #[test]
 fn tiny_and_odd_resolutions_render_every_mode_finite_with_counts_in_the_window() {
     // 1×1 (a single window), 2×3 (smaller than any 4×4 block), 317×211 (odd, prime-ish sides:
@@ -359,6 +387,8 @@ fn tiny_and_odd_resolutions_render_every_mode_finite_with_counts_in_the_window()
     }
 }
 
+/// The loop strategy accepts a stall of exactly `loop_stall_limit(4)` at 4×4 and refuses one
+/// step more, saying so; the unstalled mode runs either way.
 #[test]
 fn the_loop_strategy_refuses_a_stall_it_cannot_honour() {
     // Its gather shades up to M² samples in one invocation: lavapipe's 65 535 loop

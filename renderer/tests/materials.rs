@@ -2,6 +2,14 @@
 //! MikkTSpace's), emission with `KHR_materials_emissive_strength`, occlusion on the ambient
 //! term, and `KHR_texture_transform`. Each scene is a glTF file written here: one quad that
 //! exactly fills a 64×64 view.
+//!
+//! The assertions are on display codes: a normal map shows its bumps under a grazing light and
+//! follows glTF's tangent space, whether the tangents come from the file or from MikkTSpace;
+//! MikkTSpace splits vertices where mirrored UVs meet and leaves finite (or, on a collapsed
+//! primitive, zero) tangents; emission, occlusion and metallic-roughness textures give the
+//! codes their factors predict; `KHR_texture_transform` moves, turns and scales a texture as
+//! the extension defines; and textures packed into shared pages render as if each had a layer
+//! of its own. How materials and their textures are imported is tested in `tests/import.rs`.
 
 mod support;
 
@@ -152,6 +160,9 @@ fn mean_green(image: &FrameImages) -> f64 {
     image.display.rgba.chunks_exact(4).map(|p| f64::from(p[1])).sum::<f64>() / f64::from(SIDE * SIDE)
 }
 
+/// A normal map of eight stripes, tilted alternately towards +X and −X, under a grazing light
+/// from +X: neighbouring stripes are more than 60 codes apart, while the same plane without
+/// the map is even within 2 codes.
 #[test]
 fn a_normal_mapped_plane_lit_from_the_side_shows_its_bumps() {
     // Eight stripes of one texel each, their normals tilted alternately towards +X and −X.
@@ -176,6 +187,10 @@ fn a_normal_mapped_plane_lit_from_the_side_shows_its_bumps() {
     assert!(centre(1) < lo && centre(0) > hi + 40, "bumps: {} / {} around flat {lo}", centre(0), centre(1));
 }
 
+/// A map tilted towards the image's +Y brightens a plane lit from above (glTF's tangent space,
+/// +Y up) by more than 30 codes of mean green. MikkTSpace's tangents give an image within 1
+/// code of the file's tangent `[1, 0, 0, 1]`, and a file tangent with `w = −1` darkens the
+/// plane instead.
 #[test]
 fn normal_maps_follow_gltf_tangent_space_with_file_or_mikktspace_tangents() {
     // Every normal tilted towards the texture's +Y (up in the image), lit from above: glTF's
@@ -197,6 +212,10 @@ fn normal_maps_follow_gltf_tangent_space_with_file_or_mikktspace_tangents() {
     assert!(mean_green(&flipped) < flat - 30.0, "w = −1: {} vs flat {flat}", mean_green(&flipped));
 }
 
+/// MikkTSpace splits exactly the two shared vertices of a quad whose second triangle is
+/// mirrored in UV (four vertices become six, with opposite handedness per triangle). On a
+/// primitive collapsed by a zero-scale node it leaves zero tangents instead of underflowing,
+/// and on UVs without area it leaves finite tangents.
 #[test]
 fn mikktspace_splits_vertices_where_mirrored_uvs_meet() {
     let flat_map = png(2, 2, |_, _| encode_normal(Vec3::Z));
@@ -232,6 +251,10 @@ fn mikktspace_splits_vertices_where_mirrored_uvs_meet() {
     assert!(scene.tangents.iter().flatten().all(|c| c.is_finite()));
 }
 
+/// With no light, an emissive factor of (1, 0.5, 0.25) at `KHR_materials_emissive_strength`
+/// 0.5 gives linear 0.5, 0.25 and 0.125: codes 188, 137 and 99, each within 1 code. An emissive
+/// texture that is black on one half masks the emission to 0 there, and the same quad without
+/// emission is black.
 #[test]
 fn an_emissive_quad_in_an_unlit_scene_is_bright() {
     let black = json!({ "baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0 });
@@ -264,6 +287,8 @@ fn an_emissive_quad_in_an_unlit_scene_is_bright() {
     assert!(plain.display.rgba.chunks_exact(4).all(|p| p[..3] == [0, 0, 0]));
 }
 
+/// Where the occlusion texture is 0, strength 1 takes the ambient term to code 0 and strength
+/// 0.5 to code 188 (linear 0.5, within 1 code); where it is 1, the ambient term is untouched.
 #[test]
 fn occlusion_darkens_the_ambient_term_by_its_strength() {
     // Red 0 on the left half, 255 on the right; green, which glTF does not read, the reverse.
@@ -288,6 +313,9 @@ fn occlusion_darkens_the_ambient_term_by_its_strength() {
     assert_eq!(code(&half, 60, 32, 1), 255);
 }
 
+/// A metallic-roughness texture with metalness 0 on one half and 1 on the other renders each
+/// half within 1 code of the untextured dielectric and the untextured metal. The rough metal
+/// is more than 40 codes darker than the dielectric: it has no diffuse light.
 #[test]
 fn a_metallic_roughness_texture_multiplies_the_factors() {
     // Metalness (blue) 0 on the left half, 1 on the right; roughness (green) 1 everywhere.
@@ -313,6 +341,9 @@ fn a_metallic_roughness_texture_multiplies_the_factors() {
     );
 }
 
+/// An offset of 3/64 moves a 64-texel checker exactly 3 pixels: every pixel is within 1 code
+/// of its neighbour 3 pixels over in the untransformed image. Rotation and scale give the image
+/// of the same UVs transformed on the CPU, within 2 codes.
 #[test]
 fn a_texture_transform_moves_the_texture_as_the_extension_defines() {
     // A 64×64 checker of 8-texel squares: one texel per pixel across the 64-pixel view.
@@ -354,7 +385,7 @@ fn a_texture_transform_moves_the_texture_as_the_extension_defines() {
 }
 
 /// The rotation's direction is the one Khronos' TextureTransformTest sample marks green, which
-/// was checked by rendering that file (README, "Materials"); this pins it against a change.
+/// was checked by rendering that file (`docs/own-scene.md`); this pins it against a change.
 #[test]
 fn the_uv_transform_turns_the_way_the_khronos_sample_expects() {
     // u′ = cos r · sx·u + sin r · sy·v + ox, v′ = −sin r · sx·u + cos r · sy·v + oy: the
@@ -367,6 +398,13 @@ fn the_uv_transform_turns_the_way_the_khronos_sample_expects() {
     assert!(UvTransform::new([0.0; 2], 0.0, [1.0; 2]).is_identity());
 }
 
+/// A solid 16² texture packed beside a red one renders within 1 code of the same texture
+/// alone, magnified 4× and minified 2×, 3× and 16× with repeats, and the texture memory is
+/// what the layers and pages predict. The 3× case sits between two mip levels, where trilinear
+/// filtering reads the coarser level too: a margin of half a texel of the finer level once let
+/// 51 codes of red through there. A packed checker differs from its unpacked twin by more than
+/// 2 codes in fewer than 5% of channel values: its repeat seams clamp instead of blending
+/// across, which shows only on pixels that straddle a seam.
 #[test]
 fn textures_of_different_sizes_packed_in_pages_look_as_if_each_had_a_layer() {
     // The checker fills a 64² layer alone; two 16² textures share the second layer side by

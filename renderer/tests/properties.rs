@@ -3,6 +3,15 @@
 //! tiny magnitudes, cancellation, NaN and infinities. No input may panic or leave the
 //! documented range. `tests/color.rs` and `tests/adaptive.rs` check the GPU against the same
 //! twins.
+//!
+//! Each property runs 2000 cases over values from 10⁻³⁰⁰ to 10³⁰⁰ of both signs, zeros,
+//! subnormals, NaN and ±Inf. The geometry metric stays finite and in range (cone in [0, 1],
+//! relative variance ≤ M⁴) or is infinite exactly on silhouettes; the relative depth metric is
+//! unchanged by scaling the depths by 10⁻⁶ to 10⁶; sample counts stay in [1, M²] and k is never
+//! NaN for any window, luma cross and constants in [0, 10¹²]; the metric luma is in [0, 1] at
+//! any exposure; sanitize is finite; the tonemap maps any sanitized radiance into [0, 1] for a
+//! range of curves; every transfer function rises and inverts within 10⁻⁹; quantization stays
+//! within the codes, and black (and NaN) stays black under any grain.
 
 use aabench_renderer::adaptive::{
     self, AdaptiveSettings, DepthMetric, MAX_METRIC_CONSTANT, MetricSet, WindowSample,

@@ -61,6 +61,10 @@ fn deferred() -> Mode {
     Mode::new(Technique::Deferred, 1, false)
 }
 
+/// A marker 2 units from the light along each of ±X, ±Y and ±Z lands in its own cube face:
+/// the CPU twin of the cube lookup picks that face, the centroid of the face's covered texels
+/// lies within 0.03 of where the lookup reads the marker's centre, and the stored value is the
+/// expected reversed depth within 10⁻⁶.
 #[test]
 fn a_marker_along_each_axis_lands_in_its_face_where_the_lookup_reads() {
     // A small square 2 units from the light along each axis, off-centre towards a neighbouring
@@ -160,6 +164,8 @@ fn visibility_row(shadow: Shadow) -> Vec<f32> {
         .collect()
 }
 
+/// A point of the floor under the occluder receives less than 1% of the light; a point in the
+/// open receives all of it, within 1%.
 #[test]
 fn an_occluded_point_is_shadowed_and_a_visible_one_lit() {
     let visibility = visibility_row(Shadow { resolution: 256, bias: 0.05, radius: 0.01 });
@@ -172,6 +178,9 @@ fn an_occluded_point_is_shadowed_and_a_visible_one_lit() {
     assert!((outside - 1.0).abs() < 0.01, "in the open: {outside}");
 }
 
+/// PCF's penumbra along the middle row widens with the radius: the test asserts at least 2
+/// partly lit pixels at radius 0.03 and at least 4 more at 0.12 (measured: 4 and 12), and
+/// every visibility finite and within [0, 1].
 #[test]
 fn pcf_gives_a_soft_edge_that_widens_with_the_radius() {
     let penumbra = |radius: f32| {

@@ -1,4 +1,4 @@
-//! What the adaptive metric spends, and where adaptive images' error comes from (README, "What
+//! What the adaptive metric spends, and where adaptive images' error comes from (`docs/adaptive.md`, "What
 //! the metric does, measured"). For each M it renders the scene's adaptive mode once, reads
 //! back the G-buffer, the shade-first image S and the sample counts, recomputes each term of
 //! the metric with the CPU twin, and compares the display image with the ground truth:

@@ -1,4 +1,4 @@
-//! Where an adaptive mode's extra samples spend their time (README, "Where the extra-sample
+//! Where an adaptive mode's extra samples spend their time (`docs/design-notes.md`, "Where the extra-sample
 //! cost went"). For each M it renders, interleaved in one process, the reference, the adaptive
 //! mode and the adaptive mode with every sample forced into the list, and prints per-pass
 //! medians with three per-sample costs:

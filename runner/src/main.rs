@@ -125,6 +125,14 @@ enum Command {
         /// The verdict to show [default: verdict.json in the run's folder, if there is one].
         #[arg(long)]
         verdict: Option<PathBuf>,
+        /// Print the run's results as Markdown instead (one run): where it came from, an
+        /// overview of the main modes per scene, then each scene's table; for documentation.
+        #[arg(long, conflicts_with_all = ["history", "verdict"])]
+        markdown: bool,
+        /// With --markdown: also write each scene's error-against-run-time plot
+        /// (`<scene>-front.svg`) and a strip of crops (`<scene>-strip.png`) into this folder.
+        #[arg(long, requires = "markdown", value_name = "DIR")]
+        figures: Option<PathBuf>,
     },
     /// Join the shard runs of one suite (`run --shard I/N`) into one run with their images.
     Merge {
@@ -231,7 +239,10 @@ fn main() -> ExitCode {
         Command::Compare { runs, baseline, base_runs, out, fail_on, lenient } => {
             compare(&runs, &base_runs, &baseline, out.as_deref(), fail_on, lenient)
         }
-        Command::Report { runs, history, verdict } => report(&runs, history.as_deref(), verdict.as_deref()),
+        Command::Report { runs, markdown: true, figures, .. } => markdown_report(&runs, figures.as_deref()),
+        Command::Report { runs, history, verdict, .. } => {
+            report(&runs, history.as_deref(), verdict.as_deref())
+        }
         Command::Merge { runs, out } => merge(&runs, &out),
         Command::Graph { manifest, mode, tier, extra_samples, dot } => {
             match print_graph(&manifest, &mode, tier, extra_samples.into(), dot) {
@@ -480,6 +491,32 @@ fn compare(
         }
         Err(message) => fail(message),
     }
+}
+
+/// `report --markdown`: one run's results on stdout, figures into `figures`.
+fn markdown_report(runs: &[PathBuf], figures: Option<&Path>) -> u8 {
+    let [run] = runs else {
+        return fail("--markdown takes one run: its tables name it, and documentation quotes one run");
+    };
+    let (record, dir) = match aabench::record::load_run(run) {
+        Ok(run) => run,
+        Err(message) => return fail(message),
+    };
+    if let Some(folder) = figures {
+        match aabench::report::markdown::figures(&dir, &record, folder) {
+            Ok((written, left_out)) => {
+                for reason in left_out {
+                    tell!("aabench: warning: {reason}");
+                }
+                for file in written {
+                    tell!("wrote {file}");
+                }
+            }
+            Err(message) => return fail(message),
+        }
+    }
+    say!("{}", aabench::report::markdown::document(&record).trim_end());
+    exit::OK
 }
 
 fn report(runs: &[PathBuf], history: Option<&Path>, verdict: Option<&Path>) -> u8 {

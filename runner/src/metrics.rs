@@ -151,6 +151,9 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    /// MSE over a 4096² image equals an exact integer computation within a relative 10⁻¹², at 8
+    /// and at 10 bits. A running f64 sum had drifted by 3·10⁻¹⁰ here; squared code steps are
+    /// now summed in integers.
     #[test]
     fn mse_over_a_large_image_matches_exact_integer_arithmetic() {
         // 4096² pixels: the f64 running sum against an exact integer sum of squared code steps,

@@ -37,7 +37,7 @@ impl Tier {
 
     /// Timed repetitions of every mode, after warm-up. The quick tier is the CI gate's: on
     /// these machines one frame's time varies by about 10% from the next, so 25 repetitions
-    /// are what lets the gate catch a 25% slowdown with no false alarms (README, "The gate").
+    /// are what lets the gate catch a 25% slowdown with no false alarms (`docs/gate.md`).
     pub fn repetitions(self) -> u32 {
         match self {
             Tier::Quick => 25,

@@ -1,4 +1,10 @@
 //! The `aabench` binary as users and CI run it: real processes, real exit codes, real files.
+//!
+//! A run writes its record and images, renders and caches the ground truth, and records every
+//! frame's NaN, Inf and sample-count checks. A broken manifest fails alone with exit 3; no
+//! Vulkan adapter exits 2 with one line naming `mesa-vulkan-drivers`; bad arguments exit 2
+//! before any work; `gen-scenes` regenerates only stale files; Ctrl-C (a real SIGINT) keeps
+//! what was measured and `kill -9` leaves the scenes that finished.
 
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -227,6 +233,8 @@ fn a_ten_bit_pq_scene_writes_16_bit_pngs_and_reuses_its_cached_truth() {
     }
 }
 
+/// Each bad argument, `--warmup 4294967295` and negative numbers included, exits 2 with its
+/// reason, and nothing is written.
 #[test]
 fn bad_arguments_exit_two_before_any_work() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());

@@ -1,5 +1,7 @@
 //! The stiff scenes of scenes/, loaded as `aabench run` loads them: a scene far from the origin
 //! samples like its twin at the origin, and the Cornell box samples alike in mm, m and km.
+//! Every mode at tiny and odd resolutions, and the loop strategy's stall limit, are tested in
+//! `renderer/tests/adaptive.rs`.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -33,6 +35,10 @@ fn differing(a: &[u8], b: &[u8]) -> usize {
     a.iter().zip(b).filter(|(x, y)| x != y).count()
 }
 
+/// At adaptive-2x2 and adaptive-4x4 on the quick tier's 160×120, `far-depth` differs from its
+/// twin at the origin in at most 0.1% of sample counts (6 and 14 of 19 200 when measured), and
+/// `cornell-mm` and `cornell-km` differ from `cornell-m` in at most 0.1% as well. The far
+/// scene's HDR output is finite.
 #[test]
 fn far_from_the_origin_samples_like_at_the_origin_and_the_unit_does_not_matter() {
     let _serial = support::SERIAL.lock().unwrap_or_else(|p| p.into_inner());

@@ -1,14 +1,27 @@
 //! Fuzzing the loaders: valid seed files, randomly mutated (JSON values replaced, removed,
-//! duplicated and spliced; binary words overwritten; bits flipped; files cut short), fed to the
-//! glTF importer (as GLB, as `.gltf` with a `.bin` beside it, or with the buffer embedded as a
-//! data URI) and to the manifest loader (parse, validation, generation, import, camera and
-//! lights). Every input must end in a result that keeps the loader's promises or in an error
-//! that names the file: never a panic, never a hang, never a file written outside the
-//! manifest's folder. No device needed.
+//! duplicated and spliced; keys the seeds lack inserted; binary words overwritten; bits
+//! flipped; files cut short), fed to the glTF importer (as GLB, as `.gltf` with a `.bin` beside
+//! it, or with the buffer embedded as a data URI) and to the manifest loader (parse,
+//! validation, generation, import, camera and lights). Every input must end in a result that
+//! keeps the loader's promises or in an error that names the file: never a panic, never a
+//! hang, never a file written outside the manifest's folder. No device needed.
+//!
+//! Each input is loaded on its own thread with a 20 s limit. A loaded scene must keep the
+//! loader's promises (finite vertices, indices in range, whole triangles, textures of their
+//! stated size, a valid camera, finite lights); an error must name the file.
 //!
 //! `AABENCH_FUZZ_CASES` sets the number of inputs per loader (default 10 000, about ten
-//! seconds) and `AABENCH_FUZZ_SEED` the random seed (default: the clock); both are printed. A failing input stays in the temporary folder and proptest shrinks
-//! it to the fewest mutations that still fail.
+//! seconds, which is what CI runs) and `AABENCH_FUZZ_SEED` the random seed (default: the
+//! clock); both are printed, and a printed seed given back repeats the run. A failing input
+//! stays in the temporary folder and proptest shrinks it to the fewest mutations that still
+//! fail. 200 000 inputs per loader once ran with 0 panics and 0 hangs
+//! (`AABENCH_FUZZ_CASES=200000`, 221 s).
+//!
+//! The fuzzer found five panics, each fixed with a test: four in the gltf crate (now in
+//! `renderer/tests/import.rs`) and a light at 10³⁰⁸, finite in f64 and infinite in f32
+//! (manifest positions are now bounded to ±10¹², a unit test of `src/manifest.rs`). A review
+//! of its reach found four more that the first mutations could not produce (a short stride, a
+//! count of 0, %-escapes, multiplied node scales), which the insert mutation now can.
 
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
@@ -596,6 +609,10 @@ fn temporary_folder(name: &str) -> PathBuf {
     folder
 }
 
+/// The glTF importer on mutated seeds (a textured, masked, placed file with a camera, the
+/// generated Cornell box and degenerate scene) written as GLB, `.gltf` + `.bin` and `.gltf`
+/// with a data URI: every input loads into a sound scene or is refused naming the file, and
+/// more than 5% of inputs end each way.
 #[test]
 fn mutated_gltf_files_are_errors_or_sound_scenes_never_panics_or_hangs() {
     let folder = temporary_folder("gltf");
@@ -675,6 +692,10 @@ fn check_manifest(manifest: &Manifest) -> Result<bool, String> {
     Ok(true)
 }
 
+/// The manifest loader on mutated copies of the suite's manifests and of one for a user's own
+/// file: every input loads into a sound scene with a valid camera, finite lights and hashable
+/// inputs, or is refused naming the file; more than 5% of inputs end each way; and nothing is
+/// written beside the manifests' folder or at the absolute path the mutations offer.
 #[test]
 fn mutated_manifests_are_errors_or_sound_scenes_and_never_write_outside_their_folder() {
     let outside = temporary_folder("manifest");

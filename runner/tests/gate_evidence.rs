@@ -2,6 +2,9 @@
 //! time decided on too little evidence, baselines blessed from runs that cannot carry them,
 //! and time against the base build with the process as the unit. Real runs on lavapipe, real
 //! files and exit codes; the doctored records are copies of a real run with one field changed.
+//!
+//! The machine probes, the confidence reached by four processes a side, and a stray process
+//! are unit tests in `src/machine.rs` and `src/compare/ab.rs`.
 
 mod support;
 
@@ -72,6 +75,10 @@ fn scale_mode(record: &mut Value, id: &str, factor: f64) {
     }
 }
 
+/// A missing, non-folder or empty baseline folder, another platform's baselines only, a
+/// missing scene, a missing mode, a run without scenes, a shard and an unfinished run each fail
+/// compare (exit 1) with the reason in summary.md, junit.xml and verdict.json, and pass with
+/// `--lenient`, which still reports the reason.
 #[test]
 fn a_compare_that_compared_less_than_its_baselines_fails_and_lenient_reports_it() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
@@ -148,6 +155,8 @@ fn copy_dir(from: &Path, to: &Path) {
     }
 }
 
+/// With one repetition a side, every time check is `insufficient`, and bless warns that the
+/// modes have fewer than 5 timed frames.
 #[test]
 fn one_repetition_is_insufficient_and_bless_says_so() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
@@ -202,6 +211,9 @@ fn bless_refuses_a_run_given_twice_and_a_run_that_did_not_finish() {
     assert!(stderr(&compared_twice).contains("is given twice"), "{}", stderr(&compared_twice));
 }
 
+/// Against six base processes, six head processes of the same build pass with every time
+/// check unchanged, and a 25% slowdown of one stalled mode regresses that mode alone. Three
+/// processes a side are `insufficient`, never a verdict.
 #[test]
 fn time_is_gated_against_the_base_build_process_by_process() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
@@ -267,6 +279,8 @@ fn time_is_gated_against_the_base_build_process_by_process() {
     assert!(few.iter().all(|(_, o)| *o == "insufficient"), "{few:?}");
 }
 
+/// A slowdown fails the gate on the machine that blessed the baseline; from a machine whose ALU
+/// probe differs by 30% it is reported, not failed, while a quality drop there still fails.
 #[test]
 fn time_against_baselines_of_another_machine_is_informational() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());

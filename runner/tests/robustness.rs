@@ -1,5 +1,14 @@
 //! Bad input and hostile conditions, as users and CI meet them: every one a clear error that
 //! names the file and field, with nothing lost and nothing half-written.
+//!
+//! `generate` refuses to overwrite a user's file or the manifest itself, and generated paths
+//! that leave the manifest's folder are refused (a user's own file is read from anywhere:
+//! `own_scene.rs`). FIFOs as manifest or glTF are refused, not read forever. Degenerate
+//! cameras name their field, and a camera looking away fails unless the scene is declared
+//! `empty`. Closed pipes end output quietly; two runs started together into one folder keep
+//! both records; SIGTERM ends a run like Ctrl-C; a run started with SIGHUP ignored keeps
+//! timing; a mode over `--memory-limit` fails alone; a full disk is reported and leaves only
+//! whole files. The memory budget under a cgroup limit is a unit test in `src/run.rs`.
 
 use std::process::{Command, Stdio};
 
@@ -56,6 +65,9 @@ fn a_fifo_is_refused_rather_than_read_forever() {
     assert!(format!("{error:#}").contains("not a regular file"), "{error:#}");
 }
 
+/// A field of view of 10⁻³⁰⁰°, a position at 10³⁰⁸ and a target 10⁻²⁰⁰ from the position each
+/// fail naming their field. A valid camera looking away from everything fails the scene unless
+/// the manifest declares it `empty`.
 #[test]
 fn cameras_that_cannot_see_the_scene_fail_it_by_name() {
     let ws = Workspace::new("camera");
@@ -81,6 +93,8 @@ fn cameras_that_cannot_see_the_scene_fail_it_by_name() {
     aabench::scenes::load(&Manifest::load(&declared).unwrap()).expect("declared empty");
 }
 
+/// `aabench modes` piped into `head -1` does not panic, and with its standard output closed
+/// before the first byte it exits 0.
 #[test]
 fn broken_pipes_end_output_quietly() {
     let ws = Workspace::new("pipe");
@@ -199,6 +213,9 @@ fn two_runs_into_one_folder_in_the_same_second_keep_both_records() {
     }
 }
 
+/// SIGTERM ends a run like Ctrl-C: exit 130, the record `interrupted`, the next scene `not
+/// run`, and no temporary file left. A killed run's stale temporary from an hour ago is
+/// removed when the next run starts.
 #[test]
 fn sigterm_ends_the_run_like_ctrl_c_and_marks_later_scenes_not_run() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
@@ -239,6 +256,8 @@ fn sigterm_ends_the_run_like_ctrl_c_and_marks_later_scenes_not_run() {
     assert!(leftovers.is_empty(), "{leftovers:?}");
 }
 
+/// Under `--memory-limit 0.001` (1 MiB), reference-4x4 fails with its estimate while
+/// deferred-1x1 runs, and the run exits 3.
 #[test]
 fn a_mode_over_the_memory_limit_fails_alone_with_its_estimate() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
@@ -316,6 +335,10 @@ impl Drop for SmallDisk {
     }
 }
 
+/// On a 48 KiB tmpfs (mounted only when the tests run as root, as CI does; skipped otherwise)
+/// the run reports `No space left on device`, the modes whose images failed keep their PSNR
+/// against the truth, and every file left is whole (JSON parses, PNG and EXR decode) with no
+/// temporary left.
 #[test]
 fn a_full_disk_is_reported_and_leaves_only_whole_files() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());

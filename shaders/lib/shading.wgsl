@@ -78,7 +78,7 @@ const MAX_ANISOTROPY: f32 = 16.0;
 // Anisotropic filtering in the shader: up to MAX_ANISOTROPY trilinear taps spread along the
 // major axis of the footprint (c.dx, c.dy), each tap covering its share of that axis. lavapipe's
 // own sampler anisotropy costs about 100 times a trilinear lookup, taps taken here about their
-// number (README, "Measured facts").
+// number (`docs/lavapipe.md`).
 fn sample_filtered(textures: texture_2d_array<f32>, texture: i32, c: TexCoords) -> vec4<f32> {
     // The ratio of the axes, which alone this size enters, is the same in any unit.
     let size = vec2<f32>(textureDimensions(textures));

@@ -1,3 +1,11 @@
+//! The frame graph's compiler without a device. The seed paper's example graph (shadow map →
+//! geometry → deferred → blur → composite) takes five colour textures for its seven colour
+//! outputs, the lower bound, and never lets two live resources share an allocation; retained
+//! outputs never share; usage flags follow the accesses. A read before any write, a format or
+//! extent mismatch, a cycle, a wrong direction, an unknown port or pass and a doubly written
+//! input are rejected with messages naming passes and ports. Passes run in dependency order,
+//! then insertion order, and nothing is culled.
+
 use wgpu::TextureFormat::{Depth32Float, Rgba8Unorm, Rgba16Float};
 
 use super::*;

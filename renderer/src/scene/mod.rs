@@ -131,7 +131,7 @@ impl UvTransform {
     /// The extension's translation · rotation · scale: u′ = cos r · sx·u + sin r · sy·v + ox,
     /// v′ = −sin r · sx·u + cos r · sy·v + oy. The extension's GLSL sketch, read with GLSL's
     /// column-major constructors, turns the other way; Khronos' TextureTransformTest sample
-    /// (its green markers) and the viewers agree on this one (README, "Materials").
+    /// (its green markers) and the viewers agree on this one (`docs/own-scene.md`).
     pub fn new(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> UvTransform {
         let (sin, cos) = rotation.sin_cos();
         UvTransform {

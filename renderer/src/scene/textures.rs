@@ -2,7 +2,7 @@
 //! sRGB, with a linear view for data textures. Each texture keeps its own power-of-two side:
 //! when all share one side each fills a layer; otherwise the smaller ones are packed into
 //! layers of the largest side ("pages"), so one large texture does not make every small one as
-//! large (README, "Texture memory").
+//! large (`docs/own-scene.md`, "Texture memory").
 
 use super::{Encoding, Texture};
 

@@ -3,6 +3,7 @@
 //! SVG (drawn with plotters), images by relative paths into the run folder.
 
 pub mod html;
+pub mod markdown;
 pub mod plots;
 
 use std::collections::BTreeMap;
@@ -211,38 +212,63 @@ fn adaptive_costs(page: &mut String, run: &RunRecord) {
     page.push_str("</tbody></table>\n</section>\n");
 }
 
+/// The columns of a scene's mode table, in the HTML report and in Markdown alike.
+pub const MODE_COLUMNS: [&str; 11] = [
+    "mode",
+    "frame ms",
+    "interval ms",
+    "×1x1",
+    "samples %",
+    "MSE ×1e-5 vs truth",
+    "PSNR vs ref",
+    "PSNR vs truth",
+    "front",
+    "speed-up vs ref",
+    "efficiency",
+];
+
+/// One row of the mode table, unescaped, in the order of [`MODE_COLUMNS`]; `–` where the mode
+/// has no such number.
+pub fn mode_cells(mode: &ModeRecord) -> [String; 11] {
+    let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
+    let frame = mode.frame_ms.as_ref();
+    [
+        mode.mode.clone(),
+        cell(frame.map(|f| format!("{:.1}", f.median))),
+        cell(frame.map(|f| format!("{:.1}–{:.1}", f.ci_low, f.ci_high))),
+        cell(mode.ratio_to_deferred.map(|r| format!("{r:.2}"))),
+        cell(mode.samples.as_ref().map(|s| format!("{:.1}", s.shaded_percent))),
+        cell(mode.vs_ground_truth.as_ref().map(|q| format!("{:.3}", q.mse_e5))),
+        decibels(mode.vs_reference.as_ref()),
+        decibels(mode.vs_ground_truth.as_ref()),
+        cell(mode.front.as_ref().map(|place| place.describe())),
+        cell(mode.adaptive.as_ref().map(|a| format!("{:.2}×", a.speedup))),
+        cell(mode.adaptive.as_ref().map(|a| format!("{:.2}", a.efficiency))),
+    ]
+}
+
+/// A PSNR to two decimals, `∞` for identical images, `–` without a comparison.
+pub fn decibels(quality: Option<&crate::metrics::Quality>) -> String {
+    quality.map_or("–".into(), |q| {
+        let v = q.psnr_db.value();
+        if v.is_finite() { format!("{v:.2}") } else { "∞".into() }
+    })
+}
+
 fn mode_table(page: &mut String, scene: &SceneRecord, checks: &[&Check]) {
-    let gate = if checks.is_empty() { "" } else { "<th>gate</th>" };
-    let _ = writeln!(
-        page,
-        "<table><thead><tr><th>mode</th><th>frame ms</th><th>interval ms</th><th>×1x1</th><th>samples %</th>\
-         <th>MSE ×1e-5 vs truth</th><th>PSNR vs ref</th><th>PSNR vs truth</th><th>front</th>\
-         <th>speed-up vs ref</th><th>efficiency</th>{gate}</tr></thead><tbody>"
-    );
-    let db = |q: &Option<crate::metrics::Quality>| {
-        q.as_ref().map_or("–".into(), |q| {
-            let v = q.psnr_db.value();
-            if v.is_finite() { format!("{v:.2}") } else { "∞".into() }
-        })
-    };
+    page.push_str("<table><thead><tr>");
+    for column in MODE_COLUMNS {
+        let _ = write!(page, "<th>{}</th>", escape(column));
+    }
+    if !checks.is_empty() {
+        page.push_str("<th>gate</th>");
+    }
+    page.push_str("</tr></thead><tbody>\n");
     for mode in &scene.modes {
-        let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
-        let frame = mode.frame_ms.as_ref();
-        let _ = write!(
-            page,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
-            escape(&mode.mode),
-            cell(frame.map(|f| format!("{:.1}", f.median))),
-            cell(frame.map(|f| format!("{:.1}–{:.1}", f.ci_low, f.ci_high))),
-            cell(mode.ratio_to_deferred.map(|r| format!("{r:.2}"))),
-            cell(mode.samples.as_ref().map(|s| format!("{:.1}", s.shaded_percent))),
-            cell(mode.vs_ground_truth.as_ref().map(|q| format!("{:.3}", q.mse_e5))),
-            db(&mode.vs_reference),
-            db(&mode.vs_ground_truth),
-            cell(mode.front.as_ref().map(|place| escape(&place.describe()))),
-            cell(mode.adaptive.as_ref().map(|a| format!("{:.2}×", a.speedup))),
-            cell(mode.adaptive.as_ref().map(|a| format!("{:.2}", a.efficiency))),
-        );
+        page.push_str("<tr>");
+        for cell in mode_cells(mode) {
+            let _ = write!(page, "<td>{}</td>", escape(&cell));
+        }
         if !checks.is_empty() {
             match mode_outcome(checks, &mode.mode) {
                 Some((outcome, details)) => {
@@ -292,7 +318,7 @@ fn verdict_table(page: &mut String, checks: &[&Check]) {
 }
 
 /// The modes with an error against the truth and a frame time.
-fn error_points(scene: &SceneRecord) -> Vec<Point> {
+pub fn error_points(scene: &SceneRecord) -> Vec<Point> {
     scene
         .modes
         .iter()
@@ -424,11 +450,7 @@ fn crops(
 ) -> Result<(), String> {
     let Some(truth_file) = scene.truth.as_ref().and_then(|t| t.image.clone()) else { return Ok(()) };
     let Some(worst_file) = worst.images.display.clone() else { return Ok(()) };
-    let open = |relative: &str| {
-        image::open(run_dir.join(relative))
-            .map(|i| i.to_rgba8())
-            .map_err(|e| format!("{}: {e}", run_dir.join(relative).display()))
-    };
+    let open = |relative: &str| open_rgba(run_dir, relative);
     let (truth, worst_image) = (open(&truth_file)?, open(&worst_file)?);
     let sources: Vec<(String, String)> = std::iter::once((TRUTH_ID.to_string(), truth_file))
         .chain(modes.iter().filter_map(|mode| Some((mode.mode.clone(), mode.images.display.clone()?))))
@@ -478,6 +500,13 @@ fn crops(
     }
     page.push_str("</div>\n");
     Ok(())
+}
+
+/// Opens an image of a run by its path relative to the run's folder, as RGBA8.
+pub fn open_rgba(run_dir: &Path, relative: &str) -> Result<image::RgbaImage, String> {
+    image::open(run_dir.join(relative))
+        .map(|i| i.to_rgba8())
+        .map_err(|e| format!("{}: {e}", run_dir.join(relative).display()))
 }
 
 /// The top-left corner of the `side`×`side` window with the largest squared difference

@@ -7,7 +7,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-use crate::RenderError;
+use crate::error::RenderError;
 use crate::shaders::{self, Features};
 
 /// A WGSL file compiled on the device, with the naga module it was reflected from.
@@ -312,7 +312,7 @@ pub(crate) fn group_entries(resolved: &[Resolved]) -> Vec<Vec<wgpu::BindGroupLay
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Gpu;
+    use crate::gpu::Gpu;
 
     fn texture(gpu: &Gpu, format: wgpu::TextureFormat) -> wgpu::Texture {
         gpu.device.create_texture(&wgpu::TextureDescriptor {

@@ -16,7 +16,7 @@ use crate::passes::tonemap::TonemapNode;
 use crate::passes::{Node, gbuffer::PORTS as GBUFFER};
 use crate::scene::{Lighting, Scene, ShadowCubes};
 use crate::shaders::Features;
-use crate::{ExtraSamples, RenderError, RenderSettings};
+use crate::{adaptive::ExtraSamples, error::RenderError, settings::RenderSettings};
 
 /// What a scene asks of its frames, besides its mode.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -126,7 +126,7 @@ pub(crate) fn frame_graph(
             }
         }
         Technique::Adaptive(metrics, reconstruction) => {
-            let cells = reconstruction == crate::Reconstruction::Cells;
+            let cells = reconstruction == crate::adaptive::Reconstruction::Cells;
             let first = add(&mut g, ShadeFirstNode { m, stalled, cells, shadows: cubes });
             sources.feed(&mut g, first);
             g.retain(first, "first", Output::First);

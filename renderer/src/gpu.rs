@@ -4,16 +4,12 @@
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use crate::RenderError;
-
-/// The hint printed when no Vulkan adapter exists. It is the one line a user needs.
-pub const INSTALL_HINT: &str = "no Vulkan adapter found: install Mesa's lavapipe \
-     (Debian/Ubuntu: `sudo apt-get install mesa-vulkan-drivers`) and run again";
+use crate::error::RenderError;
 
 /// Everything about the machine that makes timings and images comparable. Two results with
 /// the same [`PlatformInfo::key`] were produced by the same driver, thread count, CPU model and
 /// build profile.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct PlatformInfo {
     pub adapter: String,
     pub driver: String,
@@ -25,7 +21,7 @@ pub struct PlatformInfo {
     pub cpu_model: String,
     pub cpu_cores: usize,
     /// `release` or `debug`: CPU maths that feeds the GPU may differ by an ulp between them.
-    pub build_profile: &'static str,
+    pub build_profile: String,
 }
 
 impl PlatformInfo {
@@ -124,7 +120,7 @@ impl Gpu {
             lp_num_threads: std::env::var("LP_NUM_THREADS").ok(),
             cpu_model: cpu_model(),
             cpu_cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
-            build_profile: if cfg!(debug_assertions) { "debug" } else { "release" },
+            build_profile: if cfg!(debug_assertions) { "debug" } else { "release" }.into(),
         };
         Ok(Gpu { device, queue, platform, errors })
     }

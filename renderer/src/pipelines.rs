@@ -5,8 +5,8 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use crate::RenderError;
 use crate::bindings::Shader;
+use crate::error::RenderError;
 use crate::scene::DrawClass;
 use crate::shaders::Features;
 

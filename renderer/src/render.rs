@@ -10,7 +10,7 @@ use crate::mode::{Mode, Technique};
 use crate::passes::{Allocated, BuildContext, Io, Pass};
 use crate::pipelines::Pipelines;
 use crate::scene::{Camera, FrameUniforms, GpuScene, Lighting, Scene, Tile};
-use crate::{RenderError, RenderSettings};
+use crate::{error::RenderError, settings::RenderSettings};
 
 /// Wall-clock time of one pass of one frame.
 #[derive(Debug, Clone, PartialEq)]
@@ -108,7 +108,7 @@ pub struct Truth {
 pub struct GBufferImages {
     pub width: u32,
     pub height: u32,
-    /// World-space normal and material index ([`crate::BACKGROUND_MATERIAL`]: no geometry),
+    /// World-space normal and material index ([`crate::passes::gbuffer::BACKGROUND_MATERIAL`]: no geometry),
     /// per sample.
     pub normal_material: Vec<[f32; 4]>,
     /// Linear view depth per sample, recovered from the depth buffer in f64.
@@ -254,8 +254,8 @@ impl SceneRenderer {
     /// limit: a longer stall would silently stop short.
     fn check_stall(&self, mode: Mode) -> Result<(), RenderError> {
         let stall = self.settings.stall_iterations;
-        let looped = self.settings.adaptive.extra_samples == crate::ExtraSamples::Loop;
-        let limit = crate::loop_stall_limit(mode.m);
+        let looped = self.settings.adaptive.extra_samples == crate::adaptive::ExtraSamples::Loop;
+        let limit = crate::settings::loop_stall_limit(mode.m);
         if looped && mode.stalled && matches!(mode.technique, Technique::Adaptive(..)) && stall > limit {
             return Err(RenderError::Limit(format!(
                 "{mode} with extra samples shaded in a loop honours at most {limit} stall iterations \

@@ -8,7 +8,7 @@
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
-use crate::RenderError;
+use crate::error::RenderError;
 
 macro_rules! sources {
     ($($name:literal),* $(,)?) => {

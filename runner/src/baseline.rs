@@ -11,9 +11,9 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::json;
 use crate::plan::Tier;
 use crate::record::{Platform, RunRecord, RunSettings, SceneRecord, Status};
+use crate::{fs, json};
 
 pub const BASELINE_SCHEMA: &str = "aabench.baseline/1";
 
@@ -137,13 +137,13 @@ fn write_together(dir: &Path, baselines: &[(PathBuf, Baseline)]) -> Result<(), S
     let assemble = || -> Result<(), String> {
         std::fs::create_dir_all(&staging).map_err(|e| error(&staging, e))?;
         if dir.is_dir() {
-            for file in json::files_in(dir)? {
+            for file in fs::files_in(dir)? {
                 let copy = staging.join(file.file_name().unwrap_or_default());
                 std::fs::copy(&file, &copy).map_err(|e| error(&file, e))?;
             }
         }
         for (target, baseline) in baselines {
-            json::write_atomic(&staging.join(target.file_name().unwrap_or_default()), baseline)?;
+            fs::write_json(&staging.join(target.file_name().unwrap_or_default()), baseline)?;
         }
         swap_into_place(&staging, dir)
             .map_err(|e| format!("{}: cannot move the new baselines in: {e}", dir.display()))
@@ -205,7 +205,7 @@ fn short_records(measured: &[&SceneRecord]) -> Option<String> {
         measured.iter().filter_map(|scene| scene.mode(id)?.frame_ms.as_ref().map(|f| f.samples.len())).sum()
     };
     let short: Vec<usize> =
-        first.modes.iter().map(|m| frames(&m.mode)).filter(|&n| n < crate::compare::MIN_FRAMES).collect();
+        first.modes.iter().map(|m| frames(&m.mode)).filter(|&n| n < crate::gate::MIN_FRAMES).collect();
     let fewest = short.iter().min()?;
     Some(format!(
         "{}: {} of {} modes have fewer than the {} timed frames a time verdict needs (the fewest {fewest}): \
@@ -213,7 +213,7 @@ fn short_records(measured: &[&SceneRecord]) -> Option<String> {
         first.name,
         short.len(),
         first.modes.len(),
-        crate::compare::MIN_FRAMES
+        crate::gate::MIN_FRAMES
     ))
 }
 
@@ -263,7 +263,7 @@ fn same_images(measured: &[&SceneRecord]) -> Result<(), String> {
 
 /// Why an existing file at `target` must not be replaced by a baseline of `run`, if it must not.
 fn refusal(target: &Path, run: &RunRecord) -> Option<String> {
-    let text = match json::read_regular(target) {
+    let text = match fs::read_regular(target) {
         Ok(text) => text,
         Err(error) if error.kind() == std::io::ErrorKind::NotFound => return None,
         Err(error) => return Some(format!("the existing file cannot be read ({error})")),
@@ -352,7 +352,7 @@ impl BaselineSet {
         let Some((key, dir)) = chosen else {
             return Ok(none(format!("{} holds no baselines for the {tier} tier", root.display())));
         };
-        let baselines = json::files_in(&dir)?.iter().map(|file| load(file)).collect::<Result<Vec<_>, _>>()?;
+        let baselines = fs::files_in(&dir)?.iter().map(|file| load(file)).collect::<Result<Vec<_>, _>>()?;
         let absent = baselines.is_empty().then(|| format!("{} holds no baseline files", dir.display()));
         Ok(BaselineSet {
             same_platform: key == run.platform.key,

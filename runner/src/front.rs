@@ -10,34 +10,11 @@
 //! simulate another shader's cost, so they are measured among the stalled modes only, and
 //! plain modes among the plain ones.
 
-use serde::{Deserialize, Serialize};
-
-use crate::record::{ModeRecord, Status};
+use crate::record::{Dominator, FrontPlace, ModeRecord, Status};
 
 /// PSNRs against the truth closer than this are a tie: the images are as near the truth as
 /// each other, whatever the last digits say.
 pub const PSNR_TIE_DB: f64 = 0.05;
-
-/// A mode's place against its scene's front.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FrontPlace {
-    /// No mode of the scene with the same stall dominates it.
-    pub on_front: bool,
-    /// The modes that dominate it, the most dominating (largest PSNR gain, then fastest) first.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub dominated_by: Vec<Dominator>,
-}
-
-/// A mode that is faster and at least as near the truth, or as fast and nearer (see
-/// [`FrontPoint::dominates`]).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Dominator {
-    pub mode: String,
-    /// Its median frame time over the dominated mode's: below 1 where it is faster.
-    pub time_ratio: f64,
-    /// Its PSNR against the truth less the dominated mode's, in dB (≥ −PSNR_TIE_DB).
-    pub psnr_gain_db: f64,
-}
 
 /// What the front reads of a mode: its frame-time median and interval (ms) and its PSNR
 /// against the truth (dB, +∞ for an image equal to the truth).
@@ -111,23 +88,6 @@ pub fn place(modes: &mut [ModeRecord]) {
         .collect();
     for (mode, place) in modes.iter_mut().zip(places) {
         mode.front = place;
-    }
-}
-
-impl FrontPlace {
-    /// One phrase: `on the front`, or the first dominator with its margins.
-    pub fn describe(&self) -> String {
-        match self.dominated_by.first() {
-            None => "on the front".into(),
-            Some(d) => {
-                let others = match self.dominated_by.len() - 1 {
-                    0 => String::new(),
-                    1 => " and 1 more".into(),
-                    n => format!(" and {n} more"),
-                };
-                format!("behind {} ({:+.2} dB, {:.2}× time){others}", d.mode, d.psnr_gain_db, d.time_ratio)
-            }
-        }
     }
 }
 

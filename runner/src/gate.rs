@@ -11,6 +11,11 @@ use serde::{Deserialize, Serialize};
 /// platform key the `*_cross_platform` tolerances apply, which still catch a 0.5 dB drop.
 /// Times are noisy: a time metric moves only when the whole confidence interval of its change
 /// is past the threshold.
+/// The fewest timed frames of a mode, on each side, from which a time check against committed
+/// baselines is decided. With fewer, the interval is the few ratios themselves: one frame a
+/// side gave false regressions in 3 of 4 compares of a build with itself.
+pub const MIN_FRAMES: usize = 5;
+
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Tolerances {

@@ -4,7 +4,6 @@
 use std::path::{Path, PathBuf};
 
 use aabench_renderer::DisplayImage;
-use aabench_renderer::scene::write::write_atomic;
 use anyhow::Context;
 
 /// Writes RGBA8 pixels as PNG.
@@ -24,7 +23,7 @@ fn encode_png(
     let mut bytes = std::io::Cursor::new(Vec::new());
     image::write_buffer_with_format(&mut bytes, samples, width, height, color, image::ImageFormat::Png)
         .with_context(|| format!("{}: PNG encoding", path.display()))?;
-    write_atomic(path, bytes.get_ref()).with_context(|| format!("{}: write", path.display()))
+    crate::fs::write(path, bytes.get_ref()).map_err(anyhow::Error::msg)
 }
 
 /// Writes a display image as PNG: 8-bit, or 16-bit for 10-bit code values (each scaled to

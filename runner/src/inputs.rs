@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use aabench_renderer::scene::percent_decode;
+use crate::fs::percent_decode;
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};

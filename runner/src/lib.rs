@@ -4,12 +4,14 @@
 pub mod baseline;
 pub mod compare;
 pub mod front;
+pub mod fs;
 pub mod gate;
 pub mod images;
 pub mod inputs;
 pub mod json;
 pub mod machine;
 pub mod manifest;
+pub mod markup;
 pub mod merge;
 pub mod metrics;
 pub mod plan;

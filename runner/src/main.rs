@@ -4,10 +4,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Duration;
 
 use aabench::manifest::Manifest;
-use aabench::plan::{self, RunPlan, Tier};
+use aabench::plan::{self, ExtraSamplesArg, RunArgs, Tier};
 use aabench::progress::Progress;
 use aabench::record::Status;
 use aabench::{baseline, compare, exit, run, scenes};
@@ -168,67 +167,6 @@ enum Command {
     Modes,
 }
 
-#[derive(Debug, clap::Args)]
-struct RunArgs {
-    /// Manifests or folders of manifests [default: scenes/].
-    paths: Vec<PathBuf>,
-    /// quick: 256×192 for the suite's scenes, 25 repetitions (the CI gate); nightly: 1024×768,
-    /// 7 repetitions.
-    #[arg(long, value_enum, default_value = "quick")]
-    tier: Tier,
-    /// Comma-separated mode ids or groups: baseline, adaptive, ablation, variant [default: the tier's].
-    #[arg(long)]
-    modes: Option<String>,
-    /// Folder that receives the run's folder.
-    #[arg(long, default_value = "reports")]
-    out: PathBuf,
-    /// Timed repetitions per mode, 1 to 10 000 [default: the tier's].
-    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=10_000))]
-    repetitions: Option<u32>,
-    /// Untimed rounds before timing (lavapipe compiles shaders at the first draw); at most 100.
-    #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(0..=100))]
-    warmup: u32,
-    /// How adaptive modes shade their extra samples: compact (a dense list, the default) or
-    /// loop (inside each pixel's invocation, the paper's simplest variant).
-    #[arg(long, value_enum, default_value = "compact")]
-    extra_samples: ExtraSamplesArg,
-    /// Render only this slice of the scenes: `I/N` takes scenes I, I+N, I+2N, … (in manifest
-    /// order). `aabench merge` joins the N shard runs into one.
-    #[arg(long, value_name = "I/N", allow_hyphen_values = true)]
-    shard: Option<String>,
-    /// Folder that caches ground truths [default: cache/truth/ beside each manifest].
-    #[arg(long, value_name = "DIR")]
-    truth_cache: Option<PathBuf>,
-    /// Memory the render targets of one scene's modes may take together, in GiB; a mode that
-    /// would pass it fails before allocating, with its estimate [default: 90% of the memory
-    /// available when the scene starts].
-    #[arg(long, value_name = "GIB", allow_negative_numbers = true)]
-    memory_limit: Option<f64>,
-    /// Longest a single frame may take, in seconds.
-    #[arg(
-        long,
-        value_name = "SECONDS",
-        allow_negative_numbers = true,
-        default_value_t = run::default_frame_timeout().as_secs_f64()
-    )]
-    frame_timeout: f64,
-}
-
-#[derive(Debug, Clone, Copy, clap::ValueEnum)]
-enum ExtraSamplesArg {
-    Compact,
-    Loop,
-}
-
-impl From<ExtraSamplesArg> for ExtraSamples {
-    fn from(arg: ExtraSamplesArg) -> ExtraSamples {
-        match arg {
-            ExtraSamplesArg::Compact => ExtraSamples::Compact,
-            ExtraSamplesArg::Loop => ExtraSamples::Loop,
-        }
-    }
-}
-
 fn main() -> ExitCode {
     quiet_mesa_device_select();
     let cli = Cli::parse();
@@ -266,8 +204,16 @@ fn fail(message: impl std::fmt::Display) -> u8 {
 }
 
 fn run_command(args: RunArgs) -> u8 {
-    let plan = match make_plan(&args) {
-        Ok(plan) => plan,
+    let plan = match args.plan() {
+        Ok((plan, stale)) => {
+            if stale > 0 {
+                tell!(
+                    "aabench: removed {stale} temporary file(s) that killed runs left in {}",
+                    args.out.display()
+                );
+            }
+            plan
+        }
         Err(message) => return fail(message),
     };
     let runtime = match tokio::runtime::Builder::new_multi_thread().enable_all().build() {
@@ -338,54 +284,6 @@ fn hangup_ignored() -> bool {
         libc::sigaction(libc::SIGHUP, std::ptr::null(), &mut current) == 0
             && current.sa_sigaction == libc::SIG_IGN
     }
-}
-
-fn make_plan(args: &RunArgs) -> Result<RunPlan, String> {
-    let modes = match &args.modes {
-        Some(list) => plan::parse_modes(list)?,
-        None => args.tier.default_modes(),
-    };
-    // A day bounds it: `Duration` cannot hold every f64, and no frame takes longer.
-    let frame_timeout = Duration::try_from_secs_f64(args.frame_timeout)
-        .ok()
-        .filter(|t| !t.is_zero() && *t <= Duration::from_secs(86_400))
-        .ok_or_else(|| {
-            format!(
-                "--frame-timeout {} must be a positive number of seconds, at most 86400",
-                args.frame_timeout
-            )
-        })?;
-    let repetitions = args.repetitions.unwrap_or_else(|| args.tier.repetitions());
-    let memory_limit = args
-        .memory_limit
-        .map(|gib| {
-            (gib.is_finite() && gib > 0.0 && gib <= 1e6)
-                .then(|| (gib * f64::from(1u32 << 30)) as u64)
-                .ok_or_else(|| format!("--memory-limit {gib} must be a positive number of GiB"))
-        })
-        .transpose()?;
-    let shard = args.shard.as_deref().map(plan::parse_shard).transpose()?;
-    let manifests = plan::find_manifests(&args.paths)?;
-    // Temporaries of killed runs (run folder, scene folders) go before this run adds its own.
-    let stale = plan::remove_stale_temporaries(&args.out, 2);
-    if stale > 0 {
-        tell!("aabench: removed {stale} temporary file(s) that killed runs left in {}", args.out.display());
-    }
-    let (run_id, run_dir) = plan::create_run_dir(&args.out, &plan::new_run_id(args.tier, shard))?;
-    Ok(RunPlan {
-        tier: args.tier,
-        scenes: plan::select_shard(plan::load_scenes(&manifests), shard),
-        modes,
-        repetitions,
-        warmup: args.warmup,
-        frame_timeout,
-        extra_samples: args.extra_samples.into(),
-        truth_cache: args.truth_cache.clone(),
-        shard,
-        memory_limit,
-        run_dir,
-        run_id,
-    })
 }
 
 fn gen_scenes(paths: &[PathBuf], force: bool) -> u8 {

@@ -54,6 +54,21 @@ fn nightly_resolution() -> [u32; 2] {
     [1024, 768]
 }
 
+impl Resolutions {
+    /// Each tier's size within [1, MAX_RESOLUTION] a side; the field is the tier.
+    fn check(&self) -> Result<(), Invalid> {
+        for (tier, [width, height]) in [("quick", self.quick), ("nightly", self.nightly)] {
+            if width == 0 || height == 0 || width > MAX_RESOLUTION || height > MAX_RESOLUTION {
+                return Err((
+                    tier.into(),
+                    format!("{width}×{height} must be between 1 and {MAX_RESOLUTION} on each side"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 impl Default for Resolutions {
     fn default() -> Self {
         Resolutions { quick: quick_resolution(), nightly: nightly_resolution() }
@@ -104,6 +119,20 @@ pub struct CameraSpec {
     pub far: Option<f64>,
 }
 
+impl Generate {
+    /// A known generator, a scale within [1e-6, 1e6] and an offset within ±1e9.
+    fn check(&self) -> Result<(), Invalid> {
+        self.generator.parse::<Generator>().map_err(|message| ("generator".to_string(), message))?;
+        if !(1e-6..=1e6).contains(&self.scale) {
+            return Err(("scale".into(), format!("{} must be within [1e-6, 1e6]", self.scale)));
+        }
+        if !self.offset.iter().all(|c| c.abs() <= 1e9) {
+            return Err(("offset".into(), format!("{:?} must be finite, each within ±1e9", self.offset)));
+        }
+        Ok(())
+    }
+}
+
 impl CameraSpec {
     /// The renderer's camera; an omitted far plane is infinite until the scene's bounds set it.
     pub fn camera(&self) -> Camera {
@@ -142,6 +171,16 @@ pub struct LightSpec {
 }
 
 impl LightSpec {
+    /// The light's own fields, and shadow settings only on a light that casts shadows.
+    fn check(&self) -> Result<(), Invalid> {
+        check_light(DVec3::from(self.position), self.color, self.intensity, Some(self.range))
+            .map_err(|(name, why)| (name.to_string(), why))?;
+        if self.shadow.is_some() && !self.casts_shadows {
+            return Err(("shadow".into(), "is given but casts_shadows is false".into()));
+        }
+        Ok(())
+    }
+
     /// The light's shadow, when it casts one.
     pub fn shadow(&self) -> Option<Shadow> {
         self.casts_shadows.then(|| self.shadow.unwrap_or_default().settings())
@@ -245,6 +284,27 @@ pub struct AdaptiveSpec {
 }
 
 impl AdaptiveSpec {
+    /// The metric constants within [0, MAX_METRIC_CONSTANT], the thresholds within [0, 1].
+    fn check(&self) -> Result<(), Invalid> {
+        let adaptive = self.settings();
+        let constants = [
+            ("c_depth", adaptive.c_depth),
+            ("c_normal", adaptive.c_normal),
+            ("c_shading", adaptive.c_shading),
+        ];
+        for (name, value) in constants {
+            if !(0.0..=MAX_METRIC_CONSTANT).contains(&value) {
+                return Err((name.into(), format!("{value} must be within [0, {MAX_METRIC_CONSTANT:e}]")));
+            }
+        }
+        for (name, value) in [("t_min", adaptive.t_min), ("t_edge", adaptive.t_edge)] {
+            if !(0.0..=1.0).contains(&value) {
+                return Err((name.into(), format!("{value} must be in [0, 1]")));
+            }
+        }
+        Ok(())
+    }
+
     pub fn settings(&self) -> AdaptiveSettings {
         let d = AdaptiveSettings::default();
         let depth_metric = match self.depth_metric {
@@ -455,6 +515,14 @@ pub const MAX_STALL_ITERATIONS: u32 = aabench_renderer::MAX_STALL_ITERATIONS;
 /// The largest output side accepted: 4×4 supersampling must still fit lavapipe's 16384 limit.
 pub const MAX_RESOLUTION: u32 = 4096;
 
+/// A field that failed its check, relative to its section, and why.
+type Invalid = (String, String);
+
+/// Prefixes a section's failed field with the section's own path (`lights[2]`, `adaptive`).
+fn within(section: &str) -> impl Fn(Invalid) -> Invalid + '_ {
+    move |(field, why)| (format!("{section}.{field}"), why)
+}
+
 impl Manifest {
     /// Reads and validates a manifest file.
     pub fn load(path: &Path) -> Result<Manifest, ManifestError> {
@@ -464,7 +532,7 @@ impl Manifest {
             message: format!("cannot read: {message}"),
         };
         // A FIFO would block the run forever.
-        aabench_renderer::scene::regular_file(path).map_err(unreadable)?;
+        crate::fs::regular_file(path).map_err(unreadable)?;
         let text = std::fs::read_to_string(path).map_err(|e| unreadable(e.to_string()))?;
         Self::parse(path, &text)
     }
@@ -549,32 +617,10 @@ impl Manifest {
                 format!("`{}` must be non-empty lowercase letters, digits, - or _", self.name),
             );
         }
-        if let Some(generate) = &self.generate
-            && let Err(message) = generate.generator.parse::<Generator>()
-        {
-            return fail("generate.generator", message);
-        }
         if let Some(generate) = &self.generate {
-            if !(1e-6..=1e6).contains(&generate.scale) {
-                return fail("generate.scale", format!("{} must be within [1e-6, 1e6]", generate.scale));
-            }
-            if !generate.offset.iter().all(|c| c.abs() <= 1e9) {
-                return fail(
-                    "generate.offset",
-                    format!("{:?} must be finite, each within ±1e9", generate.offset),
-                );
-            }
+            generate.check().map_err(within("generate"))?;
         }
-        for (tier, [width, height]) in
-            [("quick", self.resolution.quick), ("nightly", self.resolution.nightly)]
-        {
-            if width == 0 || height == 0 || width > MAX_RESOLUTION || height > MAX_RESOLUTION {
-                return fail(
-                    &format!("resolution.{tier}"),
-                    format!("{width}×{height} must be between 1 and {MAX_RESOLUTION} on each side"),
-                );
-            }
-        }
+        self.resolution.check().map_err(within("resolution"))?;
         // A file the user names is read wherever it lies; one that aabench generates is written,
         // and writes stay inside the manifest's folder.
         if self.generate.is_some() && escapes(&self.gltf) {
@@ -605,12 +651,7 @@ impl Manifest {
             );
         }
         for (i, light) in self.lights.iter().enumerate() {
-            let field = |name: &str| format!("lights[{i}].{name}");
-            check_light(DVec3::from(light.position), light.color, light.intensity, Some(light.range))
-                .or_else(|(name, why)| fail(&field(name), why))?;
-            if light.shadow.is_some() && !light.casts_shadows {
-                return fail(&field("shadow"), "is given but casts_shadows is false".into());
-            }
+            light.check().map_err(within(&format!("lights[{i}]")))?;
         }
         let shadows: Vec<(String, Shadow)> = self
             .lights
@@ -646,24 +687,7 @@ impl Manifest {
                 ),
             );
         }
-        let adaptive = self.adaptive.settings();
-        for (name, value) in [
-            ("c_depth", adaptive.c_depth),
-            ("c_normal", adaptive.c_normal),
-            ("c_shading", adaptive.c_shading),
-        ] {
-            if !(0.0..=MAX_METRIC_CONSTANT).contains(&value) {
-                return fail(
-                    &format!("adaptive.{name}"),
-                    format!("{value} must be within [0, {MAX_METRIC_CONSTANT:e}]"),
-                );
-            }
-        }
-        for (name, value) in [("t_min", adaptive.t_min), ("t_edge", adaptive.t_edge)] {
-            if !(0.0..=1.0).contains(&value) {
-                return fail(&format!("adaptive.{name}"), format!("{value} must be in [0, 1]"));
-            }
-        }
+        self.adaptive.check().map_err(within("adaptive"))?;
         if let Some(exposure) = self.tonemap.exposure
             && !(exposure > 0.0 && exposure <= MAX_EXPOSURE)
         {

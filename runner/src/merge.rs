@@ -28,7 +28,7 @@ pub fn merge(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecord, S
                 copy_folder(&dir.join(&scene.name), &staging.join(&scene.name))?;
             }
         }
-        crate::json::write_atomic(&staging.join("run.json"), &merged)?;
+        crate::fs::write_json(&staging.join("run.json"), &merged)?;
         // rename(2) replaces an empty folder, so an empty `out` is fine too.
         std::fs::rename(&staging, out)
             .map_err(|e| format!("{}: cannot move the merged run in: {e}", out.display()))

@@ -8,7 +8,133 @@ use aabench_renderer::{ExtraSamples, Mode};
 use serde::{Deserialize, Serialize};
 
 use crate::manifest::{Manifest, ManifestError};
-use crate::record::Shard;
+
+/// One slice of a run: scene k of the plan (in manifest order) belongs to shard k mod N + 1.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    /// 1-based.
+    pub index: u32,
+    pub count: u32,
+}
+
+/// Longest a single frame may take unless `--frame-timeout` says.
+pub fn default_frame_timeout() -> Duration {
+    Duration::from_secs(120)
+}
+
+#[derive(Debug, clap::Args)]
+pub struct RunArgs {
+    /// Manifests or folders of manifests [default: scenes/].
+    pub paths: Vec<PathBuf>,
+    /// quick: 256×192 for the suite's scenes, 25 repetitions (the CI gate); nightly: 1024×768,
+    /// 7 repetitions.
+    #[arg(long, value_enum, default_value = "quick")]
+    pub tier: Tier,
+    /// Comma-separated mode ids or groups: baseline, adaptive, ablation, variant [default: the tier's].
+    #[arg(long)]
+    pub modes: Option<String>,
+    /// Folder that receives the run's folder.
+    #[arg(long, default_value = "reports")]
+    pub out: PathBuf,
+    /// Timed repetitions per mode, 1 to 10 000 [default: the tier's].
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub repetitions: Option<u32>,
+    /// Untimed rounds before timing (lavapipe compiles shaders at the first draw); at most 100.
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(0..=100))]
+    pub warmup: u32,
+    /// How adaptive modes shade their extra samples: compact (a dense list, the default) or
+    /// loop (inside each pixel's invocation, the paper's simplest variant).
+    #[arg(long, value_enum, default_value = "compact")]
+    pub extra_samples: ExtraSamplesArg,
+    /// Render only this slice of the scenes: `I/N` takes scenes I, I+N, I+2N, … (in manifest
+    /// order). `aabench merge` joins the N shard runs into one.
+    #[arg(long, value_name = "I/N", allow_hyphen_values = true)]
+    pub shard: Option<String>,
+    /// Folder that caches ground truths [default: cache/truth/ beside each manifest].
+    #[arg(long, value_name = "DIR")]
+    pub truth_cache: Option<PathBuf>,
+    /// Memory the render targets of one scene's modes may take together, in GiB; a mode that
+    /// would pass it fails before allocating, with its estimate [default: 90% of the memory
+    /// available when the scene starts].
+    #[arg(long, value_name = "GIB", allow_negative_numbers = true)]
+    pub memory_limit: Option<f64>,
+    /// Longest a single frame may take, in seconds.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        allow_negative_numbers = true,
+        default_value_t = default_frame_timeout().as_secs_f64()
+    )]
+    pub frame_timeout: f64,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum ExtraSamplesArg {
+    Compact,
+    Loop,
+}
+
+impl From<ExtraSamplesArg> for ExtraSamples {
+    fn from(arg: ExtraSamplesArg) -> ExtraSamples {
+        match arg {
+            ExtraSamplesArg::Compact => ExtraSamples::Compact,
+            ExtraSamplesArg::Loop => ExtraSamples::Loop,
+        }
+    }
+}
+
+impl RunArgs {
+    /// The checked plan, its run folder created, and how many temporaries of killed runs were
+    /// removed from `--out` first.
+    pub fn plan(&self) -> Result<(RunPlan, usize), String> {
+        let args = self;
+        let modes = match &args.modes {
+            Some(list) => parse_modes(list)?,
+            None => args.tier.default_modes(),
+        };
+        // A day bounds it: `Duration` cannot hold every f64, and no frame takes longer.
+        let frame_timeout = Duration::try_from_secs_f64(args.frame_timeout)
+            .ok()
+            .filter(|t| !t.is_zero() && *t <= Duration::from_secs(86_400))
+            .ok_or_else(|| {
+                format!(
+                    "--frame-timeout {} must be a positive number of seconds, at most 86400",
+                    args.frame_timeout
+                )
+            })?;
+        let repetitions = args.repetitions.unwrap_or_else(|| args.tier.repetitions());
+        let memory_limit = args
+            .memory_limit
+            .map(|gib| {
+                (gib.is_finite() && gib > 0.0 && gib <= 1e6)
+                    .then(|| (gib * f64::from(1u32 << 30)) as u64)
+                    .ok_or_else(|| format!("--memory-limit {gib} must be a positive number of GiB"))
+            })
+            .transpose()?;
+        let shard = args.shard.as_deref().map(parse_shard).transpose()?;
+        let manifests = find_manifests(&args.paths)?;
+        // Temporaries of killed runs (run folder, scene folders) go before this run adds its own.
+        let stale = remove_stale_temporaries(&args.out, 2);
+        let (run_id, run_dir) = create_run_dir(&args.out, &new_run_id(args.tier, shard))?;
+        Ok((
+            RunPlan {
+                tier: args.tier,
+                scenes: select_shard(load_scenes(&manifests), shard),
+                modes,
+                repetitions,
+                warmup: args.warmup,
+                frame_timeout,
+                extra_samples: args.extra_samples.into(),
+                truth_cache: args.truth_cache.clone(),
+                shard,
+                memory_limit,
+                run_dir,
+                run_id,
+            },
+            stale,
+        ))
+    }
+}
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
@@ -152,7 +278,7 @@ pub fn find_manifests(paths: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
     let mut found = Vec::new();
     for path in paths {
         if path.is_dir() {
-            let files = crate::json::files_in(&path)?;
+            let files = crate::fs::files_in(&path)?;
             if files.is_empty() {
                 return Err(format!("{}: no *.json manifests in this folder", path.display()));
             }
@@ -200,7 +326,7 @@ pub fn new_run_id(tier: Tier, shard: Option<Shard>) -> String {
 /// name: creation itself is the test, so two runs started in the same second never share one.
 /// Returns the id taken and the folder.
 pub fn create_run_dir(out: &Path, id: &str) -> Result<(String, PathBuf), String> {
-    crate::json::output_folder(out).map_err(|e| format!("--out {e}"))?;
+    crate::fs::output_folder(out).map_err(|e| format!("--out {e}"))?;
     for n in 1..10_000 {
         let candidate = if n == 1 { id.to_string() } else { format!("{id}-{n}") };
         let dir = out.join(&candidate);

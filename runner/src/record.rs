@@ -8,6 +8,7 @@ use crate::gate::Tolerances;
 use crate::inputs::SceneInputs;
 use crate::machine::Machine;
 use crate::metrics::{FrameChecks, Quality, SampleStats};
+pub use crate::plan::Shard;
 use crate::plan::Tier;
 use crate::stats::Summary;
 use crate::truth::TruthRecord;
@@ -63,27 +64,13 @@ pub struct RunRecord {
     pub scenes: Vec<SceneRecord>,
 }
 
-/// One slice of a run: scene k of the plan (in manifest order) belongs to shard k mod N + 1.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Shard {
-    /// 1-based.
-    pub index: u32,
-    pub count: u32,
-}
-
-/// The machine: results with the same `key` are comparable in absolute time.
+/// The machine: results with the same `key` are comparable in absolute time. The renderer's
+/// [`PlatformInfo`] is recorded as it is, its fields beside the key in run.json.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Platform {
     pub key: String,
-    pub adapter: String,
-    pub driver: String,
-    pub driver_info: String,
-    pub backend: String,
-    pub device_type: String,
-    pub lp_num_threads: Option<String>,
-    pub cpu_model: String,
-    pub cpu_cores: usize,
-    pub build_profile: String,
+    #[serde(flatten)]
+    pub info: PlatformInfo,
     /// The CPU's identity and calibration (absent in records from before it): decides whether
     /// time is gated against a baseline blessed on another machine of the same key.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -92,19 +79,7 @@ pub struct Platform {
 
 impl From<&PlatformInfo> for Platform {
     fn from(info: &PlatformInfo) -> Platform {
-        Platform {
-            key: info.key(),
-            adapter: info.adapter.clone(),
-            driver: info.driver.clone(),
-            driver_info: info.driver_info.clone(),
-            backend: info.backend.clone(),
-            device_type: info.device_type.clone(),
-            lp_num_threads: info.lp_num_threads.clone(),
-            cpu_model: info.cpu_model.clone(),
-            cpu_cores: info.cpu_cores,
-            build_profile: info.build_profile.to_string(),
-            machine: None,
-        }
+        Platform { key: info.key(), info: info.clone(), machine: None }
     }
 }
 
@@ -225,7 +200,7 @@ pub struct ModeRecord {
     /// Its place against the scene's error-against-run-time front, among the modes with the
     /// same stall (absent where it has no frame time or no PSNR against the truth).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub front: Option<crate::front::FrontPlace>,
+    pub front: Option<FrontPlace>,
     /// The mode's compiled pass graph: passes run and the allocations they share.
     #[serde(default)]
     pub graph: Option<GraphRecord>,
@@ -352,4 +327,43 @@ pub fn fnv1a(parts: &[&[u8]]) -> String {
         hash = hash.wrapping_mul(0x0100_0000_01b3);
     }
     format!("{hash:016x}")
+}
+
+/// A mode's place against its scene's front.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrontPlace {
+    /// No mode of the scene with the same stall dominates it.
+    pub on_front: bool,
+    /// The modes that dominate it, the most dominating (largest PSNR gain, then fastest) first.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub dominated_by: Vec<Dominator>,
+}
+
+/// A mode that is faster and at least as near the truth, or as fast and nearer (see
+/// `front::FrontPoint::dominates`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Dominator {
+    pub mode: String,
+    /// Its median frame time over the dominated mode's: below 1 where it is faster.
+    pub time_ratio: f64,
+    /// Its PSNR against the truth less the dominated mode's, in dB (at least minus the front
+    /// module's PSNR tie).
+    pub psnr_gain_db: f64,
+}
+
+impl FrontPlace {
+    /// One phrase: `on the front`, or the first dominator with its margins.
+    pub fn describe(&self) -> String {
+        match self.dominated_by.first() {
+            None => "on the front".into(),
+            Some(d) => {
+                let others = match self.dominated_by.len() - 1 {
+                    0 => String::new(),
+                    1 => " and 1 more".into(),
+                    n => format!(" and {n} more"),
+                };
+                format!("behind {} ({:+.2} dB, {:.2}× time){others}", d.mode, d.psnr_gain_db, d.time_ratio)
+            }
+        }
+    }
 }

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant, SystemTime};
+use std::time::{Instant, SystemTime};
 
 use aabench_renderer::{
     AdaptiveSettings, DisplayImage, ExtraSamples, FrameImages, FrameTiming, Mode, RenderSettings, Technique,
@@ -122,7 +122,7 @@ fn now() -> String {
 }
 
 fn write_record(path: &Path, record: &RunRecord) -> anyhow::Result<()> {
-    crate::json::write_atomic(path, record).map_err(anyhow::Error::msg)
+    crate::fs::write_json(path, record).map_err(anyhow::Error::msg)
 }
 
 fn failed_scene(entry: &SceneEntry, error: String) -> SceneRecord {
@@ -197,6 +197,9 @@ pub fn render_settings(manifest: &Manifest, tier: Tier, extra_samples: ExtraSamp
     }
 }
 
+/// One scene, in its phases: load the file, upload it (and meter its exposure), render the
+/// ground truth, prepare every mode, run the timed rounds, free the device, then write images
+/// and metrics. A phase that fails ends the scene with its error; the run goes on.
 async fn run_scene(
     worker: &mut Worker,
     plan: &RunPlan,
@@ -211,14 +214,61 @@ async fn run_scene(
     if let Err(error) = std::fs::create_dir_all(&scene_dir) {
         return fail(record, format!("{}: {error}", scene_dir.display()));
     }
+    let (loaded, inputs) = match load(manifest, progress, &mut record).await {
+        Ok(loaded) => loaded,
+        Err(error) => return fail(record, error),
+    };
+    match upload(worker, plan, manifest, loaded, progress).await {
+        Ok((budget, exposure)) => {
+            record.memory_limit_bytes = budget;
+            record.exposure = Some(exposure);
+        }
+        Err(error) => return fail(record, error),
+    }
 
+    // The truth renders before any mode is prepared, so its peak memory is its own.
+    let (truth_record, truth_image) =
+        ground_truth(worker, plan, manifest, &inputs, [width, height], progress, Arc::clone(&cancel)).await;
+    record.truth = Some(truth_record);
+    if cancel.load(Ordering::SeqCst) {
+        free_scene(worker, plan).await;
+        record.status = Status::Interrupted;
+        record.error = Some("interrupted while its ground truth rendered: no mode ran".into());
+        return record;
+    }
+
+    let mut runs = match prepare_modes(worker, plan, manifest, progress).await {
+        Ok((runs, target_bytes, texture_bytes)) => {
+            record.target_bytes = Some(target_bytes);
+            record.texture_bytes = Some(texture_bytes);
+            runs
+        }
+        Err(error) => return fail(record, error),
+    };
+    timed_rounds(worker, plan, manifest, progress, &cancel, &mut runs).await;
+    // Free the scene's device memory before the CPU work below.
+    free_scene(worker, plan).await;
+
+    progress.status(&format!("[{}] writing images and metrics", manifest.name));
+    let interrupted = cancel.load(Ordering::SeqCst);
+    record.modes = finish_modes(plan, &scene_dir, manifest, runs, truth_image, interrupted).await;
+    conclude(record, worker.is_stuck(), interrupted)
+}
+
+/// Reads the manifest's glTF file and hashes the scene's inputs, off the async threads; records
+/// what the file holds.
+async fn load(
+    manifest: &Manifest,
+    progress: &Progress,
+    record: &mut SceneRecord,
+) -> Result<(scenes::LoadedScene, SceneInputs), String> {
     progress.status(&format!("[{}] loading {}", manifest.name, manifest.gltf_path().display()));
     let owned = manifest.clone();
     let load = move || -> anyhow::Result<_> { Ok((scenes::load(&owned)?, SceneInputs::of(&owned)?)) };
     let (loaded, inputs) = match tokio::task::spawn_blocking(load).await {
         Ok(Ok(loaded)) => loaded,
-        Ok(Err(error)) => return fail(record, format!("{error:#}")),
-        Err(panic) => return fail(record, format!("loading panicked: {panic}")),
+        Ok(Err(error)) => return Err(format!("{error:#}")),
+        Err(panic) => return Err(format!("loading panicked: {panic}")),
     };
     record.load_s = Some(loaded.seconds);
     record.triangles = Some(loaded.scene.triangle_count());
@@ -228,7 +278,19 @@ async fn run_scene(
         progress.line(&format!("[{}] warning: {warning}", manifest.name));
     }
     record.warnings = loaded.scene.warnings.clone();
+    Ok((loaded, inputs))
+}
 
+/// Uploads the scene into a new renderer (dropping the previous scene's), sets the memory
+/// budget its modes are prepared under, and meters the exposure where the manifest gives none.
+/// Returns the budget and the exposure every mode and the truth render at.
+async fn upload(
+    worker: &mut Worker,
+    plan: &RunPlan,
+    manifest: &Manifest,
+    loaded: scenes::LoadedScene,
+    progress: &Progress,
+) -> Result<(Option<u64>, ExposureRecord), String> {
     let settings = render_settings(manifest, plan.tier, plan.extra_samples);
     progress.status(&format!("[{}] uploading", manifest.name));
     let memory_limit = plan.memory_limit;
@@ -257,30 +319,24 @@ async fn run_scene(
         })
         .await;
     match uploaded {
-        Ok(Ok((budget, exposure))) => {
-            record.memory_limit_bytes = budget;
-            record.exposure = Some(exposure);
-        }
+        Ok(Ok(uploaded)) => Ok(uploaded),
         // What the device refuses of the file's content (too many textures) names the file.
         Ok(Err(error @ aabench_renderer::RenderError::Limit(_))) => {
-            return fail(record, format!("{}: {error}", manifest.gltf_path().display()));
+            Err(format!("{}: {error}", manifest.gltf_path().display()))
         }
-        Ok(Err(error)) => return fail(record, error.to_string()),
-        Err(error) => return fail(record, error.to_string()),
+        Ok(Err(error)) => Err(error.to_string()),
+        Err(error) => Err(error.to_string()),
     }
+}
 
-    // The truth renders before any mode is prepared, so its peak memory is its own.
-    let (truth_record, truth_image) =
-        ground_truth(worker, plan, manifest, &inputs, [width, height], progress, Arc::clone(&cancel)).await;
-    record.truth = Some(truth_record);
-    if cancel.load(Ordering::SeqCst) {
-        let _ = worker.call(plan.frame_timeout, |state| state.renderer = None).await;
-        record.status = Status::Interrupted;
-        record.error = Some("interrupted while its ground truth rendered: no mode ran".into());
-        return record;
-    }
-
-    // Prepare every mode; a mode that cannot be prepared fails alone.
+/// Prepares every mode of the plan; a mode that cannot be prepared fails alone. Returns one
+/// run per mode (its graph, or its error), the scene's target bytes and texture bytes.
+async fn prepare_modes(
+    worker: &mut Worker,
+    plan: &RunPlan,
+    manifest: &Manifest,
+    progress: &Progress,
+) -> Result<(Vec<ModeRun>, u64, u64), String> {
     let modes = plan.modes.clone();
     progress.status(&format!("[{}] compiling {} modes", manifest.name, modes.len()));
     let prepared = worker
@@ -302,32 +358,37 @@ async fn run_scene(
             (outcomes, renderer.target_bytes(), renderer.texture_bytes())
         })
         .await;
-    let mut runs: Vec<ModeRun> = match prepared {
-        Ok((outcomes, bytes, texture_bytes)) => {
-            record.target_bytes = Some(bytes);
-            record.texture_bytes = Some(texture_bytes);
-            outcomes
-                .into_iter()
-                .map(|outcome| match outcome {
-                    Ok(graph) => ModeRun { graph: Some(graph), ..Default::default() },
-                    Err(error) => ModeRun { error: Some(error), ..Default::default() },
-                })
-                .collect()
-        }
-        Err(error) => return fail(record, error.to_string()),
-    };
+    let (outcomes, target_bytes, texture_bytes) = prepared.map_err(|error| error.to_string())?;
+    let runs = outcomes
+        .into_iter()
+        .map(|outcome| match outcome {
+            Ok(graph) => ModeRun { graph: Some(graph), ..Default::default() },
+            Err(error) => ModeRun { error: Some(error), ..Default::default() },
+        })
+        .collect();
+    Ok((runs, target_bytes, texture_bytes))
+}
 
-    // Warm-up rounds (lavapipe compiles at the first draw), then timed rounds. Each round
-    // renders every mode once: A B C … A B C …, so drift over time hits every mode alike.
-    // Images are read back after the first timed frame (every later frame is checked to give
-    // the same display image), so an interrupted run still has them.
+/// Warm-up rounds (lavapipe compiles at the first draw), then timed rounds. Each round renders
+/// every mode once: A B C … A B C …, so drift over time hits every mode alike. Images are read
+/// back after the first timed frame (every later frame is checked to give the same display
+/// image), so an interrupted run still has them. A worker that stops (a timeout, a panic)
+/// ends the rounds of every mode.
+async fn timed_rounds(
+    worker: &mut Worker,
+    plan: &RunPlan,
+    manifest: &Manifest,
+    progress: &Progress,
+    cancel: &AtomicBool,
+    runs: &mut [ModeRun],
+) {
     let rounds = plan.warmup + plan.repetitions;
-    'rounds: for round in 0..rounds {
+    for round in 0..rounds {
         let timed = round >= plan.warmup;
         let first_timed = round == plan.warmup;
         for (index, mode) in plan.modes.iter().enumerate() {
             if cancel.load(Ordering::SeqCst) {
-                break 'rounds;
+                return;
             }
             if runs[index].error.is_some() {
                 continue;
@@ -338,48 +399,17 @@ async fn run_scene(
                 format!("warm-up {}/{}", round + 1, plan.warmup)
             };
             progress.status(&format!("[{}] {mode} {label}", manifest.name));
-            let m = mode.m;
-            let result = worker
-                .call(plan.frame_timeout, move |state| {
-                    let prepared = state.modes[index].as_ref().expect("prepared mode");
-                    let timing = prepared.render()?;
-                    // Read back between frames, never during one. Every frame is checked;
-                    // every timed frame's display image and sample counts are fingerprinted,
-                    // and all must agree.
-                    let images = if first_timed { Some(prepared.read_images()?) } else { None };
-                    let (hash, checks) = match &images {
-                        Some(images) => {
-                            let counts = images.sample_counts.as_deref();
-                            (
-                                Some(fingerprint(&images.display, counts)),
-                                FrameChecks::of(&images.hdr, counts, m),
-                            )
-                        }
-                        None => {
-                            let counts = prepared.read_sample_counts()?;
-                            let checks =
-                                FrameChecks::of(prepared.read_hdr()?.as_flattened(), counts.as_deref(), m);
-                            let hash = if timed {
-                                Some(fingerprint(&prepared.read_display()?, counts.as_deref()))
-                            } else {
-                                None
-                            };
-                            (hash, checks)
-                        }
-                    };
-                    Ok::<_, aabench_renderer::RenderError>((timing, hash, checks, images))
-                })
-                .await;
+            let result = render_frame(worker, plan, index, mode.m, timed, first_timed).await;
             let run = &mut runs[index];
             match result {
-                Ok(Ok((timing, hash, checks, images))) => {
-                    run.checks.add(checks);
+                Ok(Ok(frame)) => {
+                    run.checks.add(frame.checks);
                     if timed {
-                        run.timings.push(timing);
-                        run.hashes.extend(hash);
+                        run.timings.push(frame.timing);
+                        run.hashes.extend(frame.hash);
                     }
-                    if images.is_some() {
-                        run.images = images;
+                    if frame.images.is_some() {
+                        run.images = frame.images;
                     }
                 }
                 Ok(Err(error)) => run.error = Some(error.to_string()),
@@ -388,26 +418,69 @@ async fn run_scene(
                     for other in runs.iter_mut().filter(|r| r.error.is_none()) {
                         other.error = Some(format!("not finished: {error}"));
                     }
-                    break 'rounds;
+                    return;
                 }
             }
         }
     }
-    // Free the scene's device memory before the CPU work below.
+}
+
+/// What one rendered frame gave: its timing, its fingerprint (timed frames), the checks of its
+/// HDR values and sample counts, and its images (the first timed frame).
+struct Frame {
+    timing: FrameTiming,
+    hash: Option<String>,
+    checks: FrameChecks,
+    images: Option<FrameImages>,
+}
+
+/// Renders mode `index` once and reads back what the round needs, between frames, never
+/// during one. Every frame is checked; every timed frame's display image and sample counts
+/// are fingerprinted, and all must agree.
+async fn render_frame(
+    worker: &mut Worker,
+    plan: &RunPlan,
+    index: usize,
+    m: u32,
+    timed: bool,
+    first_timed: bool,
+) -> Result<Result<Frame, aabench_renderer::RenderError>, crate::worker::WorkerError> {
+    worker
+        .call(plan.frame_timeout, move |state| {
+            let prepared = state.modes[index].as_ref().expect("prepared mode");
+            let timing = prepared.render()?;
+            if first_timed {
+                let images = prepared.read_images()?;
+                let counts = images.sample_counts.as_deref();
+                let hash = Some(fingerprint(&images.display, counts));
+                let checks = FrameChecks::of(&images.hdr, counts, m);
+                return Ok(Frame { timing, hash, checks, images: Some(images) });
+            }
+            let counts = prepared.read_sample_counts()?;
+            let checks = FrameChecks::of(prepared.read_hdr()?.as_flattened(), counts.as_deref(), m);
+            let hash =
+                if timed { Some(fingerprint(&prepared.read_display()?, counts.as_deref())) } else { None };
+            Ok(Frame { timing, hash, checks, images: None })
+        })
+        .await
+}
+
+/// Drops the scene's prepared modes and renderer, freeing its device memory.
+async fn free_scene(worker: &mut Worker, plan: &RunPlan) {
     let _ = worker
         .call(plan.frame_timeout, |state| {
             state.modes.clear();
             state.renderer = None;
         })
         .await;
+}
 
-    progress.status(&format!("[{}] writing images and metrics", manifest.name));
-    let interrupted = cancel.load(Ordering::SeqCst);
-    record.modes = finish_modes(plan, &scene_dir, manifest, runs, truth_image, interrupted).await;
+/// The scene's status from its modes, its truth and the worker.
+fn conclude(mut record: SceneRecord, worker_stuck: bool, interrupted: bool) -> SceneRecord {
     let truth_error = record.truth.as_ref().and_then(|t| t.error.clone());
     if let Some(error) = truth_error {
         record.error = Some(format!("ground truth: {error}"));
-    } else if worker.is_stuck() {
+    } else if worker_stuck {
         record.error = Some("the GPU worker stopped; see the failed mode".into());
     }
     record.status = if record.error.is_none() && record.modes.iter().all(|m| m.status == Status::Ok) {
@@ -871,11 +944,6 @@ fn cgroup_headroom(root: &Path, membership: &str) -> Option<u64> {
     let leaf = own.map(|path| base.join(path.trim_start_matches('/'))).filter(|dir| dir.is_dir());
     let levels = leaf.as_deref().unwrap_or(&base).ancestors().take_while(|dir| dir.starts_with(&base));
     levels.filter_map(headroom).min()
-}
-
-/// Frame timeout when none is given: generous, since a warm-up frame includes compilation.
-pub fn default_frame_timeout() -> Duration {
-    Duration::from_secs(120)
 }
 
 #[cfg(test)]

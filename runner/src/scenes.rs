@@ -7,11 +7,12 @@ use std::time::Instant;
 
 use aabench_renderer::scene::generate::GENERATOR_STAMP;
 use aabench_renderer::scene::{
-    Camera, Light, LightKind, Lighting, MAX_LIGHTS, Scene, Shadow, load_gltf, read_generator, regular_file,
+    Camera, Light, LightKind, Lighting, MAX_LIGHTS, Scene, Shadow, load_gltf, read_generator,
 };
 use anyhow::{Context, bail};
 use glam::{DVec3, DVec4, Vec3};
 
+use crate::fs::regular_file;
 use crate::manifest::{FileLights, Manifest, check_shadows};
 
 #[derive(Debug)]

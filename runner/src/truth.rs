@@ -73,7 +73,7 @@ pub fn cache_key(
     }
     add(&platform.adapter);
     add(&platform.driver_info);
-    add(platform.build_profile);
+    add(&platform.build_profile);
     Ok(hex(&hasher.finalize()))
 }
 
@@ -128,7 +128,7 @@ mod tests {
             lp_num_threads: None,
             cpu_model: "AMD EPYC".into(),
             cpu_cores: 2,
-            build_profile: "release",
+            build_profile: "release".into(),
         }
     }
 

@@ -10,7 +10,7 @@ use crate::bindings::Bound;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
 use crate::mode::Metrics;
 use crate::pipelines::Constants;
-use crate::{AdaptiveSettings, RenderError};
+use crate::{adaptive::AdaptiveSettings, error::RenderError};
 
 /// Per-pixel sample counts, 1…16.
 pub(crate) const COUNT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Uint;

@@ -3,8 +3,8 @@
 //! the HDR image directly and exposes it first.
 
 use super::{BuildContext, FULLSCREEN, Io, Node, Pass, Program, display_format};
-use crate::RenderError;
 use crate::color::ColorSettings;
+use crate::error::RenderError;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
 use crate::pipelines::Constants;
 

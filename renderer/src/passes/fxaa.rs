@@ -1,7 +1,7 @@
 //! FXAA 3.11's quality path (its default preset, 12) on the display-encoded image: `shaders/fxaa.wgsl`.
 
 use super::{BuildContext, FULLSCREEN, Io, Node, Pass, Program, display_format};
-use crate::RenderError;
+use crate::error::RenderError;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
 
 /// FXAA's defaults, as the shader's override constants: sub-pixel removal, edge threshold,

@@ -1,7 +1,7 @@
 //! The G-buffer pass: rasterizes the scene once into M·w × M·h targets.
 
 use super::{BuildContext, Bundle, Io, Node, Pass, Program};
-use crate::RenderError;
+use crate::error::RenderError;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
 use crate::pipelines::{Constants, Raster, RenderKey};
 use crate::scene::{DrawClass, GpuScene, Vertex};
@@ -14,9 +14,6 @@ pub(crate) const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba1
 pub(crate) const UV_GRAD_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// Reversed depth; shaders recover linear depth from it.
 pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-
-/// Material indices must be exact in f16 (the normal target's w).
-pub const MAX_MATERIALS: usize = 2048;
 
 /// Material index written where no geometry covers a sample (`BACKGROUND` in WGSL).
 pub const BACKGROUND_MATERIAL: i32 = -1;

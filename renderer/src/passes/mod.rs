@@ -20,7 +20,7 @@ use crate::bindings::{self, Bound, Stages};
 use crate::graph::{Access, PassDecl, Port, Resource};
 use crate::pipelines::{ComputeKey, Constants, LayoutEntries, Pipelines, Raster, RenderKey};
 use crate::scene::GpuScene;
-use crate::{RenderError, RenderSettings};
+use crate::{error::RenderError, settings::RenderSettings};
 
 /// Linear HDR radiance.
 pub(crate) const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;

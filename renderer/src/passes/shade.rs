@@ -2,7 +2,7 @@
 //! the reference's supersampled image when it is M·w × M·h), and the M×M box filter.
 
 use super::{BuildContext, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, shading_inputs};
-use crate::RenderError;
+use crate::error::RenderError;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
 use crate::pipelines::Constants;
 

@@ -5,7 +5,7 @@
 
 use super::gbuffer::{cleared_to_far, lookup, scene_pipeline};
 use super::{BuildContext, Bundle, Io, Node, Pass, Program};
-use crate::RenderError;
+use crate::error::RenderError;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
 use crate::pipelines::{Constants, Raster, RenderKey};
 use crate::scene::GpuScene;

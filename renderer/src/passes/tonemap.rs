@@ -2,8 +2,8 @@
 //! light through the curve whose constants [`Tonemap::curve`] solves in f64.
 
 use super::{BuildContext, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program};
-use crate::RenderError;
 use crate::color::Tonemap;
+use crate::error::RenderError;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
 use crate::pipelines::Constants;
 

@@ -13,7 +13,7 @@ use super::{
     AlphaMode, Camera, DrawClass, Encoding, Light, LightKind, Material, Scene, Texture, TextureRef,
     UvTransform, Vertex,
 };
-use crate::RenderError;
+use crate::error::RenderError;
 
 /// Reads a `.gltf` or `.glb` file and everything it references. Every error names the part of
 /// the file at fault (`nodes[3]`, `accessors[2]`, `images[0] (uri textures/a.png)`, …).
@@ -29,11 +29,11 @@ pub fn load_gltf(path: &Path) -> Result<Scene, RenderError> {
 
     let mut importer = Importer::default();
     let Materials { materials, textures, mut warnings } = import_materials(&document).map_err(fail)?;
-    if materials.len() > crate::passes::gbuffer::MAX_MATERIALS {
+    if materials.len() > super::MAX_MATERIALS {
         return Err(fail(format!(
             "materials: {} materials, the G-buffer holds at most {}",
             materials.len() - 1,
-            crate::passes::gbuffer::MAX_MATERIALS - 1
+            super::MAX_MATERIALS - 1
         )));
     }
     importer.scene.materials = materials;

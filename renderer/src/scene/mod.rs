@@ -14,8 +14,8 @@ pub use camera::{Camera, CameraError, FrameUniforms, MAX_COORDINATE, Tile};
 pub use import::{MAX_TEXTURE_SIDE, load_gltf, percent_decode, read_generator, regular_file};
 pub use shadow::{MAX_SHADOW_LIGHTS, Shadow, ShadowCubes};
 pub use upload::{
-    GpuScene, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MAX_LIGHTS, SLOT_BASE, SLOT_EMISSIVE,
-    SLOT_METALLIC_ROUGHNESS, SLOT_NORMAL, SLOT_OCCLUSION,
+    GpuScene, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MAX_LIGHTS, MAX_MATERIALS, SLOT_BASE,
+    SLOT_EMISSIVE, SLOT_METALLIC_ROUGHNESS, SLOT_NORMAL, SLOT_OCCLUSION,
 };
 
 use glam::Vec3;

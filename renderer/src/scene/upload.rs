@@ -15,6 +15,10 @@ use crate::bindings::Bound;
 /// Lights a scene may have: the size of the shaders' uniform light table.
 pub const MAX_LIGHTS: usize = 64;
 
+/// Materials a scene may have: the G-buffer stores the material index in the w of an f16
+/// normal target, where integers are exact up to 2048.
+pub const MAX_MATERIALS: usize = 2048;
+
 /// `Material` in `shaders/lib/scene.wgsl`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]

@@ -108,10 +108,7 @@ pub enum FailOn {
 /// The time metrics: noisy, decided on intervals.
 const TIME_METRICS: [&str; 3] = ["relative_time", "time_vs_reference", "frame_time"];
 
-/// The fewest timed frames of a mode, on each side, from which a time check against committed
-/// baselines is decided. With fewer, the interval is the few ratios themselves: one frame a
-/// side gave false regressions in 3 of 4 compares of a build with itself.
-pub const MIN_FRAMES: usize = 5;
+pub use crate::gate::MIN_FRAMES;
 
 /// The fewest processes on each side from which a time check against the base build is
 /// decided: four against four is the smallest design whose Moses interval reaches 95%
@@ -239,42 +236,30 @@ pub struct Request<'a> {
     pub lenient: bool,
 }
 
-/// Compares the request's run with its baselines (and its base build's processes, if any).
-pub fn compare(request: &Request) -> Verdict {
-    let Request { runs, base, baselines, fail_on, lenient } = *request;
-    let run = &runs[0];
-    let mut notes = Vec::new();
-    let mut checks = Vec::new();
-    for problem in run_problems(run, baselines) {
-        if lenient {
-            notes.push(format!("{problem} (--lenient: reported, not failed)"));
-        } else {
-            checks.push(Check::of_run(Outcome::Failed, format!("{problem}; or compare with --lenient")));
-        }
-    }
-    if let (Some(_), false) = (&baselines.dir, baselines.same_platform) {
-        notes.push(format!(
-            "the baselines are of another platform (`{}`; this run: `{}`): quality is compared with the \
-             cross-platform tolerances, in-run time ratios as usual, absolute times not at all",
-            baselines.platform_key.as_deref().unwrap_or("?"),
-            run.platform.key
-        ));
-    }
-    let machine = same_machine(run, baselines);
-    let baseline_time_gated = match fail_on {
+/// Whether time against the committed baselines may fail the gate: with `--fail-on auto`, only
+/// without base runs and on the machine that blessed them. Says why not in a note.
+fn baseline_time_gated(request: &Request, machine: &Result<(), String>, notes: &mut Vec<String>) -> bool {
+    let gated = match request.fail_on {
         FailOn::All => true,
         FailOn::Quality => false,
-        FailOn::Auto => base.is_empty() && machine.is_ok(),
+        FailOn::Auto => request.base.is_empty() && machine.is_ok(),
     };
-    if baselines.dir.is_some() && !baseline_time_gated && fail_on == FailOn::Auto {
-        let why = match &machine {
-            _ if !base.is_empty() => "the base build's processes on this machine decide".to_string(),
+    if request.baselines.dir.is_some() && !gated && request.fail_on == FailOn::Auto {
+        let why = match machine {
+            _ if !request.base.is_empty() => "the base build's processes on this machine decide".to_string(),
             Err(why) => format!("another machine ({why})"),
             Ok(()) => String::new(),
         };
         notes.push(format!("time against the committed baselines is informational: {why}"));
     }
-    checks.extend(disagreements(runs));
+    gated
+}
+
+/// Every scene of the run against its baseline (or as new, or failed), then every baseline
+/// scene the run lacks.
+fn scene_checks(runs: &[RunRecord], baselines: &BaselineSet, notes: &mut Vec<String>) -> Vec<Check> {
+    let run = &runs[0];
+    let mut checks = Vec::new();
     for scene in &run.scenes {
         // A scene that failed (to load, to render its truth, in a mode) or was interrupted
         // fails the gate, baseline or not.
@@ -290,7 +275,7 @@ pub fn compare(request: &Request) -> Verdict {
             Some(baseline) => {
                 notes.extend(input_notes(scene, baseline.scene()));
                 notes.extend(front_notes(scene, baseline.scene()));
-                checks.extend(compare_scene(&processes, baseline, baselines.same_platform, &mut notes));
+                checks.extend(compare_scene(&processes, baseline, baselines.same_platform, notes));
             }
             None => checks.extend(scene.modes.iter().map(|mode| {
                 let outcome = if mode.status == Status::Ok { Outcome::New } else { Outcome::Failed };
@@ -314,6 +299,34 @@ pub fn compare(request: &Request) -> Verdict {
             }
         }
     }
+    checks
+}
+
+/// Compares the request's run with its baselines (and its base build's processes, if any).
+pub fn compare(request: &Request) -> Verdict {
+    let Request { runs, base, baselines, fail_on, lenient } = *request;
+    let run = &runs[0];
+    let mut notes = Vec::new();
+    let mut checks = Vec::new();
+    for problem in run_problems(run, baselines) {
+        if lenient {
+            notes.push(format!("{problem} (--lenient: reported, not failed)"));
+        } else {
+            checks.push(Check::of_run(Outcome::Failed, format!("{problem}; or compare with --lenient")));
+        }
+    }
+    if let (Some(_), false) = (&baselines.dir, baselines.same_platform) {
+        notes.push(format!(
+            "the baselines are of another platform (`{}`; this run: `{}`): quality is compared with the \
+             cross-platform tolerances, in-run time ratios as usual, absolute times not at all",
+            baselines.platform_key.as_deref().unwrap_or("?"),
+            run.platform.key
+        ));
+    }
+    let machine = same_machine(run, baselines);
+    let baseline_time_gated = baseline_time_gated(request, &machine, &mut notes);
+    checks.extend(disagreements(runs));
+    checks.extend(scene_checks(runs, baselines, &mut notes));
     if !base.is_empty() {
         checks.extend(ab::checks(runs, base, baselines, &mut notes));
     }

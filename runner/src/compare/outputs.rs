@@ -5,19 +5,18 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 use super::{Against, Check, FailOn, Outcome, Verdict};
-use crate::report::html::escape as xml;
+use crate::markup::escape as xml;
 
 /// Writes summary.md, junit.xml and verdict.json into `dir`, each atomically.
 pub fn write_all(verdict: &Verdict, dir: &Path) -> Result<Vec<PathBuf>, String> {
-    crate::json::output_folder(dir).map_err(|e| format!("--out {e}"))?;
+    crate::fs::output_folder(dir).map_err(|e| format!("--out {e}"))?;
     let write = |name: &str, text: &str| -> Result<PathBuf, String> {
         let path = dir.join(name);
-        aabench_renderer::scene::write::write_atomic(&path, text.as_bytes())
-            .map_err(|e| format!("{}: write: {e}", path.display()))?;
+        crate::fs::write(&path, text.as_bytes())?;
         Ok(path)
     };
     let json = dir.join("verdict.json");
-    crate::json::write_atomic(&json, verdict)?;
+    crate::fs::write_json(&json, verdict)?;
     Ok(vec![write("summary.md", &summary(verdict))?, write("junit.xml", &junit(verdict))?, json])
 }
 

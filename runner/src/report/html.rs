@@ -1,20 +1,6 @@
-//! The page's inline style sheet, and escaping text for HTML and XML (junit.xml uses it too).
+//! The page's inline style sheet, and escaping text for it.
 
-/// Escapes text for HTML (and XML) content and quoted attributes.
-pub fn escape(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&apos;"),
-            c => out.push(c),
-        }
-    }
-    out
-}
+pub use crate::markup::escape;
 
 /// Everything the page needs to look right, inline: no fonts, no scripts, nothing fetched.
 pub const STYLE: &str = "\

@@ -46,8 +46,7 @@ pub fn write(
          peak-255 convention); the truth is the reference at 8×8 samples per pixel.</footer>\n</body>\n</html>\n",
     );
     let path = run_dir.join("index.html");
-    aabench_renderer::scene::write::write_atomic(&path, page.as_bytes())
-        .map_err(|e| format!("{}: write: {e}", path.display()))?;
+    crate::fs::write(&path, page.as_bytes())?;
     Ok((path, left_out))
 }
 
@@ -63,7 +62,7 @@ fn head(page: &mut String, run: &RunRecord) {
 }
 
 fn summary(page: &mut String, run: &RunRecord, verdict: Option<&Verdict>) {
-    let p = &run.platform;
+    let p = &run.platform.info;
     let _ = writeln!(page, "<h1>aabench run <code>{}</code></h1>", escape(&run.run_id));
     let _ = writeln!(
         page,
@@ -80,7 +79,7 @@ fn summary(page: &mut String, run: &RunRecord, verdict: Option<&Verdict>) {
         p.cpu_cores,
         escape(p.lp_num_threads.as_deref().unwrap_or("auto")),
         escape(&p.build_profile),
-        escape(&p.key),
+        escape(&run.platform.key),
         run.settings.repetitions,
         run.settings.warmup,
         escape(&run.settings.interleaving),

@@ -1,0 +1,206 @@
+//! glTF 2.0 import through the `gltf` crate: meshes with baked node transforms; base-colour,
+//! metallic-roughness, normal, emissive and occlusion textures with `KHR_texture_transform`;
+//! factors (emission with `KHR_materials_emissive_strength`), alpha MASK; UVs, normals (flat
+//! normals generated where a primitive has none) and tangents (MikkTSpace where a normal-mapped
+//! primitive has none); the first camera, and `KHR_lights_punctual` lights.
+//!
+//! This module walks the node trees and assembles the scene; its parts: `files` (the file and
+//! the files it names), `materials`, `primitives` (accessors checked, vertices to world space),
+//! `tangents`, `lights` (and the camera) and `images`.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use glam::{DMat4, DVec3};
+
+use super::{DrawClass, Light, Scene};
+use crate::error::RenderError;
+
+mod files;
+mod images;
+mod lights;
+mod materials;
+mod primitives;
+mod tangents;
+
+use files::{check_external_files, ignored_extensions, open};
+pub use files::{percent_decode, read_generator, regular_file};
+pub use images::MAX_TEXTURE_SIDE;
+use images::decode_textures;
+use lights::{camera_from_node, light_from_node};
+use materials::{Materials, import_materials};
+
+/// Reads a `.gltf` or `.glb` file and everything it references. Every error names the part of
+/// the file at fault (`nodes[3]`, `accessors[2]`, `images[0] (uri textures/a.png)`, …).
+pub fn load_gltf(path: &Path) -> Result<Scene, RenderError> {
+    let fail = |message: String| RenderError::Scene { path: path.to_path_buf(), message };
+    regular_file(path).map_err(|e| fail(format!("cannot read glTF: {e}")))?;
+    let (gltf::Gltf { document, blob }, lenient) =
+        open(path).map_err(|e| fail(format!("cannot read glTF: {e}")))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    check_external_files(&document, base).map_err(fail)?;
+    let buffers = gltf::import_buffers(&document, Some(base), blob)
+        .map_err(|e| fail(format!("cannot read buffers: {e}")))?;
+
+    let mut importer = Importer::default();
+    let Materials { materials, textures, mut warnings } = import_materials(&document).map_err(fail)?;
+    if materials.len() > super::MAX_MATERIALS {
+        return Err(fail(format!(
+            "materials: {} materials, the G-buffer holds at most {}",
+            materials.len() - 1,
+            super::MAX_MATERIALS - 1
+        )));
+    }
+    importer.scene.materials = materials;
+    importer.visit_scene(&document, &buffers).map_err(fail)?;
+
+    let mut scene = importer.finish();
+    scene.textures = decode_textures(&document, base, &buffers, &textures).map_err(fail)?;
+    scene.generator = document.as_json().asset.generator.clone();
+    warnings.extend(lenient);
+    warnings.extend(ignored_extensions(&document));
+    scene.warnings = warnings;
+    Ok(scene)
+}
+
+/// The scene's origin is a multiple of this many units (see `Importer::finish`).
+pub const ORIGIN_GRID: f64 = 1024.0;
+
+#[derive(Default)]
+struct Importer {
+    scene: Scene,
+    /// Each vertex's world position, in f64.
+    world: Vec<DVec3>,
+    /// The file's lights with their world positions, in f64.
+    lights: Vec<(Light, DVec3)>,
+    /// Triangles as vertex-index triples, by draw class.
+    triangles: BTreeMap<DrawClass, Vec<[u32; 3]>>,
+    /// Normal-mapped primitives without tangents of their own, for MikkTSpace.
+    untangented: Vec<Primitive>,
+}
+
+/// Where one primitive's vertices and triangles lie in the importer's lists.
+struct Primitive {
+    class: DrawClass,
+    vertices: std::ops::Range<usize>,
+    triangles: std::ops::Range<usize>,
+}
+
+impl Importer {
+    /// Walks the default scene's node trees depth first (children in order), without recursion:
+    /// a hierarchy thousands of nodes deep must not overflow the stack. A node reached twice
+    /// is an error: glTF's nodes form disjoint trees, so it is a cycle or a second parent.
+    fn visit_scene(
+        &mut self,
+        document: &gltf::Document,
+        buffers: &[gltf::buffer::Data],
+    ) -> Result<(), String> {
+        let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next()) {
+            Some(scene) => scene.nodes().collect(),
+            None => {
+                // No scene: every node that is nobody's child is a root.
+                let mut is_child = vec![false; document.nodes().len()];
+                for child in document.nodes().flat_map(|n| n.children()) {
+                    is_child[child.index()] = true;
+                }
+                document.nodes().filter(|n| !is_child[n.index()]).collect()
+            }
+        };
+        let mut reached = vec![false; document.nodes().len()];
+        let mut stack: Vec<(gltf::Node, DMat4)> =
+            roots.into_iter().rev().map(|n| (n, DMat4::IDENTITY)).collect();
+        while let Some((node, parent)) = stack.pop() {
+            if std::mem::replace(&mut reached[node.index()], true) {
+                return Err(format!(
+                    "nodes[{}]: reached twice: the node hierarchy has a cycle or a node with two parents \
+                     (glTF nodes must form disjoint trees)",
+                    node.index()
+                ));
+            }
+            let world = self.visit(document, &node, parent, buffers)?;
+            stack.extend(node.children().map(|child| (child, world)).collect::<Vec<_>>().into_iter().rev());
+        }
+        Ok(())
+    }
+
+    /// Adds one node's mesh and camera; returns its world transform.
+    fn visit(
+        &mut self,
+        document: &gltf::Document,
+        node: &gltf::Node,
+        parent: DMat4,
+        buffers: &[gltf::buffer::Data],
+    ) -> Result<DMat4, String> {
+        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(format!("nodes[{}]: the transform is not finite", node.index()));
+        }
+        if let Some(mesh) = node.mesh() {
+            for primitive in mesh.primitives() {
+                self.add_primitive(&mesh, &primitive, world, buffers)?;
+            }
+        }
+        if let (Some(camera), None) = (node.camera(), &self.scene.camera) {
+            self.scene.camera = camera_from_node(document, camera.index(), world)?;
+        }
+        if let Some(light) = node.light() {
+            self.lights
+                .push(light_from_node(&light, world).map_err(|e| format!("nodes[{}]: {e}", node.index()))?);
+        }
+        Ok(world)
+    }
+
+    /// Sorts the triangles by draw class and makes positions relative to the scene's origin:
+    /// the centre of its bounds, rounded to a multiple of [`ORIGIN_GRID`] units, so geometry
+    /// far from the file's origin keeps f32 precision (and a scene near it keeps its bits).
+    fn finish(mut self) -> Scene {
+        self.generate_tangents();
+        let (lo, hi) = self
+            .world
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        let origin = if self.world.is_empty() {
+            DVec3::ZERO
+        } else {
+            ((lo + hi) * 0.5 / ORIGIN_GRID).round() * ORIGIN_GRID
+        };
+        for (vertex, world) in self.scene.vertices.iter_mut().zip(&self.world) {
+            vertex.position = (*world - origin).as_vec3().to_array();
+        }
+        if !self.scene.tangents.is_empty() {
+            self.scene.tangents.resize(self.scene.vertices.len(), [0.0; 4]);
+        }
+        self.scene.origin = origin;
+        if let Some(camera) = &mut self.scene.camera {
+            camera.position -= origin;
+        }
+        // A light without a range reaches everywhere (KHR_lights_punctual); the shader's
+        // smooth window then sits far beyond the scene as seen from the light: ten times the
+        // bounds' diagonal plus the light's distance from their centre.
+        let (diagonal, centre) = if self.world.is_empty() {
+            (1.0, DVec3::ZERO)
+        } else {
+            ((hi - lo).length().max(1e-6), (lo + hi) * 0.5)
+        };
+        self.scene.lights = self
+            .lights
+            .into_iter()
+            .map(|(light, world)| Light {
+                position: (world - origin).as_vec3(),
+                range: if light.range.is_finite() {
+                    light.range
+                } else {
+                    (10.0 * (diagonal + (world - centre).length())) as f32
+                },
+                ..light
+            })
+            .collect();
+        for (class, triangles) in self.triangles {
+            let start = self.scene.indices.len() as u32;
+            self.scene.indices.extend(triangles.into_iter().flatten());
+            self.scene.draws.push((class, start..self.scene.indices.len() as u32));
+        }
+        self.scene
+    }
+}

@@ -396,6 +396,11 @@ fn markdown_of_the_same_run(ws: &Workspace, run_dir: &Path) {
         assert!(markdown.contains(&format!("\n| {id} | ")), "no row for {id}:\n{markdown}");
     }
     assert!(markdown.contains("### Adaptive and its variants") && markdown.contains("\n| edge | 3×3 | "));
+    // Where the time goes: the reference's and the paper's 3×3 frames pass by pass.
+    assert!(markdown.contains("### Where the time goes"), "{markdown}");
+    for id in ["reference-3x3", "adaptive-3x3"] {
+        assert!(markdown.contains(&format!("| edge | 3×3 | {id} | ")), "no passes row for {id}");
+    }
     let svg = std::fs::read_to_string(ws.dir.join("figures/edge-front.svg")).unwrap();
     assert!(svg.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\""), "{}", &svg[..80.min(svg.len())]);
     let log = stderr(&output);

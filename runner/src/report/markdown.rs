@@ -37,6 +37,7 @@ pub fn document(run: &RunRecord) -> String {
     out.push_str("\n### Overview\n\n");
     overview(&mut out, run);
     variants(&mut out, run);
+    passes(&mut out, run);
     for scene in &run.scenes {
         scene_table(&mut out, scene);
     }
@@ -127,6 +128,58 @@ fn variants(out: &mut String, run: &RunRecord) {
         }
     }
     out.push_str("\nEach cell: frame ms / PSNR against the truth in dB; **bold** on the front.\n");
+}
+
+/// Per scene and M (unstalled): where the paper's adaptive frame goes, pass by pass, against
+/// the reference's. The passes the reference does not have (S, evaluate, compact, the extra
+/// samples, gather in place of resolve) are what adaptive must win back in shading.
+fn passes(out: &mut String, run: &RunRecord) {
+    const COLUMNS: [&str; 9] = [
+        "shadow",
+        "gbuffer",
+        "shade",
+        "shade_first",
+        "evaluate",
+        "compact",
+        "shade_extra",
+        "gather",
+        "resolve",
+    ];
+    let rows: Vec<(&SceneRecord, u32)> = run
+        .scenes
+        .iter()
+        .flat_map(|scene| (2..=4).map(move |m| (scene, m)))
+        .filter(|(scene, m)| scene.mode(&format!("adaptive-{m}x{m}")).is_some())
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "\n### Where the time goes\n\n| scene | M | mode | frame | {} | colour |\n|---|---|---|{}",
+        COLUMNS.join(" | "),
+        "---:|".repeat(COLUMNS.len() + 2)
+    );
+    for (scene, m) in rows {
+        for id in [format!("reference-{m}x{m}"), format!("adaptive-{m}x{m}")] {
+            let Some(mode) = scene.mode(&id) else { continue };
+            let median = |name: &str| mode.passes.iter().find(|p| p.name == name).map(|p| p.ms.median);
+            let cells: Vec<String> =
+                COLUMNS.iter().map(|name| median(name).map_or("–".into(), |ms| format!("{ms:.1}"))).collect();
+            let colour = ["tonemap", "display", "fxaa"].iter().filter_map(|name| median(name)).sum::<f64>();
+            let frame = mode.frame_ms.as_ref().map_or("–".into(), |f| format!("{:.1}", f.median));
+            let _ = writeln!(
+                out,
+                "| {} | {m}×{m} | {id} | {frame} | {} | {colour:.1} |",
+                scene.name,
+                cells.join(" | ")
+            );
+        }
+    }
+    out.push_str(
+        "\nPass medians in ms (each pass is its own timed submit; their sum is near the frame's); \
+         *colour*: tonemap and display.\n",
+    );
 }
 
 fn overview_cell(mode: Option<&ModeRecord>) -> String {

@@ -13,10 +13,8 @@
 
 mod support;
 
-use std::path::PathBuf;
-
 use aabench_renderer::scene::write::glb;
-use aabench_renderer::scene::{Camera, Light, LightKind, Lighting, UvTransform, load_gltf};
+use aabench_renderer::scene::{Camera, Light, LightKind, Lighting, Scene, UvTransform, load_gltf};
 use aabench_renderer::{FrameImages, SceneRenderer};
 use glam::{DVec3, Vec3};
 use serde_json::{Value, json};
@@ -44,7 +42,9 @@ impl Quad {
         Quad { material, images: Vec::new(), uvs: UPRIGHT, tangent: None, scale: [1.0; 3] }
     }
 
-    fn write(&self, name: &str) -> PathBuf {
+    /// Writes the quad as a GLB file into a folder of its own, imports it through the importer
+    /// as a user's file would be, and removes the folder.
+    fn import(&self, name: &str) -> Scene {
         let positions: [[f32; 3]; 4] =
             [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]];
         let normals = [[0.0f32, 0.0, 1.0]; 4];
@@ -94,16 +94,18 @@ impl Quad {
             document["images"] = json!(images);
             document["textures"] = json!(textures);
         }
-        let dir = std::env::temp_dir().join(format!("aabench-materials-{}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("aabench-materials-{}-{name}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join(format!("{name}.glb"));
         std::fs::write(&path, glb(&document, &bin)).unwrap();
-        path
+        let scene = load_gltf(&path);
+        let _ = std::fs::remove_dir_all(&dir);
+        scene.unwrap()
     }
 
     /// The quad seen head-on, filling the frame, at `mode`.
     fn render(&self, name: &str, lighting: &Lighting) -> FrameImages {
-        let scene = load_gltf(&self.write(name)).unwrap();
+        let scene = self.import(name);
         let camera = Camera::look_at(DVec3::new(0.0, 0.0, 1.0), DVec3::ZERO, 90.0);
         let (gpu, _guard) = gpu();
         let mut renderer = SceneRenderer::new(gpu, &scene, &camera, lighting, settings(SIDE, SIDE)).unwrap();
@@ -225,14 +227,14 @@ fn mikktspace_splits_vertices_where_mirrored_uvs_meet() {
         ..Quad::new(grey(json!({ "normalTexture": { "index": 0 } })))
     };
     // Upright UVs: one tangent per vertex, along +u = +X, bitangent up the image (w = 1).
-    let scene = load_gltf(&quad(UPRIGHT).write("upright")).unwrap();
+    let scene = quad(UPRIGHT).import("upright");
     assert_eq!(scene.vertices.len(), 4);
     for t in &scene.tangents {
         assert!((Vec3::from_slice(&t[..3]) - Vec3::X).length() < 1e-5 && t[3] == 1.0, "{t:?}");
     }
     // The second triangle (corners 0, 2, 3) mirrored in UV space: its corners at the shared
     // vertices 0 and 2 need the other handedness, so those vertices split.
-    let scene = load_gltf(&quad([[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [2.0, 0.0]]).write("mirrored")).unwrap();
+    let scene = quad([[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [2.0, 0.0]]).import("mirrored");
     assert_eq!(scene.vertices.len(), 6, "two shared vertices split");
     let handedness = |triangle: usize| {
         let corners = &scene.indices[3 * triangle..3 * triangle + 3];
@@ -242,11 +244,10 @@ fn mikktspace_splits_vertices_where_mirrored_uvs_meet() {
     // A node scaled to zero (how exporters hide objects): every triangle collapses, which
     // MikkTSpace cannot take (it underflows); the tangents are zero.
     let hidden = Quad { scale: [0.0; 3], ..quad(UPRIGHT) };
-    let scene = load_gltf(&hidden.write("hidden")).unwrap();
+    let scene = hidden.import("hidden");
     assert!(scene.tangents.iter().all(|t| *t == [0.0; 4]));
     // Degenerate UVs (no area): MikkTSpace has no direction to give; tangents stay finite.
-    let scene =
-        load_gltf(&quad([[0.0, 1.0], [0.0, 1.0], [0.0, 0.0], [0.0, 0.0]]).write("no-uv-area")).unwrap();
+    let scene = quad([[0.0, 1.0], [0.0, 1.0], [0.0, 0.0], [0.0, 0.0]]).import("no-uv-area");
     assert_eq!(scene.tangents.len(), scene.vertices.len());
     assert!(scene.tangents.iter().flatten().all(|c| c.is_finite()));
 }
@@ -425,7 +426,7 @@ fn textures_of_different_sizes_packed_in_pages_look_as_if_each_had_a_layer() {
             images.extend([checker.clone(), red.clone()]);
         }
         let quad = Quad { images, uvs, ..Quad::new(material) };
-        let scene = load_gltf(&quad.write(name)).unwrap();
+        let scene = quad.import(name);
         let camera = Camera::look_at(DVec3::new(0.0, 0.0, 1.0), DVec3::ZERO, 90.0);
         let (gpu, _guard) = gpu();
         let mut renderer = SceneRenderer::new(gpu, &scene, &camera, &ambient, settings(SIDE, SIDE)).unwrap();
@@ -474,7 +475,7 @@ fn more_texture_layers_than_the_device_holds_is_refused_by_name() {
     let texel = png(4, 4, |_, _| [200, 100, 50, 255]);
     let mut quad = Quad::new(json!({ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }));
     quad.images = vec![texel];
-    let mut scene = load_gltf(&quad.write("many-textures")).unwrap();
+    let mut scene = quad.import("many-textures");
     scene.textures = vec![scene.textures[0].clone(); 2100];
     let camera = Camera::look_at(DVec3::new(0.0, 0.0, 1.0), DVec3::ZERO, 90.0);
     let (gpu, _guard) = gpu();

@@ -2,6 +2,7 @@
 
 #![allow(dead_code)]
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
@@ -22,19 +23,25 @@ pub fn gpu() -> (Arc<Gpu>, MutexGuard<'static, ()>) {
     (Arc::clone(gpu), guard)
 }
 
-/// Generates a scene into a per-process temporary folder and imports it through glTF.
+/// Generates a scene, writes it as GLB into a temporary folder, imports it through glTF and
+/// removes the folder. Each generator runs once per test binary; later calls get a copy.
 pub fn generated(generator: Generator) -> (Scene, Camera) {
-    let dir = std::env::temp_dir().join(format!("aabench-renderer-tests-{}", std::process::id()));
-    let path: PathBuf = dir.join(format!("{generator}.glb"));
-    if !path.exists() {
+    static SCENES: Mutex<BTreeMap<String, (Scene, Camera)>> = Mutex::new(BTreeMap::new());
+    let mut scenes = SCENES.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    let entry = scenes.entry(generator.to_string()).or_insert_with(|| {
+        let dir =
+            std::env::temp_dir().join(format!("aabench-renderer-tests-{}-{generator}", std::process::id()));
+        let path: PathBuf = dir.join(format!("{generator}.glb"));
         generator.write(1, &path).expect("write generated scene");
-    }
-    let scene = load_gltf(&path).expect("import generated scene");
-    let mut camera = scene.camera.expect("generated scenes carry a camera");
-    if !camera.far.is_finite() {
-        camera.far = 500.0;
-    }
-    (scene, camera)
+        let scene = load_gltf(&path).expect("import generated scene");
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut camera = scene.camera.expect("generated scenes carry a camera");
+        if !camera.far.is_finite() {
+            camera.far = 500.0;
+        }
+        (scene, camera)
+    });
+    entry.clone()
 }
 
 /// Ambient light only: every surface shows exactly ambient × albedo.

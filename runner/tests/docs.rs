@@ -26,22 +26,46 @@ fn documents() -> Vec<PathBuf> {
 }
 
 /// The text outside fenced code blocks and inline code spans, line by line: links there are
-/// text, not links.
+/// text, not links. A code span may wrap onto the next line of its paragraph.
 fn prose(markdown: &str) -> Vec<String> {
-    let mut fenced = false;
     let mut lines = Vec::new();
+    let mut paragraph: Vec<&str> = Vec::new();
+    let flush = |paragraph: &mut Vec<&str>, lines: &mut Vec<String>| {
+        // Every other piece between backticks is code.
+        let text: String = paragraph.join("\n").split('`').step_by(2).collect();
+        lines.extend(text.lines().map(str::to_owned));
+        paragraph.clear();
+    };
+    let mut fenced = false;
+    for line in markdown.lines() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+            flush(&mut paragraph, &mut lines);
+        } else if !fenced && line.trim().is_empty() {
+            flush(&mut paragraph, &mut lines);
+        } else if !fenced {
+            paragraph.push(line);
+        }
+    }
+    flush(&mut paragraph, &mut lines);
+    lines
+}
+
+/// The headings outside fenced code blocks, their code spans kept as text.
+fn headings(markdown: &str) -> Vec<String> {
+    let mut fenced = false;
+    let mut found = Vec::new();
     for line in markdown.lines() {
         if line.trim_start().starts_with("```") {
             fenced = !fenced;
             continue;
         }
-        if fenced {
-            continue;
+        let hashes = line.chars().take_while(|&c| c == '#').count();
+        if !fenced && (1..=6).contains(&hashes) && line[hashes..].starts_with(' ') {
+            found.push(line[hashes..].replace(['`', '*'], ""));
         }
-        // Drop `code spans`: every other piece between backticks.
-        lines.push(line.split('`').step_by(2).collect::<Vec<_>>().join(""));
     }
-    lines
+    found
 }
 
 /// The targets of inline links and images, `[text](target)` and `![alt](target)`.
@@ -77,12 +101,8 @@ fn slug(heading: &str) -> String {
 /// The anchors of a document's headings (a repeated heading gets `-1`, `-2`, … as on GitHub).
 fn anchors(markdown: &str) -> BTreeSet<String> {
     let mut seen = BTreeSet::new();
-    for line in prose(markdown) {
-        let hashes = line.chars().take_while(|&c| c == '#').count();
-        if !(1..=6).contains(&hashes) || !line[hashes..].starts_with(' ') {
-            continue;
-        }
-        let base = slug(&line[hashes..].replace("**", "").replace('*', ""));
+    for heading in headings(markdown) {
+        let base = slug(&heading);
         let mut anchor = base.clone();
         let mut n = 0;
         while seen.contains(&anchor) {
@@ -101,6 +121,9 @@ fn slugs_follow_github() {
     assert_eq!(slug("The suite's scenes"), "the-suites-scenes");
     assert_eq!(slug("Adaptive and its variants"), "adaptive-and-its-variants");
     assert_eq!(link_targets("see [a](b.md#c) and ![d](e.png), not `[f](g)`"), ["b.md#c", "e.png"]);
+    // A code span that wraps onto the next line hides its code, not the prose after it.
+    assert_eq!(link_targets("a `span that\nwraps` then [h](i.md)"), ["i.md"]);
+    assert!(anchors("### `renderer/src`\n").contains("renderersrc"));
 }
 
 #[test]

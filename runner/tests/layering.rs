@@ -27,25 +27,95 @@ fn ident(text: &str) -> &str {
     &text[..end]
 }
 
-/// The top-level modules a source text names through `crate::`.
+/// The source without comments (from `//` to the end of a line, doc comments included) and
+/// without `#[cfg(test)]` items (the braced block that follows the attribute): test code may
+/// reach anywhere.
+fn production_code(source: &str) -> String {
+    let lines: Vec<&str> = source.lines().map(|line| line.split("//").next().unwrap_or_default()).collect();
+    let code = lines.join("\n");
+    let mut out = String::new();
+    let mut rest = code.as_str();
+    while let Some(at) = rest.find("#[cfg(test)]") {
+        out.push_str(&rest[..at]);
+        let after = &rest[at..];
+        let Some(open) = after.find('{') else { return out };
+        let mut depth = 0usize;
+        let mut end = after.len();
+        for (i, c) in after[open..].char_indices() {
+            match c {
+                '{' => depth += 1,
+                '}' => {
+                    depth -= 1;
+                    if depth == 0 {
+                        end = open + i + 1;
+                        break;
+                    }
+                }
+                _ => {}
+            }
+        }
+        rest = &after[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// The first names of the items of a `{…}` group (nested groups and line breaks included),
+/// given the text after its opening brace.
+fn group_items(text: &str) -> Vec<String> {
+    let (mut items, mut depth, mut start) = (Vec::new(), 0usize, 0usize);
+    for (i, c) in text.char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' if depth == 0 => {
+                items.push(ident(text[start..i].trim()).to_string());
+                return items;
+            }
+            '}' => depth -= 1,
+            ',' if depth == 0 => {
+                items.push(ident(text[start..i].trim()).to_string());
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    items
+}
+
+/// The names a source text uses through `crate::`: modules, or items the crate root re-exports.
 fn uses(source: &str) -> BTreeSet<String> {
-    // What follows a unit-test module is test code: it may reach anywhere.
-    let code = source.split("#[cfg(test)]").next().unwrap_or_default();
+    let code = production_code(source);
     let mut names = BTreeSet::new();
-    // Comments (from `//` to the end of the line, doc comments included) are not uses.
-    for line in code.lines().map(|line| line.split("//").next().unwrap_or_default()) {
-        for (at, _) in line.match_indices("crate::") {
-            let rest = &line[at + "crate::".len()..];
-            if let Some(group) = rest.strip_prefix('{') {
-                let group = &group[..group.find('}').unwrap_or(group.len())];
-                names.extend(group.split(',').map(|item| ident(item.trim()).to_string()));
-            } else {
+    for (at, _) in code.match_indices("crate::") {
+        let rest = &code[at + "crate::".len()..];
+        match rest.strip_prefix('{') {
+            Some(group) => names.extend(group_items(group)),
+            None => {
                 names.insert(ident(rest).to_string());
             }
         }
     }
     names.retain(|name| !name.is_empty() && name != "self");
     names
+}
+
+/// What the crate root re-exports, by name, and the module each comes from (`pub use m::{A, B}`).
+fn root_exports(lib: &str) -> BTreeMap<String, String> {
+    let code = production_code(lib);
+    let mut exports = BTreeMap::new();
+    for (at, _) in code.match_indices("pub use ") {
+        let rest = &code[at + "pub use ".len()..];
+        let module = ident(rest).to_string();
+        let statement = &rest[..rest.find(';').unwrap_or(rest.len())];
+        let items = match statement.find('{') {
+            Some(open) => group_items(&statement[open + 1..]),
+            None => vec![statement.rsplit("::").next().unwrap_or_default().trim().to_string()],
+        };
+        for item in items {
+            exports.insert(item, module.clone());
+        }
+    }
+    exports
 }
 
 /// Top-level module → the top-level modules it uses, for the crate whose sources are in `src`.
@@ -70,10 +140,27 @@ fn module_graph(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
         used.remove(&top);
         graph.entry(top).or_default().extend(used);
     }
-    // Names that are not modules (re-exported items at the crate root) are not edges.
+    // An item the crate root re-exports is a use of the module it comes from; any other name
+    // must be a module, or the reader has missed a path.
+    let lib = ["lib.rs", "main.rs"].iter().find_map(|f| std::fs::read_to_string(src.join(f)).ok()).unwrap();
+    let exports = root_exports(&lib);
     let modules: BTreeSet<String> = graph.keys().cloned().collect();
-    for used in graph.values_mut() {
-        used.retain(|name| modules.contains(name));
+    // Modules written inline in the crate root (`pub mod exit { … }`) are leaves, not edges.
+    let inline: BTreeSet<String> =
+        lib.match_indices("mod ").map(|(at, _)| ident(&lib[at + 4..]).to_string()).collect();
+    for (module, used) in graph.iter_mut() {
+        let resolved: BTreeSet<String> = used
+            .iter()
+            .map(|name| exports.get(name).cloned().unwrap_or_else(|| name.clone()))
+            .filter(|name| name != module)
+            .collect();
+        for name in &resolved {
+            assert!(
+                modules.contains(name) || inline.contains(name),
+                "{module}: `crate::{name}` is neither a module nor a root re-export"
+            );
+        }
+        *used = resolved.into_iter().filter(|name| modules.contains(name)).collect();
     }
     graph
 }
@@ -110,9 +197,17 @@ fn cycle(graph: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> {
 
 #[test]
 fn the_reader_sees_plain_and_grouped_uses_and_finds_a_cycle() {
-    let used =
-        uses("use crate::{fs, json::read, self};\nlet x = crate::plan::Tier::Quick; // crate::front\n");
-    assert_eq!(used, BTreeSet::from(["fs".to_string(), "json".into(), "plan".into()]));
+    let source = "use crate::{\n    fs,\n    json::{read, write},\n    self,\n};\nlet x = crate::plan::Tier::Quick; // crate::front\n\
+                  #[cfg(test)]\nmod tests {\n    use crate::report;\n}\nfn after() { crate::stats::median(); }\n";
+    assert_eq!(
+        uses(source),
+        BTreeSet::from(["fs".to_string(), "json".into(), "plan".into(), "stats".into()])
+    );
+    let exports = root_exports(
+        "pub use error::RenderError;\npub use render::{\n    DisplayImage, SceneRenderer,\n};\n",
+    );
+    assert_eq!(exports.get("SceneRenderer").map(String::as_str), Some("render"));
+    assert_eq!(exports.get("RenderError").map(String::as_str), Some("error"));
     let graph: BTreeMap<String, BTreeSet<String>> = [
         ("a".to_string(), BTreeSet::from(["b".to_string()])),
         ("b".into(), BTreeSet::from(["c".to_string()])),

@@ -77,11 +77,15 @@ fn provenance(out: &mut String, run: &RunRecord) {
 pub fn overview(out: &mut String, run: &RunRecord) {
     let columns: Vec<&str> =
         OVERVIEW.into_iter().filter(|id| run.scenes.iter().any(|s| s.mode(id).is_some())).collect();
+    if columns.is_empty() {
+        out.push_str("The run has none of the overview's modes; each scene's table follows.\n");
+        return;
+    }
     let _ = writeln!(out, "| scene | {} |", columns.join(" | "));
     let _ = writeln!(out, "|---|{}", "---|".repeat(columns.len()));
     for scene in &run.scenes {
         let cells: Vec<String> = columns.iter().map(|id| overview_cell(scene.mode(id))).collect();
-        let _ = writeln!(out, "| {} | {} |", scene.name, cells.join(" | "));
+        let _ = writeln!(out, "| {} | {} |", cell_text(&scene.name), cells.join(" | "));
     }
     out.push_str(
         "\nEach cell: frame ms / PSNR against the truth in dB; **bold** where the mode is on the \
@@ -116,7 +120,7 @@ fn variants(out: &mut String, run: &RunRecord) {
                 let _ = writeln!(
                     out,
                     "| {} | {m}×{m}{} | {} | {} | {} | {} | {} |",
-                    scene.name,
+                    cell_text(&scene.name),
                     if stall.is_empty() { "" } else { " stalled" },
                     overview_cell(mode(format!("reference-{m}x{m}"))),
                     overview_cell(mode(format!("adaptive-{m}x{m}"))),
@@ -171,7 +175,7 @@ fn passes(out: &mut String, run: &RunRecord) {
             let _ = writeln!(
                 out,
                 "| {} | {m}×{m} | {id} | {frame} | {} | {colour:.1} |",
-                scene.name,
+                cell_text(&scene.name),
                 cells.join(" | ")
             );
         }
@@ -232,7 +236,7 @@ pub fn figures(run_dir: &Path, run: &RunRecord, dir: &Path) -> Result<(Vec<Strin
         if points.is_empty() {
             continue;
         }
-        match strip(run_dir, scene)? {
+        match strip(run_dir, scene) {
             Ok((image, shows)) => {
                 let path = dir.join(format!("{}-strip.png", scene.name));
                 crate::images::write_png(&path, image.width(), image.height(), image.as_raw())
@@ -271,24 +275,24 @@ fn strip_modes(scene: &SceneRecord) -> Option<Vec<&ModeRecord>> {
 }
 
 /// The truth and the [`strip_modes`], cropped at the window where the paper's adaptive mode
-/// differs most from the truth, enlarged and set side by side. The inner result is the image
-/// and what it shows, or the reason when the scene lacks what a strip needs.
-fn strip(run_dir: &Path, scene: &SceneRecord) -> Result<Result<(RgbaImage, String), String>, String> {
+/// differs most from the truth, enlarged and set side by side: the image and what it shows, or
+/// why the scene has no strip (it lacks a truth or an adaptive mode, or an image does not read).
+fn strip(run_dir: &Path, scene: &SceneRecord) -> Result<(RgbaImage, String), String> {
     let Some(truth_file) = scene.truth.as_ref().and_then(|t| t.image.as_deref()) else {
-        return Ok(Err("no truth image".into()));
+        return Err("no truth image".into());
     };
-    let Some(modes) = strip_modes(scene) else { return Ok(Err("no adaptive mode".into())) };
+    let Some(modes) = strip_modes(scene) else { return Err("no adaptive mode".into()) };
     let panels: Vec<(&str, &str)> =
         modes.iter().filter_map(|m| Some((m.mode.as_str(), m.images.display.as_deref()?))).collect();
     let Some(&(_, worst)) = panels.iter().find(|(id, _)| id.starts_with("adaptive")) else {
-        return Ok(Err("no adaptive image".into()));
+        return Err("no adaptive image".into());
     };
     let truth = open_rgba(run_dir, truth_file)?;
     let mut images = vec![truth];
     for (_, file) in &panels {
         let image = open_rgba(run_dir, file)?;
         if image.dimensions() != images[0].dimensions() {
-            return Ok(Err(format!("{file} is not the size of the truth (replaced after the run?)")));
+            return Err(format!("{file} is not the size of the truth (replaced after the run?)"));
         }
         images.push(image);
     }
@@ -303,5 +307,5 @@ fn strip(run_dir: &Path, scene: &SceneRecord) -> Result<Result<(RgbaImage, Strin
         image::imageops::replace(&mut out, &big, i64::from(i as u32 * (panel + STRIP_GAP)), 0);
     }
     let names: Vec<&str> = std::iter::once(TRUTH_ID).chain(panels.iter().map(|(id, _)| *id)).collect();
-    Ok(Ok((out, format!("{side}×{side} at ({x}, {y}), ×{STRIP_ZOOM}: {}", names.join(", ")))))
+    Ok((out, format!("{side}×{side} at ({x}, {y}), ×{STRIP_ZOOM}: {}", names.join(", "))))
 }

@@ -26,8 +26,8 @@ pub fn default_frame_timeout() -> Duration {
 pub struct RunArgs {
     /// Manifests or folders of manifests [default: scenes/].
     pub paths: Vec<PathBuf>,
-    /// quick: 256×192 for the suite's scenes, 25 repetitions (the CI gate); nightly: 1024×768,
-    /// 7 repetitions.
+    /// quick: 256×192 unless a manifest says (the stiff scenes: 160×120), 25 repetitions (the CI
+    /// gate); nightly: 1024×768, 7 repetitions.
     #[arg(long, value_enum, default_value = "quick")]
     pub tier: Tier,
     /// Comma-separated mode ids or groups: baseline, adaptive, ablation, variant [default: the tier's].
@@ -55,7 +55,7 @@ pub struct RunArgs {
     pub truth_cache: Option<PathBuf>,
     /// Memory the render targets of one scene's modes may take together, in GiB; a mode that
     /// would pass it fails before allocating, with its estimate [default: 90% of the memory
-    /// available when the scene starts].
+    /// available after the scene's upload].
     #[arg(long, value_name = "GIB", allow_negative_numbers = true)]
     pub memory_limit: Option<f64>,
     /// Longest a single frame may take, in seconds.
@@ -230,7 +230,7 @@ pub struct RunPlan {
     /// The slice of the scenes this run renders, if not all.
     pub shard: Option<Shard>,
     /// Bytes the render targets of one scene's modes may take together; `None`: 90% of the
-    /// memory available when the scene starts.
+    /// memory available after the scene's upload.
     pub memory_limit: Option<u64>,
     /// reports/<run-id>, created by [`create_run_dir`].
     pub run_dir: PathBuf,

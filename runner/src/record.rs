@@ -266,7 +266,7 @@ pub struct ImageFiles {
     /// Heatmap of samples per pixel (adaptive modes).
     pub samples: Option<String>,
     /// Heatmap of |image − reference| (reference: the same-M reference for adaptive modes,
-    /// else the ground truth).
+    /// deferred-1x1 for FXAA, else the ground truth).
     pub difference: Option<String>,
 }
 

@@ -47,7 +47,7 @@ fn a_run_writes_its_record_and_images_and_exits_zero() {
         // One warm-up and two timed frames, each checked for NaN, Inf and sample counts.
         assert_eq!(m["checks"], json!({"frames": 3, "nan": 0, "inf": 0, "counts_out_of_range": 0}), "{id}");
         assert_eq!(m["passes"][0]["name"], "gbuffer", "{id}");
-        let png = image::open(ws.run_dir().join(m["images"]["display"].as_str().unwrap())).unwrap();
+        let png = ws.display(m);
         assert_eq!((png.width(), png.height()), (64, 48));
         let exr = ws.run_dir().join(m["images"]["hdr"].as_str().unwrap());
         exr::prelude::read_first_rgba_layer_from_file(&exr, |_, _| (), |_, _, _: (f32, f32, f32, f32)| ())
@@ -213,7 +213,7 @@ fn a_ten_bit_pq_scene_writes_16_bit_pngs_and_reuses_its_cached_truth() {
         for id in modes.split(',') {
             let m = mode(scene, id);
             assert_eq!(m["status"], "ok", "{id}: {}", m["error"]);
-            let png = image::open(ws.run_dir().join(m["images"]["display"].as_str().unwrap())).unwrap();
+            let png = ws.display(m);
             let samples = png.to_rgba16().into_raw();
             assert_eq!(png.color(), image::ColorType::Rgba16, "{id}");
             // Each sample is a 10-bit code with its top bits repeated below it.

@@ -59,8 +59,7 @@ fn a_three_line_manifest_frames_and_lights_a_file_in_any_unit() {
     for scene in record["scenes"].as_array().unwrap() {
         assert_eq!(scene["status"], "ok", "{scene}");
         assert_eq!(scene["resolution"], json!([256, 192]), "the quick tier's default");
-        let png = ws.run_dir().join(mode(scene, "deferred-1x1")["images"]["display"].as_str().unwrap());
-        let image = image::open(&png).unwrap().to_rgb8();
+        let image = ws.display(mode(scene, "deferred-1x1")).to_rgb8();
         // The default background is a sky blue; the cube is reddish and lit.
         let background = image.get_pixel(0, 0).0;
         let cube: Vec<[u8; 3]> = image.pixels().map(|p| p.0).filter(|p| p[0] > p[2] + 20).collect();
@@ -123,10 +122,9 @@ fn automatic_exposure_renders_a_sun_of_6830_lux_as_one_of_6_8() {
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
     let record = ws.record();
     let image = |name: &str| {
-        let scene = record["scenes"].as_array().unwrap().iter().find(|s| s["name"] == name).unwrap();
+        let scene = scene(&record, name);
         assert_eq!(scene["exposure"]["metered"], true, "{scene}");
-        let png = ws.run_dir().join(mode(scene, "deferred-1x1")["images"]["display"].as_str().unwrap());
-        (scene["exposure"]["value"].as_f64().unwrap(), image::open(&png).unwrap().to_rgb8())
+        (scene["exposure"]["value"].as_f64().unwrap(), ws.display(mode(scene, "deferred-1x1")).to_rgb8())
     };
     let ((noon_exposure, noon), (dusk_exposure, dusk)) = (image("noon"), image("dusk"));
     let ratio = dusk_exposure / noon_exposure;
@@ -157,9 +155,12 @@ fn automatic_exposure_renders_a_sun_of_6830_lux_as_one_of_6_8() {
     let record = ws.record();
     let scene = &record["scenes"][0];
     assert_eq!(scene["exposure"], json!({ "value": 1.0, "metered": false }));
-    let png = ws.run_dir().join(mode(scene, "deferred-1x1")["images"]["display"].as_str().unwrap());
-    let white =
-        image::open(&png).unwrap().to_rgb8().pixels().filter(|p| p.0.iter().all(|&c| c >= 250)).count();
+    let white = ws
+        .display(mode(scene, "deferred-1x1"))
+        .to_rgb8()
+        .pixels()
+        .filter(|p| p.0.iter().all(|&c| c >= 250))
+        .count();
     assert!(white > lit / 2, "exposure 1 under a 6830 lux sun should blow the lit scene out ({white} white)");
 }
 
@@ -225,11 +226,7 @@ fn the_files_point_lights_cast_shadows_when_the_manifest_asks() {
     let output = ws.run(&["run", "--modes", "deferred-1x1", "--repetitions", "1"]);
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
     let record = ws.record();
-    let image = |name: &str| {
-        let scene = record["scenes"].as_array().unwrap().iter().find(|s| s["name"] == name).unwrap();
-        let png = ws.run_dir().join(mode(scene, "deferred-1x1")["images"]["display"].as_str().unwrap());
-        image::open(&png).unwrap().to_rgb8()
-    };
+    let image = |name: &str| ws.display(mode(scene(&record, name), "deferred-1x1")).to_rgb8();
     let (plain, shadowed) = (image("plain"), image("shadowed"));
     // The box's shadow falls on the floor behind it: floor pixels that darken by far.
     let darkened =

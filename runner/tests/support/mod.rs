@@ -68,6 +68,12 @@ impl Workspace {
     pub fn run_dir(&self) -> PathBuf {
         std::fs::read_dir(self.dir.join("reports")).unwrap().next().unwrap().unwrap().path()
     }
+
+    /// The display image of a mode record of the only run.
+    pub fn display(&self, mode: &Value) -> image::DynamicImage {
+        let file = self.run_dir().join(mode["images"]["display"].as_str().expect("a display image"));
+        image::open(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()))
+    }
 }
 
 impl Drop for Workspace {
@@ -78,6 +84,16 @@ impl Drop for Workspace {
 
 pub fn stderr(output: &Output) -> String {
     String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+/// The scene of a run record by its name.
+pub fn scene<'a>(record: &'a Value, name: &str) -> &'a Value {
+    record["scenes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["name"] == name)
+        .unwrap_or_else(|| panic!("no {name}"))
 }
 
 pub fn mode<'a>(scene: &'a Value, id: &str) -> &'a Value {

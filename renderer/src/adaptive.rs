@@ -75,7 +75,28 @@ pub enum Reconstruction {
     /// rather than point-sampled n times. The first sample of a pixel that takes more than one
     /// is shaded again for its own cell instead of reusing S, which stands for the whole pixel.
     Cells,
+    /// Beyond the paper's prefix: the M² samples of the G-buffer are grouped into the surfaces
+    /// they lie on (material, normal, tangent plane: [`SURFACE_COS`], [`SURFACE_GAP`]); each
+    /// surface is shaded once, at its sample nearest to its cells' centroid, and more samples
+    /// are shaded where the shading metric asks (the first of the dither order). Every sample
+    /// is stood for by the nearest shaded sample of its surface, which is shaded at the
+    /// centroid of the samples it stands for and weighted by their share of the pixel: thin
+    /// geometry counts by its coverage, as under per-sample edge shading (Lauritzen 2010) and
+    /// surface-based anti-aliasing (Salvi & Vidimče 2012). Where a base-colour texture varies
+    /// inside the pixel, a shaded sample's light is carried to the mean albedo of its samples,
+    /// each read as the reference reads it (shading is affine in albedo): textures are filtered
+    /// at the reference's rate while light is shaded at the surfaces' rate. A pixel on one
+    /// surface with nothing more asked reuses S.
+    Coverage,
 }
+
+/// Two samples of a window lie on one surface for `-coverage` when their normals' cosine is at
+/// least this: 14°.
+pub const SURFACE_COS: f32 = 0.97;
+
+/// … and the second lies within this fraction of the first's depth from the first's tangent
+/// plane.
+pub const SURFACE_GAP: f32 = 0.01;
 
 impl Reconstruction {
     /// Whether a pixel of `n` of `m`² samples reads [`sample_cells`] rather than averaging
@@ -85,10 +106,10 @@ impl Reconstruction {
     }
 
     /// Whether a pixel of `n` of `m`² samples shades its first sample again instead of
-    /// reusing S: every full window does (to equal the reference), and under `Cells` every
-    /// pixel of more than one sample.
+    /// reusing S: every full window does (to equal the reference), and under `Cells` and
+    /// `Coverage` every pixel of more than one sample.
     pub fn reshades_first(self, m: u32, n: u32) -> bool {
-        n == m * m || (self == Reconstruction::Cells && n > 1)
+        n == m * m || (matches!(self, Reconstruction::Cells | Reconstruction::Coverage) && n > 1)
     }
 }
 

@@ -2,6 +2,7 @@
 //! which outputs are read back. Built from what the scene needs, so a scene without
 //! shadow-casting lights has no shadow pass and no cube, and only adaptive modes evaluate.
 
+use crate::adaptive::{ExtraSamples, Reconstruction};
 use crate::graph::{Dims, Graph, Output, PassId, Plan};
 use crate::mode::{Mode, Technique};
 use crate::passes::adaptive::{
@@ -16,7 +17,7 @@ use crate::passes::tonemap::TonemapNode;
 use crate::passes::{Node, gbuffer::PORTS as GBUFFER};
 use crate::scene::{Lighting, Scene, ShadowCubes};
 use crate::shaders::Features;
-use crate::{adaptive::ExtraSamples, error::RenderError, settings::RenderSettings};
+use crate::{error::RenderError, settings::RenderSettings};
 
 /// What a scene asks of its frames, besides its mode.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -126,23 +127,24 @@ pub(crate) fn frame_graph(
             }
         }
         Technique::Adaptive(metrics, reconstruction) => {
-            let cells = reconstruction == crate::adaptive::Reconstruction::Cells;
-            let first = add(&mut g, ShadeFirstNode { m, stalled, cells, shadows: cubes });
+            let coverage = reconstruction == Reconstruction::Coverage;
+            let first = add(&mut g, ShadeFirstNode { m, stalled, reconstruction, shadows: cubes });
             sources.feed(&mut g, first);
             g.retain(first, "first", Output::First);
             let textured = needs.features.textured;
-            let texture_detail = cells;
-            let evaluate = add(
-                &mut g,
-                EvaluateNode { m, metrics, textured, texture_detail, settings: settings.adaptive },
-            );
-            let read = if textured { &gbuffer::PORTS[..] } else { &[gbuffer::NORMAL, gbuffer::DEPTH][..] };
-            g.connect_all(gbuffer, evaluate, read);
+            let evaluate_node =
+                EvaluateNode { m, metrics, textured, reconstruction, settings: settings.adaptive };
+            let reads = evaluate_node.gbuffer_reads();
+            let evaluate = add(&mut g, evaluate_node);
+            g.connect_all(gbuffer, evaluate, reads);
             g.connect(first, "first", evaluate, "first");
             g.retain(evaluate, "counts", Output::SampleCounts);
+            // `-coverage` reads its samples' slopes from the list, which the loop has no room for.
             let extra = match settings.adaptive.extra_samples {
-                ExtraSamples::Loop => Extra::Loop { stalled, shadows: cubes },
-                ExtraSamples::Compact => Extra::List(List::new(m, settings.width, settings.height, limits)?),
+                ExtraSamples::Loop if !coverage => Extra::Loop { stalled, shadows: cubes },
+                ExtraSamples::Loop | ExtraSamples::Compact => {
+                    Extra::List(List::new(m, settings.width, settings.height, limits)?)
+                }
             };
             let list = match extra {
                 Extra::List(list) => Some(list),
@@ -154,14 +156,23 @@ pub(crate) fn frame_graph(
             match list {
                 None => sources.feed(&mut g, gather),
                 Some(list) => {
-                    let compact = add(&mut g, CompactNode { m, cells, list });
+                    let compact = add(&mut g, CompactNode { m, reconstruction, list });
                     g.connect(evaluate, "counts", compact, "counts");
-                    let extra = add(&mut g, ShadeExtraNode { m, stalled, cells, list, shadows: cubes });
+                    let extra =
+                        add(&mut g, ShadeExtraNode { m, stalled, reconstruction, list, shadows: cubes });
                     sources.feed(&mut g, extra);
                     g.connect(compact, "entries", extra, "list_entries");
                     g.connect(compact, "totals", extra, "list_totals");
                     g.connect(compact, "pixel_offsets", gather, "list_offsets");
                     g.connect(extra, "extra", gather, "extra_samples");
+                    if coverage {
+                        for pass in [compact, extra, gather] {
+                            g.connect(evaluate, "groups", pass, "groups");
+                        }
+                        g.connect(first, "first_slope", gather, "first_slope");
+                        g.connect(extra, "extra_slope", gather, "extra_slopes");
+                        g.connect_all(gbuffer, gather, &gbuffer::PORTS);
+                    }
                 }
             }
             gather

@@ -1,5 +1,5 @@
 //! Render modes and their ids: `deferred-1x1`, `reference-4x4-stalled`, `adaptive-3x3-geometry`,
-//! `adaptive-3x3-area`, `adaptive-4x4-cells`.
+//! `adaptive-3x3-area`, `adaptive-4x4-cells`, `adaptive-4x4-coverage`.
 
 use std::fmt;
 use std::str::FromStr;
@@ -70,12 +70,13 @@ impl Mode {
         modes
     }
 
-    /// Adaptive 2×2–4×4 beyond the paper, beside it: samples weighted by their area, and
-    /// samples that stand for their cells.
+    /// Adaptive 2×2–4×4 beyond the paper, beside it: samples weighted by their area, samples
+    /// that stand for their cells, and one sample per surface weighted by its coverage.
     pub fn variant_modes() -> Vec<Mode> {
-        let mut modes = Self::adaptive(Metrics::Both, Reconstruction::Area);
-        modes.extend(Self::adaptive(Metrics::Both, Reconstruction::Cells));
-        modes
+        [Reconstruction::Area, Reconstruction::Cells, Reconstruction::Coverage]
+            .into_iter()
+            .flat_map(|reconstruction| Self::adaptive(Metrics::Both, reconstruction))
+            .collect()
     }
 
     /// How an adaptive mode reconstructs its pixels (`Equal` for every other mode, whose
@@ -116,6 +117,7 @@ impl fmt::Display for Mode {
                 Reconstruction::Equal => {}
                 Reconstruction::Area => f.write_str("-area")?,
                 Reconstruction::Cells => f.write_str("-cells")?,
+                Reconstruction::Coverage => f.write_str("-coverage")?,
             }
         }
         if self.stalled {
@@ -128,7 +130,7 @@ impl fmt::Display for Mode {
 /// A mode id that does not parse, with the reason.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry, adaptive-4x4-area, adaptive-4x4-cells)"
+    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry, adaptive-4x4-area, adaptive-4x4-cells, adaptive-4x4-coverage)"
 )]
 pub struct ModeError {
     pub id: String,
@@ -169,6 +171,7 @@ impl FromStr for Mode {
         let reconstruction = match (technique, rest.last()) {
             ("adaptive", Some(&"area")) => Reconstruction::Area,
             ("adaptive", Some(&"cells")) => Reconstruction::Cells,
+            ("adaptive", Some(&"coverage")) => Reconstruction::Coverage,
             _ => Reconstruction::Equal,
         };
         if reconstruction != Reconstruction::Equal {
@@ -214,10 +217,11 @@ mod tests {
         let all =
             [Mode::baseline_modes(), Mode::adaptive_modes(), Mode::ablation_modes(), Mode::variant_modes()]
                 .concat();
-        assert_eq!(all.len(), 10 + 6 + 12 + 12);
+        assert_eq!(all.len(), 10 + 6 + 12 + 18);
         assert!(all.iter().any(|m| m.to_string() == "fxaa-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-3x3-area-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-4x4-cells"));
+        assert!(all.iter().any(|m| m.to_string() == "adaptive-2x2-coverage-stalled"));
         for mode in all {
             assert_eq!(mode.to_string().parse::<Mode>(), Ok(mode));
         }

@@ -42,8 +42,8 @@ impl Constants {
 /// How a render pipeline rasterizes, beyond its shaders: the part of its key that passes add.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub(crate) enum Raster {
-    /// No vertex buffers, one colour target of this format.
-    Screen(wgpu::TextureFormat),
+    /// No vertex buffers, colour targets of these formats.
+    Screen(ScreenTargets),
     /// The scene's vertices into the G-buffer, culled as the draw class says.
     GBuffer(DrawClass),
     /// The scene's vertices into a depth-only target, both faces.
@@ -218,14 +218,21 @@ impl Pipelines {
     }
 }
 
+/// The most colour targets a screen pass writes: a colour and its slope in albedo
+/// (`shade_group`), a count and its pixel's surfaces (`evaluate_coverage`).
+pub(crate) const MAX_SCREEN_TARGETS: usize = 2;
+
+/// The formats of a screen pass's colour targets, in location order.
+pub(crate) type ScreenTargets = [Option<wgpu::TextureFormat>; MAX_SCREEN_TARGETS];
+
 /// A pipeline that runs a fragment entry point over the triangles that a vertex entry point
-/// (no vertex buffers) makes, into one target of `format`.
+/// (no vertex buffers) makes, into targets of `formats`.
 pub(crate) fn screen_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     key: &RenderKey,
-    format: wgpu::TextureFormat,
+    formats: ScreenTargets,
 ) -> wgpu::RenderPipeline {
     let constants = key.constants.pairs();
     // Both stages see the same override constants.
@@ -246,7 +253,7 @@ pub(crate) fn screen_pipeline(
             module,
             entry_point: key.fragment,
             compilation_options: options,
-            targets: &[Some(format.into())],
+            targets: &formats.into_iter().flatten().map(|f| Some(f.into())).collect::<Vec<_>>(),
         }),
         multiview_mask: None,
         cache: None,

@@ -171,16 +171,21 @@ impl Tier {
         }
     }
 
-    /// The modes run when `--modes` is not given: baselines, adaptive and the unstalled
-    /// variants; the nightly tier adds the unstalled ablations and the stalled `-cells` modes
-    /// (which shade other samples than the paper's, so their stalled time is their own, where
-    /// `-area` differs from the paper only in `gather`).
+    /// The modes run when `--modes` is not given: baselines, adaptive and the unstalled `-area`
+    /// and `-cells` variants; the nightly tier adds the unstalled ablations, the stalled
+    /// `-cells` modes (which shade other samples than the paper's, so their stalled time is
+    /// their own, where `-area` differs from the paper only in `gather`) and `-coverage`,
+    /// plain and stalled (its fixed passes cost more than it saves at the quick tier's size,
+    /// so it is measured where it can pay).
     pub fn default_modes(self) -> Vec<Mode> {
+        use aabench_renderer::Reconstruction::{Cells, Coverage};
         let mut modes = Mode::baseline_modes();
         modes.extend(Mode::adaptive_modes());
         let nightly = self == Tier::Nightly;
-        modes.extend(Mode::variant_modes().into_iter().filter(|m| {
-            !m.stalled || (nightly && m.reconstruction() == aabench_renderer::Reconstruction::Cells)
+        modes.extend(Mode::variant_modes().into_iter().filter(|m| match m.reconstruction() {
+            Coverage => nightly,
+            Cells => !m.stalled || nightly,
+            _ => !m.stalled,
         }));
         if nightly {
             modes.extend(Mode::ablation_modes().into_iter().filter(|m| !m.stalled));
@@ -450,12 +455,14 @@ mod tests {
         let quick = Tier::Quick.default_modes();
         let nightly = Tier::Nightly.default_modes();
         assert_eq!(quick.len(), 22);
-        assert_eq!(nightly.len(), 31);
+        assert_eq!(nightly.len(), 37);
         assert!(quick.iter().all(|m| !m.to_string().contains("geometry")));
         let area: Vec<String> = quick.iter().map(Mode::to_string).filter(|id| id.contains("area")).collect();
         assert_eq!(area, ["adaptive-2x2-area", "adaptive-3x3-area", "adaptive-4x4-area"]);
         let stalled_cells =
             |modes: &[Mode]| modes.iter().filter(|m| m.stalled && m.to_string().contains("cells")).count();
         assert_eq!((stalled_cells(&quick), stalled_cells(&nightly)), (0, 3));
+        let coverage = |modes: &[Mode]| modes.iter().filter(|m| m.to_string().contains("coverage")).count();
+        assert_eq!((coverage(&quick), coverage(&nightly)), (0, 6));
     }
 }

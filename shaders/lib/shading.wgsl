@@ -38,10 +38,18 @@ fn stall(texel: vec2<i32>) -> f32 {
     return f32(h >> 8u) * (1.0 / 16777216.0);
 }
 
+// What a surface reflects of one light, and how that changes with its albedo.
+struct Reflected {
+    value: vec3<f32>,
+    // d value / d albedo, channel by channel: exact for dielectrics, whose reflectance is
+    // affine in albedo; for metals, whose Fresnel term also follows albedo, the tangent.
+    slope: vec3<f32>,
+}
+
 // glTF's metallic-roughness model: Lambert diffuse, GGX distribution, Schlick Fresnel, and
 // Hammon's approximation of height-correlated Smith visibility (no square roots; Filament's
-// "fast" variant). `n_l` > 0 is the caller's.
-fn brdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, n_l: f32, albedo: vec3<f32>, metallic: f32, a2: f32, a: f32) -> vec3<f32> {
+// "fast" variant), with its slope in albedo. `n_l` > 0 is the caller's.
+fn reflect_light(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, n_l: f32, albedo: vec3<f32>, metallic: f32, a2: f32, a: f32) -> Reflected {
     let h = normalize(v + l);
     let n_v = max(dot(n, v), 1e-4);
     let n_h = max(dot(n, h), 0.0);
@@ -53,9 +61,15 @@ fn brdf(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, n_l: f32, albedo: vec3<f32>, m
     // (1 − v·h)⁵ by multiplication rather than pow() (exp2 of log2).
     let x = 1.0 - v_h;
     let x2 = x * x;
-    let fresnel = f0 + (1.0 - f0) * (x2 * x2 * x);
-    let diffuse = (1.0 - fresnel) * ((1.0 - metallic) / PI) * albedo;
-    return (diffuse + fresnel * (distribution * visibility)) * n_l;
+    let x5 = x2 * x2 * x;
+    let fresnel = f0 + (1.0 - f0) * x5;
+    let diffuse_scale = (1.0 - metallic) / PI;
+    let diffuse = (1.0 - fresnel) * diffuse_scale * albedo;
+    let specular = distribution * visibility;
+    // f0 moves with albedo at the rate `metallic`, and the Fresnel term with f0 at 1 − x⁵.
+    let fresnel_slope = metallic * (1.0 - x5);
+    let slope = (1.0 - fresnel) * diffuse_scale + fresnel_slope * (specular - diffuse_scale * albedo);
+    return Reflected((diffuse + fresnel * specular) * n_l, slope * n_l);
 }
 
 // KHR_lights_punctual's inverse-square falloff with a smooth window to zero at `range`, from
@@ -112,13 +126,18 @@ fn shade(texel: vec2<i32>, footprint: f32) -> vec4<f32> {
     return shade_surface(texel, s, world_position(texel, s.depth), footprint);
 }
 
-// The sample at `texel` shaded as if taken `offset` G-buffer texels away on its own surface:
-// the UV moves along its derivatives and the position along the sample's tangent plane, to
-// where the view ray through the offset point meets it. A ray that meets the plane at a
-// grazing angle, behind the camera or at more than twice or less than half the sample's depth
-// leaves the position where it was (the offset is under a pixel; such a plane is an edge,
-// which takes its samples where they lie).
-fn shade_offset(texel: vec2<i32>, offset: vec2<f32>, footprint: f32) -> vec4<f32> {
+// A sample's surface and shading position as if taken `offset` G-buffer texels away on its own
+// surface: the UV moves along its derivatives and the position along the sample's tangent
+// plane, to where the view ray through the offset point meets it. A ray that meets the plane
+// at a grazing angle, behind the camera or at more than twice or less than half the sample's
+// depth leaves the position where it was (the offset is under a pixel; such a plane is an
+// edge, which takes its samples where they lie).
+struct Moved {
+    surface: Surface,
+    position: vec3<f32>,
+}
+
+fn move_on_surface(texel: vec2<i32>, offset: vec2<f32>) -> Moved {
     var s = load_surface(texel);
     s.uv += s.uv_dx * offset.x + s.uv_dy * offset.y;
     let centre = vec2<f32>(texel) + 0.5;
@@ -131,15 +150,18 @@ fn shade_offset(texel: vec2<i32>, offset: vec2<f32>, footprint: f32) -> vec4<f32
         point += offset;
         s.depth = depth;
     }
-    return shade_surface(texel, s, world_position_at(point, s.depth), footprint);
+    return Moved(s, world_position_at(point, s.depth));
 }
 
-// Shading of surface `s` at `position`; `texel` seeds the stall.
-fn shade_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f32) -> vec4<f32> {
-    let stalled = stall(texel);
-    if s.material == BACKGROUND {
-        return vec4<f32>(frame.background.rgb, stalled);
-    }
+// The sample at `texel` shaded as if taken `offset` G-buffer texels away (move_on_surface).
+fn shade_offset(texel: vec2<i32>, offset: vec2<f32>, footprint: f32) -> vec4<f32> {
+    let moved = move_on_surface(texel, offset);
+    return shade_surface(texel, moved.surface, moved.position, footprint);
+}
+
+// The albedo that shading reads for surface `s`: the base colour, times its texture filtered
+// over `footprint`.
+fn surface_albedo(s: Surface, footprint: f32) -> vec3<f32> {
     let material = materials[s.material];
     var albedo = material.base_color.rgb;
 #ifdef TEXTURED
@@ -147,6 +169,30 @@ fn shade_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f
         albedo *= sample_filtered(scene_textures, material.texture, surface_coords(s, SLOT_BASE, footprint)).rgb;
     }
 #endif
+    return albedo;
+}
+
+// Shading of surface `s` at `position`; `texel` seeds the stall.
+fn shade_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f32) -> vec4<f32> {
+    return light_surface(texel, s, position, footprint).color;
+}
+
+// A shaded sample: its radiance (alpha: the stall's result), and the radiance's slope in the
+// sample's albedo, with which the `-coverage` variant carries the light of one sample to the
+// albedos of the samples it stands for. Passes that read only `color` leave the slope's
+// arithmetic to dead-code elimination; `color` is computed by the same operations either way.
+struct Lit {
+    color: vec4<f32>,
+    slope: vec3<f32>,
+}
+
+fn light_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f32) -> Lit {
+    let stalled = stall(texel);
+    if s.material == BACKGROUND {
+        return Lit(vec4<f32>(frame.background.rgb, stalled), vec3<f32>(0.0));
+    }
+    let material = materials[s.material];
+    let albedo = surface_albedo(s, footprint);
 #ifdef METALLIC_ROUGHNESS
     var metallic = material.metallic;
     var rough = material.roughness;
@@ -172,8 +218,10 @@ fn shade_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f
         ambient *= 1.0 + material.occlusion_strength * (occlusion - 1.0);
     }
     var radiance = ambient * albedo;
+    var slope = ambient;
 #else
     var radiance = frame.ambient.rgb * albedo;
+    var slope = frame.ambient.rgb;
 #endif
 #ifdef EMISSIVE
     var emitted = material.emissive;
@@ -207,22 +255,28 @@ fn shade_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f
 #ifdef LIGHT_KINDS
             let falloff = select(1.0, attenuation(distance2, inverse * inverse, light.range), positional);
             let cone = clamp(dot(light.direction, -l) * light.spot_scale + light.spot_offset, 0.0, 1.0);
-            var contribution = brdf(s.normal, v, l, n_l, albedo, metallic, a2, a)
-                * light.radiance * falloff * (cone * cone);
+            let reflected = reflect_light(s.normal, v, l, n_l, albedo, metallic, a2, a);
+            var contribution = reflected.value * light.radiance * falloff * (cone * cone);
+            var contribution_slope = reflected.slope * light.radiance * falloff * (cone * cone);
 #else
-            var contribution = brdf(s.normal, v, l, n_l, albedo, metallic, a2, a)
-                * light.radiance * attenuation(distance2, inverse * inverse, light.range);
+            let reflected = reflect_light(s.normal, v, l, n_l, albedo, metallic, a2, a);
+            let falloff = attenuation(distance2, inverse * inverse, light.range);
+            var contribution = reflected.value * light.radiance * falloff;
+            var contribution_slope = reflected.slope * light.radiance * falloff;
 #endif
 #ifdef SHADOWS
             if light.shadow >= 0 {
-                contribution *= shadow_visibility(light, position, s.normal, length(frame.eye.xyz - position));
+                let visible = shadow_visibility(light, position, s.normal, length(frame.eye.xyz - position));
+                contribution *= visible;
+                contribution_slope *= visible;
             }
 #endif
             radiance += contribution;
+            slope += contribution_slope;
         }
     }
     // The HDR targets are f16: radiance past their largest value (a light 10⁵ times the others
     // on a glossy highlight) would be stored as +Inf. It is kept at HALF_MAX instead, which
     // the tonemap reads as "brighter than anything shown".
-    return vec4<f32>(min(radiance, vec3<f32>(HALF_MAX)), stalled);
+    return Lit(vec4<f32>(min(radiance, vec3<f32>(HALF_MAX)), stalled), min(slope, vec3<f32>(HALF_MAX)));
 }

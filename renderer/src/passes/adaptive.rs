@@ -4,7 +4,8 @@ use super::{
     BuildContext, Compute, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, gbuffer, shading_inputs,
 };
 use crate::adaptive::{
-    DepthMetric, LIST_TEXEL_BITS, Reconstruction, packed_dither_matrix, packed_sample_order,
+    DepthMetric, LIST_TEXEL_BITS, Reconstruction, SURFACE_COS, SURFACE_GAP, packed_dither_matrix,
+    packed_sample_order,
 };
 use crate::bindings::Bound;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
@@ -28,6 +29,17 @@ fn counts() -> Resource {
     Resource::texture(COUNT_FORMAT, Extent::Output)
 }
 
+/// The `-coverage` variant's map of each pixel's shaded samples and the cells they stand for
+/// (`shaders/adaptive.wgsl`: groups).
+fn groups() -> Resource {
+    Resource::texture(wgpu::TextureFormat::Rgba32Uint, Extent::Output)
+}
+
+/// The slope in albedo of the colour beside it (`lib/shading.wgsl`: Lit).
+fn first_slope() -> Resource {
+    Resource::texture(HDR_FORMAT, Extent::Output)
+}
+
 /// The window's side and its dither order.
 fn window(m: u32) -> Constants {
     // The dither matrices, and evaluate's depth gathers (two blocks a row), stop at 4.
@@ -42,9 +54,12 @@ fn cells_table(ctx: &mut BuildContext, m: u32) -> [(&'static str, Bound); 1] {
     [("sample_cells", Bound::Buffer(ctx.pipelines.sample_cells(m)))]
 }
 
-/// Whether each sample stands for its cell (the `-cells` variant), for the passes that read it.
-fn cells_flag(cells: bool) -> Constants {
-    Constants::new().flag("CELLS", cells)
+/// Which variant's reading of the list the passes that read it follow: each sample standing
+/// for its cell (`-cells`) or for the samples of its surface (`-coverage`).
+fn variant_flags(reconstruction: Reconstruction) -> Constants {
+    Constants::new()
+        .flag("CELLS", reconstruction == Reconstruction::Cells)
+        .flag("COVERAGE", reconstruction == Reconstruction::Coverage)
 }
 
 /// The list of extra samples: at most M² entries per pixel (a full window shades rank 0
@@ -102,8 +117,9 @@ fn buffer(bytes: u64) -> Resource {
 pub(crate) struct ShadeFirstNode {
     pub m: u32,
     pub stalled: bool,
-    /// S at the pixel's centre with the pixel's footprint (`Reconstruction::Cells`).
-    pub cells: bool,
+    /// Under `Cells` and `Coverage`, S at the pixel's centre with the pixel's footprint;
+    /// under `Coverage` also its slope in albedo.
+    pub reconstruction: Reconstruction,
     pub shadows: Option<Resource>,
 }
 
@@ -111,16 +127,24 @@ impl Node for ShadeFirstNode {
     fn decl(&self) -> PassDecl {
         let mut ports = shading_inputs(self.shadows);
         ports.push(Port::new("first", first(), Access::Attachment));
+        if self.reconstruction == Reconstruction::Coverage {
+            ports.push(Port::new("first_slope", first_slope(), Access::Attachment));
+        }
         PassDecl { name: "shade_first", ports }
     }
 
     fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
-        let constants =
-            ctx.shading_constants(self.stalled).extend(&window(self.m)).extend(&cells_flag(self.cells));
-        let program =
-            Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some("shade_first"), constants };
+        let constants = ctx
+            .shading_constants(self.stalled)
+            .extend(&window(self.m))
+            .extend(&variant_flags(self.reconstruction));
+        let (fragment, targets): (_, &[&str]) = match self.reconstruction {
+            Reconstruction::Coverage => ("shade_first_coverage", &["first", "first_slope"]),
+            _ => ("shade_first", &["first"]),
+        };
+        let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some(fragment), constants };
         let owned = cells_table(ctx, self.m);
-        Ok(Box::new(ctx.screen(io, "shade_first", program, "first", FULLSCREEN.1, &owned)?))
+        Ok(Box::new(ctx.screen(io, "shade_first", program, targets, FULLSCREEN.1, &owned)?))
     }
 }
 
@@ -133,23 +157,39 @@ pub(crate) struct EvaluateNode {
     /// The scene has textures: the shader then reads the G-buffer's UVs (for the texture
     /// detail below, even where it is off).
     pub textured: bool,
-    /// The shading metric counts texture contrast below the pixel's scale (`-cells`).
-    pub texture_detail: bool,
+    pub reconstruction: Reconstruction,
     pub settings: AdaptiveSettings,
+}
+
+impl EvaluateNode {
+    /// The G-buffer ports the pass reads: normals and depths; the UVs in a textured scene (for
+    /// the texture detail, even where it is off), and under `-coverage` at least the UV
+    /// target's size (`view_ray`).
+    pub fn gbuffer_reads(&self) -> &'static [&'static str] {
+        if self.textured {
+            &gbuffer::PORTS
+        } else if self.reconstruction == Reconstruction::Coverage {
+            &[gbuffer::UV, gbuffer::NORMAL, gbuffer::DEPTH]
+        } else {
+            &[gbuffer::NORMAL, gbuffer::DEPTH]
+        }
+    }
 }
 
 impl Node for EvaluateNode {
     fn decl(&self) -> PassDecl {
-        let [uv, normal, uv_grad, depth] = gbuffer::outputs();
-        let read = |port: Port| Port { access: Access::Loaded, ..port };
-        let mut ports = vec![read(normal), read(depth)];
-        if self.textured {
-            ports.extend([read(uv), read(uv_grad)]);
-        }
+        let mut ports: Vec<Port> = gbuffer::outputs()
+            .into_iter()
+            .filter(|port| self.gbuffer_reads().contains(&port.name))
+            .map(|port| Port { access: Access::Loaded, ..port })
+            .collect();
         ports.extend([
             Port::new("first", first(), Access::Loaded),
             Port::new("counts", counts(), Access::Attachment),
         ]);
+        if self.reconstruction == Reconstruction::Coverage {
+            ports.push(Port::new("groups", groups(), Access::Attachment));
+        }
         PassDecl { name: "evaluate", ports }
     }
 
@@ -165,11 +205,22 @@ impl Node for EvaluateNode {
             .flag("USE_GEOMETRY", self.metrics != Metrics::Shading)
             .flag("USE_SHADING", self.metrics != Metrics::Geometry)
             .flag("FORCE_ALL", s.force_all_samples)
-            .flag("TEXTURE_DETAIL", self.texture_detail && self.metrics != Metrics::Geometry);
-        let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some("evaluate"), constants };
+            // The shading metric counts texture contrast below the pixel's scale under `-cells`;
+            // `-coverage` filters textures at the reference's rate instead.
+            .flag(
+                "TEXTURE_DETAIL",
+                self.reconstruction == Reconstruction::Cells && self.metrics != Metrics::Geometry,
+            )
+            .with("SURFACE_COS", SURFACE_COS)
+            .with("SURFACE_GAP", SURFACE_GAP);
+        let (fragment, targets): (_, &[&str]) = match self.reconstruction {
+            Reconstruction::Coverage => ("evaluate_coverage", &["counts", "groups"]),
+            _ => ("evaluate", &["counts"]),
+        };
+        let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some(fragment), constants };
         let owned =
             [("texel_sampler", Bound::Sampler { sampler: ctx.pipelines.texel_sampler(), filtering: false })];
-        Ok(Box::new(ctx.screen(io, "evaluate", program, "counts", FULLSCREEN.1, &owned)?))
+        Ok(Box::new(ctx.screen(io, "evaluate", program, targets, FULLSCREEN.1, &owned)?))
     }
 }
 
@@ -177,8 +228,9 @@ impl Node for EvaluateNode {
 #[derive(Debug)]
 pub(crate) struct CompactNode {
     pub m: u32,
-    /// Pixels of more than one sample list their first sample too (`Reconstruction::Cells`).
-    pub cells: bool,
+    /// Under `Cells` and `Coverage`, pixels of more than one sample list their first sample
+    /// too; under `Coverage` the listed samples are a pixel's `groups`.
+    pub reconstruction: Reconstruction,
     pub list: List,
 }
 
@@ -186,25 +238,27 @@ impl Node for CompactNode {
     fn decl(&self) -> PassDecl {
         // Rows and pixels are bounded by the list's capacity over M².
         let pixels = self.list.capacity / u64::from(self.m * self.m);
-        PassDecl {
-            name: "compact",
-            ports: vec![
-                Port::new("counts", counts(), Access::Loaded),
-                // Scratch: each row's offset, read by nothing after this pass.
-                Port::new("row_offsets", buffer(4 * pixels), Access::StorageWrite),
-                Port::new("totals", buffer(4), Access::StorageWrite),
-                Port::new("pixel_offsets", buffer(4 * pixels), Access::StorageWrite),
-                Port::new("entries", buffer(4 * self.list.capacity), Access::StorageWrite),
-            ],
+        let mut ports = vec![
+            Port::new("counts", counts(), Access::Loaded),
+            // Scratch: each row's offset, read by nothing after this pass.
+            Port::new("row_offsets", buffer(4 * pixels), Access::StorageWrite),
+            Port::new("totals", buffer(4), Access::StorageWrite),
+            Port::new("pixel_offsets", buffer(4 * pixels), Access::StorageWrite),
+            Port::new("entries", buffer(4 * self.list.capacity), Access::StorageWrite),
+        ];
+        if self.reconstruction == Reconstruction::Coverage {
+            ports.push(Port::new("groups", groups(), Access::Loaded));
         }
+        PassDecl { name: "compact", ports }
     }
 
     fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
         let rows = io.texture("counts")?.height();
         let row_groups = rows.div_ceil(64);
         let mut steps = Vec::new();
-        for (entry, workgroups) in [("scan_rows", row_groups), ("scan_total", 1), ("emit", row_groups)] {
-            let constants = window(self.m).extend(&cells_flag(self.cells));
+        let emit = if self.reconstruction == Reconstruction::Coverage { "emit_groups" } else { "emit" };
+        for (entry, workgroups) in [("scan_rows", row_groups), ("scan_total", 1), (emit, row_groups)] {
+            let constants = window(self.m).extend(&variant_flags(self.reconstruction));
             steps.push(ctx.compute_step(io, SHADER, entry, constants, [workgroups, 1, 1])?);
         }
         Ok(Box::new(Compute { name: "compact", steps }))
@@ -216,8 +270,9 @@ impl Node for CompactNode {
 pub(crate) struct ShadeExtraNode {
     pub m: u32,
     pub stalled: bool,
-    /// Each sample shaded for its cell (`Reconstruction::Cells`).
-    pub cells: bool,
+    /// Each sample shaded for its cell (`Cells`) or for the samples it stands for, with its
+    /// slope in albedo (`Coverage`).
+    pub reconstruction: Reconstruction,
     pub list: List,
     pub shadows: Option<Resource>,
 }
@@ -230,6 +285,12 @@ impl Node for ShadeExtraNode {
             Port::new("list_totals", buffer(4), Access::StorageRead),
             Port::new("extra", self.list.extra(), Access::Attachment),
         ]);
+        if self.reconstruction == Reconstruction::Coverage {
+            ports.extend([
+                Port::new("groups", groups(), Access::Loaded),
+                Port::new("extra_slope", self.list.extra(), Access::Attachment),
+            ]);
+        }
         PassDecl { name: "shade_extra", ports }
     }
 
@@ -239,13 +300,16 @@ impl Node for ShadeExtraNode {
             .shading_constants(self.stalled)
             .extend(&window(self.m))
             .extend(&self.list.constants())
-            .extend(&cells_flag(self.cells))
+            .extend(&variant_flags(self.reconstruction))
             .with("RANK_LOW", low)
             .with("RANK_HIGH", high);
-        let program =
-            Program { shader: SHADER, vertex: COMPACT_ROWS.0, fragment: Some("shade_extra"), constants };
+        let (fragment, targets): (_, &[&str]) = match self.reconstruction {
+            Reconstruction::Coverage => ("shade_group", &["extra", "extra_slope"]),
+            _ => ("shade_extra", &["extra"]),
+        };
+        let program = Program { shader: SHADER, vertex: COMPACT_ROWS.0, fragment: Some(fragment), constants };
         let owned = cells_table(ctx, self.m);
-        Ok(Box::new(ctx.screen(io, "shade_extra", program, "extra", COMPACT_ROWS.1, &owned)?))
+        Ok(Box::new(ctx.screen(io, "shade_extra", program, targets, COMPACT_ROWS.1, &owned)?))
     }
 }
 
@@ -281,12 +345,24 @@ impl Node for GatherNode {
             ]),
             Extra::Loop { shadows, .. } => ports.extend(shading_inputs(*shadows)),
         }
+        if let (Reconstruction::Coverage, Extra::List(list)) = (self.reconstruction, &self.extra) {
+            // The G-buffer for the albedos that a shaded sample's light is carried to.
+            ports.extend(shading_inputs(None));
+            ports.extend([
+                Port::new("groups", groups(), Access::Loaded),
+                Port::new("first_slope", first_slope(), Access::Loaded),
+                Port::new("extra_slopes", list.extra(), Access::Loaded),
+            ]);
+        }
         ports.push(Port::new("color", Resource::texture(HDR_FORMAT, Extent::Output), Access::Attachment));
         PassDecl { name: "gather", ports }
     }
 
     fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
         let (entry, constants) = match &self.extra {
+            Extra::List(list) if self.reconstruction == Reconstruction::Coverage => {
+                ("gather_coverage", window(self.m).extend(&list.constants()))
+            }
             Extra::List(list) => ("gather", window(self.m).extend(&list.constants())),
             Extra::Loop { stalled, .. } => {
                 ("gather_loop", ctx.shading_constants(*stalled).extend(&window(self.m)))
@@ -294,10 +370,10 @@ impl Node for GatherNode {
         };
         let constants = constants
             .flag("WEIGHTED", self.reconstruction != Reconstruction::Equal)
-            .extend(&cells_flag(self.reconstruction == Reconstruction::Cells));
+            .extend(&variant_flags(self.reconstruction));
         let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some(entry), constants };
         let owned = cells_table(ctx, self.m);
-        Ok(Box::new(ctx.screen(io, "gather", program, "color", FULLSCREEN.1, &owned)?))
+        Ok(Box::new(ctx.screen(io, "gather", program, &["color"], FULLSCREEN.1, &owned)?))
     }
 }
 

@@ -44,7 +44,7 @@ impl Node for DisplayNode {
             fragment: Some("display"),
             constants: encoding(&ctx.settings.color).flag("EXPOSE", self.expose),
         };
-        Ok(Box::new(ctx.screen(io, "display", program, "display", FULLSCREEN.1, &[])?))
+        Ok(Box::new(ctx.screen(io, "display", program, &["display"], FULLSCREEN.1, &[])?))
     }
 }
 

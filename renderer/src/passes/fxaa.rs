@@ -34,6 +34,6 @@ impl Node for FxaaNode {
             .with("EDGE_THRESHOLD_MIN", EDGE_THRESHOLD_MIN);
         let program =
             Program { shader: "fxaa.wgsl", vertex: FULLSCREEN.0, fragment: Some("fxaa"), constants };
-        Ok(Box::new(ctx.screen(io, "fxaa", program, "display", FULLSCREEN.1, &[])?))
+        Ok(Box::new(ctx.screen(io, "fxaa", program, &["display"], FULLSCREEN.1, &[])?))
     }
 }

@@ -18,7 +18,9 @@ use std::collections::{BTreeSet, HashMap};
 
 use crate::bindings::{self, Bound, Stages};
 use crate::graph::{Access, PassDecl, Port, Resource};
-use crate::pipelines::{ComputeKey, Constants, LayoutEntries, Pipelines, Raster, RenderKey};
+use crate::pipelines::{
+    ComputeKey, Constants, LayoutEntries, MAX_SCREEN_TARGETS, Pipelines, Raster, RenderKey, ScreenTargets,
+};
 use crate::scene::GpuScene;
 use crate::{error::RenderError, settings::RenderSettings};
 
@@ -208,35 +210,37 @@ impl BuildContext<'_> {
         Ok(Bundle { pipeline, groups })
     }
 
-    /// A fragment pass of `program` over the texture of the output port `target`; `owned` are
-    /// the pass's own bindings, beside its ports and the scene's.
+    /// A fragment pass of `program` over the textures of the output ports `targets` (at most
+    /// [`MAX_SCREEN_TARGETS`], in location order); `owned` are the pass's own bindings, beside
+    /// its ports and the scene's.
     pub fn screen(
         &mut self,
         io: &mut Io,
         name: &'static str,
         program: Program,
-        target: &str,
+        targets: &[&str],
         vertices: u32,
         owned: &[(&str, Bound)],
     ) -> Result<Screen, RenderError> {
-        let target = io.texture(target)?;
-        let format = target.format();
+        let mut formats: ScreenTargets = [None; MAX_SCREEN_TARGETS];
+        let mut views = Vec::with_capacity(targets.len());
+        for (i, target) in targets.iter().enumerate() {
+            let texture = io.texture(target)?;
+            *formats.get_mut(i).ok_or_else(|| {
+                RenderError::Binding(format!("{name}: more than {MAX_SCREEN_TARGETS} colour targets"))
+            })? = Some(texture.format());
+            views.push(texture.create_view(&Default::default()));
+        }
         let bound = self.render_pipeline(
             io,
             &program,
-            Raster::Screen(format),
+            Raster::Screen(formats),
             owned,
             |device, layout, module, key| {
-                crate::pipelines::screen_pipeline(device, layout, module, key, format)
+                crate::pipelines::screen_pipeline(device, layout, module, key, formats)
             },
         )?;
-        Ok(Screen {
-            name,
-            pipeline: bound.pipeline,
-            groups: bound.groups,
-            target: target.create_view(&Default::default()),
-            vertices,
-        })
+        Ok(Screen { name, pipeline: bound.pipeline, groups: bound.groups, targets: views, vertices })
     }
 
     /// One compute dispatch step of `entry`.
@@ -292,7 +296,7 @@ impl SetBindGroup for wgpu::ComputePass<'_> {
     }
 }
 
-/// A fragment shader run on `target` over the triangles of `vertices` vertices that the
+/// A fragment shader run on `targets` over the triangles of `vertices` vertices that the
 /// pipeline's vertex shader makes: 3 for the fullscreen triangle. Whatever it covers it
 /// overwrites, and the rest is never read.
 #[derive(Debug)]
@@ -300,7 +304,7 @@ pub(crate) struct Screen {
     pub name: &'static str,
     pub pipeline: wgpu::RenderPipeline,
     pub groups: Vec<(u32, wgpu::BindGroup)>,
-    pub target: wgpu::TextureView,
+    pub targets: Vec<wgpu::TextureView>,
     pub vertices: u32,
 }
 
@@ -310,16 +314,23 @@ impl Pass for Screen {
     }
 
     fn encode(&self, encoder: &mut wgpu::CommandEncoder) {
+        let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = self
+            .targets
+            .iter()
+            .map(|view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    // Old contents are never read: `Load` costs nothing on lavapipe where
+                    // `Clear` would fill the whole target first.
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+                })
+            })
+            .collect();
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(self.name),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &self.target,
-                depth_slice: None,
-                resolve_target: None,
-                // Old contents are never read: `Load` costs nothing on lavapipe where `Clear`
-                // would fill the whole target first.
-                ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
-            })],
+            color_attachments: &attachments,
             depth_stencil_attachment: None,
             timestamp_writes: None,
             occlusion_query_set: None,

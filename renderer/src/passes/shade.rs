@@ -27,7 +27,7 @@ impl Node for ShadeNode {
             fragment: Some("shade_all"),
             constants: ctx.shading_constants(self.stalled),
         };
-        Ok(Box::new(ctx.screen(io, "shade", program, "color", FULLSCREEN.1, &[])?))
+        Ok(Box::new(ctx.screen(io, "shade", program, &["color"], FULLSCREEN.1, &[])?))
     }
 }
 
@@ -55,6 +55,6 @@ impl Node for ResolveNode {
             fragment: Some("resolve"),
             constants: Constants::new().with("M", self.m),
         };
-        Ok(Box::new(ctx.screen(io, "resolve", program, "color", FULLSCREEN.1, &[])?))
+        Ok(Box::new(ctx.screen(io, "resolve", program, &["color"], FULLSCREEN.1, &[])?))
     }
 }

@@ -42,6 +42,6 @@ impl Node for TonemapNode {
             .with("CROSS_SATURATION", t.cross_saturation);
         let program =
             Program { shader: "tonemap.wgsl", vertex: FULLSCREEN.0, fragment: Some("tonemap"), constants };
-        Ok(Box::new(ctx.screen(io, "tonemap", program, "tonemapped", FULLSCREEN.1, &[])?))
+        Ok(Box::new(ctx.screen(io, "tonemap", program, &["tonemapped"], FULLSCREEN.1, &[])?))
     }
 }

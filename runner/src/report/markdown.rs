@@ -8,7 +8,7 @@ use std::path::Path;
 
 use image::RgbaImage;
 
-use super::{MODE_COLUMNS, decibels, error_points, mode_cells, open_rgba, plots, worst_window};
+use super::{MODE_COLUMNS, VARIANTS, decibels, error_points, mode_cells, open_rgba, plots, worst_window};
 use crate::record::{ModeRecord, RunRecord, SceneRecord};
 use crate::truth::TRUTH_ID;
 
@@ -100,14 +100,14 @@ fn variants(out: &mut String, run: &RunRecord) {
         .scenes
         .iter()
         .flat_map(|s| &s.modes)
-        .any(|m| m.mode.contains("-area") || m.mode.contains("-cells"));
+        .any(|m| m.mode.split('-').any(|part| VARIANTS.contains(&part)));
     if !has_variants {
         return;
     }
     out.push_str(
         "\n### Adaptive and its variants\n\n\
-         | scene | M | reference | adaptive | -area | -cells | -cells on the front, or behind |\n\
-         |---|---|---|---|---|---|---|\n",
+         | scene | M | reference | adaptive | -area | -cells | -coverage | -cells on the front, or behind | -coverage on the front, or behind |\n\
+         |---|---|---|---|---|---|---|---|---|\n",
     );
     for scene in &run.scenes {
         for m in 2..=4 {
@@ -117,16 +117,22 @@ fn variants(out: &mut String, run: &RunRecord) {
                     continue;
                 }
                 let cells = mode(format!("adaptive-{m}x{m}-cells"));
+                let coverage = mode(format!("adaptive-{m}x{m}-coverage"));
+                let place = |mode: Option<&ModeRecord>| {
+                    mode.and_then(|c| c.front.as_ref()).map_or("–".into(), |place| place.describe())
+                };
                 let _ = writeln!(
                     out,
-                    "| {} | {m}×{m}{} | {} | {} | {} | {} | {} |",
+                    "| {} | {m}×{m}{} | {} | {} | {} | {} | {} | {} | {} |",
                     cell_text(&scene.name),
                     if stall.is_empty() { "" } else { " stalled" },
                     overview_cell(mode(format!("reference-{m}x{m}"))),
                     overview_cell(mode(format!("adaptive-{m}x{m}"))),
                     overview_cell(mode(format!("adaptive-{m}x{m}-area"))),
                     overview_cell(cells),
-                    cells.and_then(|c| c.front.as_ref()).map_or("–".into(), |place| place.describe()),
+                    overview_cell(coverage),
+                    place(cells),
+                    place(coverage),
                 );
             }
         }

@@ -226,6 +226,9 @@ pub const MODE_COLUMNS: [&str; 11] = [
     "efficiency",
 ];
 
+/// The suffixes of the adaptive variants beyond the paper, in the order the report shows them.
+pub const VARIANTS: [&str; 3] = ["area", "cells", "coverage"];
+
 /// One row of the mode table, unescaped, in the order of [`MODE_COLUMNS`]; `–` where the mode
 /// has no such number.
 pub fn mode_cells(mode: &ModeRecord) -> [String; 11] {
@@ -328,7 +331,7 @@ pub fn error_points(scene: &SceneRecord) -> Vec<Point> {
                 "deferred" => Kind::Deferred,
                 "fxaa" => Kind::Fxaa,
                 "reference" => Kind::Reference,
-                _ if mode.mode.split('-').any(|part| part == "area" || part == "cells") => Kind::Variant,
+                _ if mode.mode.split('-').any(|part| VARIANTS.contains(&part)) => Kind::Variant,
                 _ => Kind::Adaptive,
             };
             (error > 0.0).then(|| Point {
@@ -391,7 +394,8 @@ fn images(
         let adaptive = pick(format!("adaptive-{m}x{m}"));
         let area = pick(format!("adaptive-{m}x{m}-area"));
         let cells = pick(format!("adaptive-{m}x{m}-cells"));
-        let adaptives: Vec<&ModeRecord> = [adaptive, area, cells].into_iter().flatten().collect();
+        let coverage = pick(format!("adaptive-{m}x{m}-coverage"));
+        let adaptives: Vec<&ModeRecord> = [adaptive, area, cells, coverage].into_iter().flatten().collect();
         if reference.is_none() && adaptives.is_empty() {
             continue;
         }
@@ -406,9 +410,9 @@ fn images(
                 figure(page, image, &format!("|{} − reference| (32 steps full scale)", mode.mode));
             }
         }
-        // The area variant takes the paper's samples: one heatmap serves both; cells take
-        // their own.
-        for mode in [adaptive.or(area), cells].into_iter().flatten() {
+        // The area variant takes the paper's samples: one heatmap serves both; cells and
+        // coverage take their own.
+        for mode in [adaptive.or(area), cells, coverage].into_iter().flatten() {
             if let Some(image) = &mode.images.samples {
                 figure(
                     page,
@@ -575,7 +579,11 @@ fn history_plots(page: &mut String, scene: &SceneRecord, history: &[&RunRecord])
     // Quality does not depend on stalling; the variants' time is charted nowhere here (the
     // error-against-time plot holds it).
     let quality: Vec<String> = (2..=4)
-        .flat_map(|m| ["", "-area", "-cells"].map(|variant| format!("adaptive-{m}x{m}{variant}")))
+        .flat_map(|m| {
+            std::iter::once(String::new())
+                .chain(VARIANTS.map(|variant| format!("-{variant}")))
+                .map(move |variant| format!("adaptive-{m}x{m}{variant}"))
+        })
         .collect();
     let timed: Vec<String> =
         ["deferred-1x1", "reference-4x4", "adaptive-4x4", "reference-4x4-stalled", "adaptive-4x4-stalled"]

@@ -11,8 +11,8 @@ pub enum Kind {
     Fxaa,
     Reference,
     Adaptive,
-    /// An adaptive variant beyond the paper (`-area`, `-cells`): a hollow circle beside
-    /// adaptive's disc.
+    /// An adaptive variant beyond the paper (`-area`, `-cells`, `-coverage`): a hollow
+    /// circle beside adaptive's disc.
     Variant,
 }
 

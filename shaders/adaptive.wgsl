@@ -807,8 +807,8 @@ fn shade_group(@builtin(position) position: vec4<f32>) -> ShadeOut {
     let moved = move_on_surface(texel, share.yz);
     let lit = light_surface(texel, moved.surface, moved.position, share.w);
     var color = lit.color;
-    if g.detail && moved.surface.material != BACKGROUND {
-        color = vec4<f32>(color.rgb - surface_albedo(moved.surface, share.w) * lit.slope, color.a);
+    if g.detail {
+        color = vec4<f32>(color.rgb - lit.albedo * lit.slope, color.a);
     }
     return ShadeOut(color, vec4<f32>(lit.slope, 0.0));
 }

@@ -177,19 +177,21 @@ fn shade_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f
     return light_surface(texel, s, position, footprint).color;
 }
 
-// A shaded sample: its radiance (alpha: the stall's result), and the radiance's slope in the
-// sample's albedo, with which the `-coverage` variant carries the light of one sample to the
-// albedos of the samples it stands for. Passes that read only `color` leave the slope's
-// arithmetic to dead-code elimination; `color` is computed by the same operations either way.
+// A shaded sample: its radiance (alpha: the stall's result), the albedo it was shaded with and
+// the radiance's slope in that albedo, with which the `-coverage` variant carries the light of
+// one sample to the albedos of the samples it stands for. Passes that read only `color` leave
+// the slope's arithmetic to dead-code elimination; `color` is computed by the same operations
+// either way.
 struct Lit {
     color: vec4<f32>,
+    albedo: vec3<f32>,
     slope: vec3<f32>,
 }
 
 fn light_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f32) -> Lit {
     let stalled = stall(texel);
     if s.material == BACKGROUND {
-        return Lit(vec4<f32>(frame.background.rgb, stalled), vec3<f32>(0.0));
+        return Lit(vec4<f32>(frame.background.rgb, stalled), vec3<f32>(0.0), vec3<f32>(0.0));
     }
     let material = materials[s.material];
     let albedo = surface_albedo(s, footprint);
@@ -278,5 +280,5 @@ fn light_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f
     // The HDR targets are f16: radiance past their largest value (a light 10⁵ times the others
     // on a glossy highlight) would be stored as +Inf. It is kept at HALF_MAX instead, which
     // the tonemap reads as "brighter than anything shown".
-    return Lit(vec4<f32>(min(radiance, vec3<f32>(HALF_MAX)), stalled), min(slope, vec3<f32>(HALF_MAX)));
+    return Lit(vec4<f32>(min(radiance, vec3<f32>(HALF_MAX)), stalled), albedo, min(slope, vec3<f32>(HALF_MAX)));
 }

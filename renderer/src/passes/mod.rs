@@ -314,11 +314,10 @@ impl Pass for Screen {
     }
 
     fn encode(&self, encoder: &mut wgpu::CommandEncoder) {
-        let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = self
-            .targets
-            .iter()
-            .map(|view| {
-                Some(wgpu::RenderPassColorAttachment {
+        // A fixed array rather than a vector: this runs for every pass of every frame.
+        let attachments: [Option<wgpu::RenderPassColorAttachment>; MAX_SCREEN_TARGETS] =
+            std::array::from_fn(|i| {
+                self.targets.get(i).map(|view| wgpu::RenderPassColorAttachment {
                     view,
                     depth_slice: None,
                     resolve_target: None,
@@ -326,11 +325,10 @@ impl Pass for Screen {
                     // `Clear` would fill the whole target first.
                     ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
                 })
-            })
-            .collect();
+            });
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(self.name),
-            color_attachments: &attachments,
+            color_attachments: &attachments[..self.targets.len()],
             depth_stencil_attachment: None,
             timestamp_writes: None,
             occlusion_query_set: None,

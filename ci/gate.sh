@@ -11,7 +11,9 @@
 # from). When the base's code differs from the working tree's, the gate builds the base beside
 # the head and runs both at the quick tier in alternating processes ($AABENCH_GATE_PROCESSES a
 # side, default 6, of $AABENCH_GATE_REPETITIONS rounds each, default 3); `aabench compare` then
-# decides time with the process as the unit. When the code is the base's (only baselines or
+# decides time with the process as the unit. The scenes whose time regressed are measured again
+# in as many fresh processes a side, and a time regression stands only where those find it
+# again (`compare --confirm-runs`). When the code is the base's (only baselines or
 # docs changed), time cannot have changed through the change: one run is compared with the
 # baselines and its time is reported, not gated. Without a usable base (no git history), one
 # run is compared with the baselines and time is gated only on the machine that blessed them.
@@ -56,6 +58,39 @@ resolve_base() {
 }
 base=$(resolve_base) || exit 2
 
+# alternate DIR ARGS...: $processes processes a side of `run --tier quick ARGS...`, the head's
+# into DIR/head and the base's into DIR/base, in the order base head head base base head …, so
+# that a drift of the machine over the job weighs on both builds alike. A head process that
+# exits non-zero sets run_code; a base process that does is only reported.
+alternate() {
+    local dir=$1
+    shift
+    for ((i = 1; i <= processes; i++)); do
+        local order=(base head)
+        if ((i % 2 == 0)); then order=(head base); fi
+        for side in "${order[@]}"; do
+            echo "ci/gate.sh: process $i of $processes, $side" >&2
+            if [ "$side" = head ]; then
+                "$head_bin" run --tier quick --repetitions "$repetitions" --out "$dir/head" "$@"
+                local code=$?
+                if [ "$code" -ne 0 ] && [ "$run_code" -eq 0 ]; then run_code=$code; fi
+            else
+                (cd "$base_src" && "$gate_dir/bin/aabench-base" run --tier quick --repetitions "$repetitions" \
+                    --out "$dir/base" "$@") ||
+                    echo "ci/gate.sh: a base process exited $?; compare uses the base runs that finished" >&2
+            fi
+        done
+    done
+}
+
+# finished_runs DIR: sets finished to the run folders under DIR that hold a run.json.
+finished_runs() {
+    finished=()
+    for run in "$1"/*/; do
+        if [ -f "$run/run.json" ]; then finished+=("$run"); fi
+    done
+}
+
 # What cannot change a time: the baselines themselves and the documentation.
 code_paths=(. ':(exclude)baselines' ':(exclude)*.md' ':(exclude)docs')
 started=$(date +%s)
@@ -90,32 +125,12 @@ else
     }
     cp "$base_target/release/aabench" "$gate_dir/bin/aabench-base" || exit 2
     started=$(date +%s)
-    # Alternating processes, in the order base head head base base head …, so that a drift of
-    # the machine over the job weighs on both builds alike.
     run_code=0
-    for ((i = 1; i <= processes; i++)); do
-        order=(base head)
-        if ((i % 2 == 0)); then order=(head base); fi
-        for side in "${order[@]}"; do
-            echo "ci/gate.sh: process $i of $processes, $side" >&2
-            if [ "$side" = head ]; then
-                "$head_bin" run --tier quick --repetitions "$repetitions" --out "$gate_dir/head" "${run_args[@]}"
-                code=$?
-                if [ "$code" -ne 0 ] && [ "$run_code" -eq 0 ]; then run_code=$code; fi
-            else
-                (cd "$base_src" && "$gate_dir/bin/aabench-base" run --tier quick --repetitions "$repetitions" \
-                    --out "$gate_dir/base" "${run_args[@]}") ||
-                    echo "ci/gate.sh: a base process exited $?; compare uses the base runs that finished" >&2
-            fi
-        done
-    done
+    alternate "$gate_dir" "${run_args[@]}"
     head_runs=("$gate_dir"/head/*/)
-    base_runs=()
-    for run in "$gate_dir"/base/*/; do
-        if [ -f "$run/run.json" ]; then base_runs+=("$run"); fi
-    done
-    base_args=(--base-runs "${base_runs[@]}")
-    if [ "${#base_runs[@]}" -eq 0 ]; then base_args=(); fi
+    finished_runs "$gate_dir/base"
+    base_args=(--base-runs "${finished[@]}")
+    if [ "${#finished[@]}" -eq 0 ]; then base_args=(); fi
 fi
 if [ ! -f "${head_runs[0]}/run.json" ]; then
     echo "ci/gate.sh: the run wrote nothing (exit $run_code)" >&2
@@ -123,8 +138,26 @@ if [ ! -f "${head_runs[0]}/run.json" ]; then
 fi
 run_dir=${head_runs[0]%/}
 
-"$head_bin" compare "${head_runs[@]}" "${base_args[@]}" --baseline baselines --out "$run_dir" --fail-on "$fail_on"
+compare=("$head_bin" compare "${head_runs[@]}" "${base_args[@]}" --baseline baselines --out "$run_dir" --fail-on "$fail_on")
+"${compare[@]}"
 code=$?
+# A time regression against the base stands only if fresh processes of its scenes, decided on
+# their own, find it again: one false alarm among a gate's two thousand time checks is no rare
+# event, two independent ones on the same check are.
+if [ "$strategy" = ab ] && [ "$code" -eq 1 ] && [ -s "$run_dir/to-confirm.txt" ]; then
+    mapfile -t confirm_scenes <"$run_dir/to-confirm.txt"
+    echo "ci/gate.sh: time regressed in ${confirm_scenes[*]}: measuring again in fresh processes" >&2
+    alternate "$gate_dir/confirm" "${confirm_scenes[@]}"
+    finished_runs "$gate_dir/confirm/base"
+    confirm_base=("${finished[@]}")
+    finished_runs "$gate_dir/confirm/head"
+    if [ "${#finished[@]}" -gt 0 ] && [ "${#confirm_base[@]}" -gt 0 ]; then
+        "${compare[@]}" --confirm-runs "${finished[@]}" --confirm-base-runs "${confirm_base[@]}"
+        code=$?
+    else
+        echo "ci/gate.sh: the fresh processes wrote nothing: the regressions stand" >&2
+    fi
+fi
 # A scene that failed already fails compare; this keeps a run that went wrong otherwise from
 # passing unnoticed.
 if [ "$code" -eq 0 ] && [ "$run_code" -ne 0 ]; then code=$run_code; fi

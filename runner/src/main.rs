@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use aabench::manifest::Manifest;
 use aabench::plan::{self, ExtraSamplesArg, RunArgs, Tier};
 use aabench::progress::Progress;
-use aabench::record::Status;
+use aabench::record::{RunRecord, Status};
 use aabench::{baseline, compare, exit, run, scenes};
 use aabench_renderer::{ExtraSamples, Mode};
 use clap::{Parser, Subcommand};
@@ -87,31 +87,7 @@ enum Command {
     /// Decide per scene × mode × metric whether a run regressed against its baselines; write
     /// summary.md, junit.xml and verdict.json. Exit 0: nothing regressed, 1: something did, or
     /// the run compared less than its baselines hold, 2: an error.
-    Compare {
-        /// The run: its folder or its run.json; or several processes of one build (the first
-        /// gives the quality numbers, their frames are pooled).
-        #[arg(required = true)]
-        runs: Vec<PathBuf>,
-        /// The baselines' root folder.
-        #[arg(long, default_value = "baselines")]
-        baseline: PathBuf,
-        /// Runs of the base build on this machine, in this job (alternating with the runs):
-        /// time is then gated against them, with the process as the unit (at least 4 a side).
-        #[arg(long, num_args = 1.., value_name = "RUN")]
-        base_runs: Vec<PathBuf>,
-        /// Folder for summary.md, junit.xml and verdict.json [default: the run's folder].
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Which checks may fail: auto (quality; time against the base runs, or against the
-        /// baselines on the machine that blessed them), all, or quality only.
-        #[arg(long, value_enum, default_value = "auto")]
-        fail_on: compare::FailOn,
-        /// Report, not fail, what the run lacks: no baselines (or only another platform's), a
-        /// scene or mode the baselines hold, scenes at all; a shard; an unfinished run. For a
-        /// first bless or an exploratory compare, never for a gate.
-        #[arg(long)]
-        lenient: bool,
-    },
+    Compare(CompareArgs),
     /// Write a static, self-contained index.html beside each run: per scene the modes, error
     /// against run time, images and crops, the gate's verdict, and metrics over past runs.
     Report {
@@ -167,6 +143,42 @@ enum Command {
     Modes,
 }
 
+#[derive(Debug, clap::Args)]
+struct CompareArgs {
+    /// The run: its folder or its run.json; or several processes of one build (the first
+    /// gives the quality numbers, their frames are pooled).
+    #[arg(required = true)]
+    runs: Vec<PathBuf>,
+    /// The baselines' root folder.
+    #[arg(long, default_value = "baselines")]
+    baseline: PathBuf,
+    /// Runs of the base build on this machine, in this job (alternating with the runs):
+    /// time is then gated against them, with the process as the unit (at least 4 a side).
+    #[arg(long, num_args = 1.., value_name = "RUN")]
+    base_runs: Vec<PathBuf>,
+    /// Fresh processes of the run's build that measured again the scenes a first compare found
+    /// slower than the base build (its `to_confirm`): a time regression against the base then
+    /// stands only where these, decided on their own against `--confirm-base-runs`, find it
+    /// again. `ci/gate.sh` runs them.
+    #[arg(long, num_args = 1.., value_name = "RUN", requires_all = ["base_runs", "confirm_base_runs"])]
+    confirm_runs: Vec<PathBuf>,
+    /// The base build's fresh processes of those scenes, alternating with `--confirm-runs`.
+    #[arg(long, num_args = 1.., value_name = "RUN", requires = "confirm_runs")]
+    confirm_base_runs: Vec<PathBuf>,
+    /// Folder for summary.md, junit.xml and verdict.json [default: the run's folder].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Which checks may fail: auto (quality; time against the base runs, or against the
+    /// baselines on the machine that blessed them), all, or quality only.
+    #[arg(long, value_enum, default_value = "auto")]
+    fail_on: compare::FailOn,
+    /// Report, not fail, what the run lacks: no baselines (or only another platform's), a
+    /// scene or mode the baselines hold, scenes at all; a shard; an unfinished run. For a
+    /// first bless or an exploratory compare, never for a gate.
+    #[arg(long)]
+    lenient: bool,
+}
+
 fn main() -> ExitCode {
     quiet_mesa_device_select();
     let cli = Cli::parse();
@@ -174,9 +186,7 @@ fn main() -> ExitCode {
         Command::Run(args) => run_command(args),
         Command::GenScenes { paths, force } => gen_scenes(&paths, force),
         Command::Bless { runs, baseline, force } => bless(&runs, &baseline, force),
-        Command::Compare { runs, baseline, base_runs, out, fail_on, lenient } => {
-            compare(&runs, &base_runs, &baseline, out.as_deref(), fail_on, lenient)
-        }
+        Command::Compare(args) => compare(&args),
         Command::Report { runs, markdown: true, figures, .. } => markdown_report(&runs, figures.as_deref()),
         Command::Report { runs, history, verdict, .. } => {
             report(&runs, history.as_deref(), verdict.as_deref())
@@ -351,34 +361,44 @@ fn bless(runs: &[PathBuf], root: &Path, force: bool) -> u8 {
     }
 }
 
-fn compare(
-    runs: &[PathBuf],
-    base_runs: &[PathBuf],
-    root: &Path,
-    out_dir: Option<&Path>,
-    fail_on: compare::FailOn,
-    lenient: bool,
-) -> u8 {
-    let load = |paths: &[PathBuf]| -> Result<Vec<_>, String> {
-        paths.iter().map(|path| aabench::record::load_run(path)).collect()
+fn compare(args: &CompareArgs) -> u8 {
+    let load = |paths: &[PathBuf]| -> Result<Vec<RunRecord>, String> {
+        paths.iter().map(|path| aabench::record::load_run(path).map(|(record, _)| record)).collect()
     };
-    let (head, base) = match (load(runs), load(base_runs)) {
-        (Ok(head), Ok(base)) => (head, base),
-        (Err(message), _) | (_, Err(message)) => return fail(message),
+    let loaded = (|| {
+        Ok::<_, String>([
+            load(&args.runs)?,
+            load(&args.base_runs)?,
+            load(&args.confirm_runs)?,
+            load(&args.confirm_base_runs)?,
+        ])
+    })();
+    let [head, base, confirm_head, confirm_base] = match loaded {
+        Ok(sides) => sides,
+        Err(message) => return fail(message),
     };
-    let run_dir = head[0].1.clone();
-    let head: Vec<_> = head.into_iter().map(|(record, _)| record).collect();
-    let base: Vec<_> = base.into_iter().map(|(record, _)| record).collect();
-    if let Err(message) = compare::check_comparable(&head, &base) {
+    if let Err(message) = compare::check_comparable(&[&head, &base, &confirm_head, &confirm_base]) {
         return fail(message);
     }
-    let baselines = match baseline::BaselineSet::load(root, &head[0]) {
+    let baselines = match baseline::BaselineSet::load(&args.baseline, &head[0]) {
         Ok(baselines) => baselines,
         Err(message) => return fail(message),
     };
-    let request = compare::Request { runs: &head, base: &base, baselines: &baselines, fail_on, lenient };
+    let confirmation = (!confirm_head.is_empty())
+        .then_some(compare::Confirmation { runs: &confirm_head, base: &confirm_base });
+    let request = compare::Request {
+        runs: &head,
+        base: &base,
+        baselines: &baselines,
+        fail_on: args.fail_on,
+        lenient: args.lenient,
+        confirmation,
+    };
     let verdict = compare::compare(&request);
-    let out_dir = out_dir.map_or(run_dir, Path::to_path_buf);
+    let out_dir = match &args.out {
+        Some(dir) => dir.clone(),
+        None => aabench::record::run_folder(&args.runs[0]),
+    };
     match compare::outputs::write_all(&verdict, &out_dir) {
         Ok(files) => {
             out(format_args!("{}", compare::outputs::summary(&verdict)));

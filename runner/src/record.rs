@@ -312,11 +312,19 @@ pub struct SampleCost {
 /// Reads a run: its folder or its run.json. Returns the record and the run folder (image
 /// paths in the record are relative to it). Errors name the file.
 pub fn load_run(path: &std::path::Path) -> Result<(RunRecord, std::path::PathBuf), String> {
+    let record = crate::json::read_versioned(&run_file(path), RUN_SCHEMA)?;
+    Ok((record, run_folder(path)))
+}
+
+/// The run.json that `path` names: the file itself, or the one in the folder.
+fn run_file(path: &std::path::Path) -> std::path::PathBuf {
     let is_file = path.extension().is_some_and(|ext| ext == "json") && !path.is_dir();
-    let file = if is_file { path.to_path_buf() } else { path.join("run.json") };
-    let record = crate::json::read_versioned(&file, RUN_SCHEMA)?;
-    let dir = file.parent().map_or_else(|| std::path::PathBuf::from("."), std::path::Path::to_path_buf);
-    Ok((record, dir))
+    if is_file { path.to_path_buf() } else { path.join("run.json") }
+}
+
+/// The folder of the run that `path` names (its folder or its run.json).
+pub fn run_folder(path: &std::path::Path) -> std::path::PathBuf {
+    run_file(path).parent().map_or_else(|| std::path::PathBuf::from("."), std::path::Path::to_path_buf)
 }
 
 /// FNV-1a, 64-bit, over the parts in order: a stable fingerprint of image bytes.

@@ -212,7 +212,9 @@ fn bless_refuses_a_run_given_twice_and_a_run_that_did_not_finish() {
 }
 
 /// Against six base processes, six head processes of the same build pass with every time
-/// check unchanged, and a 25% slowdown of one stalled mode regresses that mode alone. Three
+/// check unchanged, and a 25% slowdown of one stalled mode regresses that mode alone; the
+/// regression stands when fresh processes find it again (or are too few to decide) and is
+/// noisy when they do not. Three
 /// processes a side are `insufficient`, never a verdict.
 #[test]
 fn time_is_gated_against_the_base_build_process_by_process() {
@@ -270,6 +272,53 @@ fn time_is_gated_against_the_base_build_process_by_process() {
         .filter(|c| c["against"] == "baseline" && c["metric"] == "relative_time" && c["gated"] == true)
         .count();
     assert_eq!(gated_baseline_times, 0);
+    // The slower scene is named for measuring again, in verdict.json and in to-confirm.txt.
+    let manifest = record["scenes"][0]["manifest"].as_str().unwrap();
+    assert_eq!(verdict["to_confirm"], json!([manifest]));
+    let list = ws.dir.join("gate-slow/to-confirm.txt");
+    assert_eq!(std::fs::read_to_string(&list).unwrap(), format!("{manifest}\n"));
+
+    // Fresh processes that find the slowdown again keep it a regression; fresh processes that
+    // do not turn it noisy, and the gate passes. Either way nothing is left to confirm.
+    let base_again = side("base-again", 6, 1.0, 5);
+    let confirmed = |folder: &str, head: &[PathBuf]| {
+        let mut args = base_args.clone();
+        args.push("--confirm-runs");
+        args.extend(head.iter().map(|p| arg(p)));
+        args.push("--confirm-base-runs");
+        args.extend(base_again.iter().map(|p| arg(p)));
+        compare(&ws, &slow, folder, &args)
+    };
+    let stalled = |verdict: &Value| -> Value {
+        let checks = verdict["checks"].as_array().unwrap();
+        let found = checks.iter().find(|c| {
+            c["mode"] == "reference-2x2-stalled" && c["metric"] == "relative_time" && c["against"] == "base"
+        });
+        found.unwrap().clone()
+    };
+    let (output, verdict) = confirmed("gate-slow", &side("slow-again", 6, 1.25, 7));
+    assert_eq!(output.status.code(), Some(1), "{}", String::from_utf8_lossy(&output.stdout));
+    let check = stalled(&verdict);
+    assert_eq!(check["outcome"], "regressed");
+    assert!(check["detail"].as_str().unwrap().contains("; found again in fresh processes: "), "{check}");
+    assert_eq!(verdict["confirm_run_ids"].as_array().map(Vec::len), Some(6));
+    assert!(verdict.get("to_confirm").is_none(), "{}", verdict["to_confirm"]);
+    assert!(!list.exists(), "an earlier compare's list outlived it");
+    let (output, verdict) = confirmed("gate-unconfirmed", &side("same-again", 6, 1.0, 7));
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stdout));
+    let check = stalled(&verdict);
+    assert_eq!(check["outcome"], "noisy");
+    assert!(check["detail"].as_str().unwrap().contains("; not found again in fresh processes: "), "{check}");
+    let others = outcomes(&verdict, "relative_time", "base");
+    assert!(others.iter().filter(|(m, _)| *m != "reference-2x2-stalled").all(|(_, o)| *o == "unchanged"));
+    // Too few fresh processes to decide leave the regression standing.
+    let (output, verdict) = confirmed("gate-few-again", &side("few-again", 3, 1.0, 7));
+    assert_eq!(output.status.code(), Some(1), "{}", String::from_utf8_lossy(&output.stdout));
+    assert!(stalled(&verdict)["detail"].as_str().unwrap().contains("; not decided in fresh processes: "));
+    // A first process given again as a fresh one is refused: it is no new evidence.
+    let (output, _) = confirmed("gate-reused", &[slow[0].to_path_buf()]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(stderr(&output).contains("is given twice"), "{}", stderr(&output));
 
     // Three processes a side cannot reach the confidence: insufficient, never a verdict.
     let (output, verdict) =

@@ -12,7 +12,7 @@ use crate::baseline::BaselineSet;
 use crate::record::{RunRecord, SceneRecord, Status};
 use crate::stats::{Shift, Summary};
 
-use super::{Against, CONFIDENCE, Check, MIN_PROCESSES, Outcome, decide};
+use super::{Against, CONFIDENCE, Check, Confirmation, MIN_PROCESSES, Outcome, decide};
 
 /// The checks of every mode that ran ok in the first process of `runs` and in the base's
 /// processes: `relative_time`, `time_vs_reference` (adaptive modes) and `frame_time`, each
@@ -70,6 +70,46 @@ pub(super) fn checks(
         }
     }
     checks
+}
+
+/// The manifests of the scenes of `run` with a time regression against the base build, each
+/// once, in the run's order.
+pub(super) fn regressed_manifests(checks: &[Check], run: &RunRecord) -> Vec<String> {
+    let regressed = |scene: &SceneRecord| {
+        checks
+            .iter()
+            .any(|c| c.against == Against::Base && c.outcome == Outcome::Regressed && c.scene == scene.name)
+    };
+    run.scenes.iter().filter(|s| regressed(s)).map(|s| s.manifest.clone()).collect()
+}
+
+/// Decides each time regression of `checks` again on the fresh processes alone: it stands when
+/// they find it again, or cannot decide (too few of them, the scene or mode not among them);
+/// it becomes `noisy` when they decide that it did not regress. Other checks are left alone:
+/// the fresh processes test only what the first ones found.
+pub(super) fn confirm(checks: &mut [Check], fresh: Confirmation, baselines: &BaselineSet) {
+    let again = self::checks(fresh.runs, fresh.base, baselines, &mut Vec::new());
+    for check in checks.iter_mut().filter(|c| c.outcome == Outcome::Regressed) {
+        let same = |c: &&Check| c.scene == check.scene && c.mode == check.mode && c.metric == check.metric;
+        let Some(again) = again.iter().find(same) else {
+            check.detail = format!(
+                "{}; not measured again by the {} fresh processes of the run",
+                check.detail,
+                fresh.runs.len()
+            );
+            continue;
+        };
+        let (outcome, verb) = match again.outcome {
+            Outcome::Regressed => (Outcome::Regressed, "found again"),
+            Outcome::Insufficient => (Outcome::Regressed, "not decided"),
+            _ => (Outcome::Noisy, "not found again"),
+        };
+        // The fresh detail without its "<what> against the base build: " lead, which the
+        // first detail already says.
+        let numbers = again.detail.split_once(": ").map_or(again.detail.as_str(), |(_, numbers)| numbers);
+        check.outcome = outcome;
+        check.detail = format!("{}; {verb} in fresh processes: {numbers}", check.detail);
+    }
 }
 
 /// The records of scene `name` that ran ok, one per process that has it.

@@ -46,7 +46,8 @@ pub enum Outcome {
     /// Better beyond the tolerance.
     Improved,
     /// A time whose estimate is past the threshold but whose interval is not wholly: the
-    /// repetitions cannot tell. Reported, not failed.
+    /// repetitions cannot tell; or a time regression against the base build that fresh
+    /// processes did not find again. Reported, not failed.
     Noisy,
     /// A time with too little evidence to decide either way: fewer than [`MIN_FRAMES`] frames
     /// on a side, or fewer than [`MIN_PROCESSES`] processes of the base or the head. Reported,
@@ -198,6 +199,16 @@ pub struct Verdict {
     /// The base build's processes that time was gated against, if any.
     #[serde(default)]
     pub base_run_ids: Vec<String>,
+    /// Fresh processes of the run's build and of the base build that measured again the scenes
+    /// whose time regressed against the base (see [`Confirmation`]), if any.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub confirm_run_ids: Vec<String>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub confirm_base_run_ids: Vec<String>,
+    /// The manifests of the scenes whose time regressed against the base build and was not yet
+    /// measured again: `ci/gate.sh` runs them in fresh processes and compares once more.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub to_confirm: Vec<String>,
     pub tier: String,
     pub run_platform: String,
     /// The baselines' folder, or `None` when there were none for the tier.
@@ -234,6 +245,24 @@ pub struct Request<'a> {
     /// Missing baselines, scenes, modes and platforms, shards and unfinished runs are
     /// reported, not failed (a first bless, an exploratory compare).
     pub lenient: bool,
+    /// Fresh processes that measured again the scenes whose time regressed against `base`.
+    pub confirmation: Option<Confirmation<'a>>,
+}
+
+/// A second, independent measurement of the scenes whose time regressed against the base
+/// build: fresh processes of both builds, alternating, run after a first compare named them.
+///
+/// Each time check is a 95% interval, and a gate makes some two thousand of them, strongly
+/// correlated within a scene (a process that lands slow on a scene lands slow on its modes). A
+/// false alarm somewhere is then no rare event: a gate of code that cannot have changed a
+/// scene's time once failed on it, every mode of that scene 10–30% slower in the head's six
+/// processes. A regression found in the first processes therefore stands only when the fresh
+/// processes, decided on their own, find it again; the chance that both are false is the
+/// product of two small ones, while a real slowdown is found again as a matter of course.
+#[derive(Debug, Clone, Copy)]
+pub struct Confirmation<'a> {
+    pub runs: &'a [RunRecord],
+    pub base: &'a [RunRecord],
 }
 
 /// Whether time against the committed baselines may fail the gate: with `--fail-on auto`, only
@@ -304,7 +333,7 @@ fn scene_checks(runs: &[RunRecord], baselines: &BaselineSet, notes: &mut Vec<Str
 
 /// Compares the request's run with its baselines (and its base build's processes, if any).
 pub fn compare(request: &Request) -> Verdict {
-    let Request { runs, base, baselines, fail_on, lenient } = *request;
+    let Request { runs, base, baselines, fail_on, lenient, confirmation } = *request;
     let run = &runs[0];
     let mut notes = Vec::new();
     let mut checks = Vec::new();
@@ -327,8 +356,14 @@ pub fn compare(request: &Request) -> Verdict {
     let baseline_time_gated = baseline_time_gated(request, &machine, &mut notes);
     checks.extend(disagreements(runs));
     checks.extend(scene_checks(runs, baselines, &mut notes));
+    let mut to_confirm = Vec::new();
     if !base.is_empty() {
-        checks.extend(ab::checks(runs, base, baselines, &mut notes));
+        let mut time = ab::checks(runs, base, baselines, &mut notes);
+        match confirmation {
+            Some(fresh) => ab::confirm(&mut time, fresh, baselines),
+            None => to_confirm = ab::regressed_manifests(&time, run),
+        }
+        checks.extend(time);
     }
     for check in &mut checks {
         if TIME_METRICS.contains(&check.metric.as_str()) {
@@ -353,6 +388,11 @@ pub fn compare(request: &Request) -> Verdict {
         run_id: run.run_id.clone(),
         run_ids: runs.iter().map(|r| r.run_id.clone()).collect(),
         base_run_ids: base.iter().map(|r| r.run_id.clone()).collect(),
+        confirm_run_ids: confirmation
+            .map_or(Vec::new(), |c| c.runs.iter().map(|r| r.run_id.clone()).collect()),
+        confirm_base_run_ids: confirmation
+            .map_or(Vec::new(), |c| c.base.iter().map(|r| r.run_id.clone()).collect()),
+        to_confirm: if fail_on == FailOn::Quality { Vec::new() } else { to_confirm },
         tier: run.tier.name().into(),
         run_platform: run.platform.key.clone(),
         baseline_dir: baselines.dir.clone(),
@@ -368,12 +408,12 @@ pub fn compare(request: &Request) -> Verdict {
     }
 }
 
-/// Runs that cannot be compared together at all (exit 2): processes of the run, or of the
-/// base, on different platforms or tiers, the same run given twice, or base runs of another
-/// platform or tier than the run's.
-pub fn check_comparable(runs: &[RunRecord], base: &[RunRecord]) -> Result<(), String> {
-    let first = &runs[0];
-    let all: Vec<&RunRecord> = runs.iter().chain(base).collect();
+/// Runs that cannot be compared together at all (exit 2): processes of the run, of the base,
+/// or of a confirmation on different platforms or tiers than the run's first, or the same run
+/// given twice. `groups` are the run's processes first, then the others.
+pub fn check_comparable(groups: &[&[RunRecord]]) -> Result<(), String> {
+    let all: Vec<&RunRecord> = groups.iter().flat_map(|group| group.iter()).collect();
+    let first = all[0];
     for (index, run) in all.iter().enumerate() {
         // Equal records are one process read twice: two processes never time alike.
         if all[..index].contains(run) {

@@ -1,5 +1,6 @@
 //! What CI reads from a verdict: `summary.md` (a pull-request comment or
-//! `$GITHUB_STEP_SUMMARY`), `junit.xml` (one test case per scene × mode) and `verdict.json`.
+//! `$GITHUB_STEP_SUMMARY`), `junit.xml` (one test case per scene × mode), `verdict.json`, and
+//! `to-confirm.txt` (the scenes whose time regressed, to measure again).
 
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -7,7 +8,8 @@ use std::path::{Path, PathBuf};
 use super::{Against, Check, FailOn, Outcome, Verdict};
 use crate::markup::escape as xml;
 
-/// Writes summary.md, junit.xml and verdict.json into `dir`, each atomically.
+/// Writes summary.md, junit.xml, verdict.json and, when it names scenes, to-confirm.txt into
+/// `dir`, each atomically.
 pub fn write_all(verdict: &Verdict, dir: &Path) -> Result<Vec<PathBuf>, String> {
     crate::fs::output_folder(dir).map_err(|e| format!("--out {e}"))?;
     let write = |name: &str, text: &str| -> Result<PathBuf, String> {
@@ -17,8 +19,26 @@ pub fn write_all(verdict: &Verdict, dir: &Path) -> Result<Vec<PathBuf>, String> 
     };
     let json = dir.join("verdict.json");
     crate::fs::write_json(&json, verdict)?;
-    Ok(vec![write("summary.md", &summary(verdict))?, write("junit.xml", &junit(verdict))?, json])
+    let mut written =
+        vec![write("summary.md", &summary(verdict))?, write("junit.xml", &junit(verdict))?, json];
+    // The scenes to measure again, one manifest a line, for `ci/gate.sh`; none, no file (an
+    // earlier compare's list must not outlive it).
+    let list = dir.join(TO_CONFIRM);
+    if verdict.to_confirm.is_empty() {
+        match std::fs::remove_file(&list) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(format!("{}: {e}", list.display()));
+            }
+            _ => {}
+        }
+    } else {
+        written.push(write(TO_CONFIRM, &(verdict.to_confirm.join("\n") + "\n"))?);
+    }
+    Ok(written)
 }
+
+/// The file beside verdict.json that lists its `to_confirm` manifests.
+pub const TO_CONFIRM: &str = "to-confirm.txt";
 
 /// The one-line tally: `2 regressed · 1 improved · 140 unchanged`.
 pub fn tally(verdict: &Verdict) -> String {
@@ -67,6 +87,23 @@ pub fn summary(verdict: &Verdict) -> String {
         "nothing: no base build was measured, and the baselines were blessed on another machine".to_string()
     };
     let _ = writeln!(out, "Time is gated against {time}.\n");
+    if !verdict.confirm_run_ids.is_empty() {
+        let _ = writeln!(
+            out,
+            "Each time regression against the base build was decided again on {} fresh processes of the base and \
+             {} of the run: it stands only where they found it again.\n",
+            verdict.confirm_base_run_ids.len(),
+            verdict.confirm_run_ids.len()
+        );
+    }
+    if !verdict.to_confirm.is_empty() {
+        let _ = writeln!(
+            out,
+            "Time regressed against the base build in {}: not yet measured again in fresh processes \
+             (`ci/gate.sh` does; by hand, `--confirm-runs` and `--confirm-base-runs`).\n",
+            verdict.to_confirm.join(", ")
+        );
+    }
     for note in &verdict.notes {
         let _ = writeln!(out, "- {note}");
     }

@@ -28,6 +28,7 @@
 #include "lib/scene.wgsl"
 #include "lib/gbuffer.wgsl"
 #include "lib/shading.wgsl"
+#include "lib/color.wgsl"
 
 // Set by passes/adaptive.rs from AdaptiveSettings; no defaults here, so Rust is the one source.
 override M: u32;
@@ -321,6 +322,108 @@ fn texture_range(pixel: vec2<i32>) -> f32 {
     return first_luma(pixel) * (sqrt(high) - sqrt(low)) / sqrt(mean);
 }
 
+// The shading metric also bounds the specular highlights inside the pixel from the lights
+// (`-cells` and `-coverage`; the paper's future work): S's luma cannot show a highlight that
+// peaks between pixel centres.
+override LIGHT_DETAIL: bool;
+
+// How far the half vector of a light can turn against the normal inside the pixel, less the
+// light's own share: the spread of the normals of the window's corners on S's surface plus half
+// the angle the pixel subtends from the eye; and `reach`, the pixel's half-diagonal on the
+// surface in world units, a grazing view stretching it.
+struct Turn {
+    eye: f32,
+    reach: f32,
+}
+
+fn pixel_turn(pixel: vec2<i32>, material: i32, normal: vec3<f32>, depth: f32, v: vec3<f32>) -> Turn {
+    let origin = pixel * i32(M);
+    let last = i32(M) - 1;
+    var min_cos = 1.0;
+    for (var corner = 0u; corner < 4u; corner += 1u) {
+        let nm = load_normal_material(origin + vec2<i32>(i32(corner & 1u), i32(corner >> 1u)) * last);
+        if i32(nm.w) == material {
+            min_cos = min(min_cos, dot(nm.xyz, normal));
+        }
+    }
+    let centre = view_ray(vec2<f32>(origin) + 0.5 * f32(M));
+    let half_diagonal = length(centre - view_ray(vec2<f32>(origin)));
+    let eye = half_diagonal / length(centre);
+    let reach = depth * half_diagonal / max(abs(dot(normal, v)), 0.25);
+    return Turn(acos(clamp(min_cos, -1.0, 1.0)) + 0.5 * eye, reach);
+}
+
+// A light whose lobe (about `a` radians wide) spans more than this many of the pixel's turns
+// changes the highlight slowly enough for the luma cross on S to see it, and is skipped.
+const LOBE_TURNS: f32 = 16.0;
+
+// The luma range of the specular highlights inside the pixel, bounded on S's sample: for each
+// light, n·h at S lies at angle θ from the lobe's peak and moves by at most δ inside the pixel
+// (pixel_turn, plus half the angle the pixel subtends from a near light), so the GGX lobe spans
+// its values at max(θ − δ, 0) and min(θ + δ, 90°). The lobe is weighted by S's visibility,
+// Fresnel term and light; shadows and metallic-roughness textures are left out (a highlight
+// in shadow is over-counted, a texture-sharpened one under-counted).
+fn specular_range(pixel: vec2<i32>) -> f32 {
+    let texel = window_texel(pixel, 0u);
+    let nm = load_normal_material(texel);
+    let index = i32(nm.w);
+    if index == BACKGROUND {
+        return 0.0;
+    }
+    let normal = nm.xyz;
+    let depth = linear_depth(texel);
+    let material = materials[index];
+    let position = world_position(texel, depth);
+    let v = normalize(frame.eye.xyz - position);
+    let turn = pixel_turn(pixel, index, normal, depth, v);
+    let a = clamp(material.roughness, 0.03, 1.0) * clamp(material.roughness, 0.03, 1.0);
+    let a2 = a * a;
+    let n_v = max(dot(normal, v), 1e-4);
+    let f0 = mix(vec3<f32>(0.04), material.base_color.rgb, material.metallic);
+    var above = 0.0;
+    var below = 0.0;
+    for (var i = 0u; i < LIGHT_COUNT; i += 1u) {
+        let light = lights.entries[i];
+        let ray = light_ray(light, position);
+        let inverse = inverseSqrt(ray.distance2);
+        let l = ray.to_light * inverse;
+        let n_l = dot(normal, l);
+        let delta = min(turn.eye + 0.5 * select(0.0, turn.reach * inverse, ray.positional), 0.5 * PI);
+        if n_l <= 0.0 || a > LOBE_TURNS * delta {
+            continue;
+        }
+        let h = normalize(v + l);
+        let n_h = clamp(dot(normal, h), 0.0, 1.0);
+        // cos(θ ∓ δ) from cos θ = n·h, without inverse trigonometry; cos δ and sin δ by their
+        // Taylor polynomials, within 0.02 up to 90°.
+        let d2 = delta * delta;
+        let cos_delta = 1.0 - d2 * (0.5 - d2 / 24.0);
+        let sines = sqrt(max(1.0 - n_h * n_h, 0.0)) * delta * (1.0 - d2 * (1.0 / 6.0 - d2 / 120.0));
+        let highest = ggx(select(n_h * cos_delta + sines, 1.0, n_h >= cos_delta), a2);
+        let here = ggx(n_h, a2);
+        let lowest = ggx(max(n_h * cos_delta - sines, 0.0), a2);
+        let fresnel = f0 + (1.0 - f0) * schlick_weight(max(dot(v, h), 0.0));
+        var falloff = attenuation(ray.distance2, inverse * inverse, light.range);
+#ifdef LIGHT_KINDS
+        falloff = select(1.0, falloff, ray.positional) * spot_fade(light, l);
+#endif
+        let weight = luminance(fresnel * light.radiance) * smith_visibility(n_l, n_v, a) * n_l * falloff;
+        above += weight * (highest - here);
+        below += weight * (here - lowest);
+    }
+    let exposure = frame.display.x;
+    let lum = luminance(sanitize3(textureLoad(first, pixel, 0).rgb));
+    return shown_luma((lum + above) * exposure) - shown_luma((lum - below) * exposure);
+}
+
+// The metric's luma of exposed linear luminance `x` as the display shows it: through the
+// scene's tonemap (set by passes/adaptive.rs; without one, color.wgsl's defaults clamp to
+// [0, 1]), under the metric's square root. Unlike first_luma's clamp, it tells a highlight's
+// core from its rim.
+fn shown_luma(x: f32) -> f32 {
+    return select(sqrt(tonemap_curve(min(x, HALF_MAX))), 0.0, x <= PEAK_FLOOR);
+}
+
 fn shading_k(pixel: vec2<i32>) -> f32 {
     let c = first_luma(pixel);
     let l = first_luma(pixel + vec2<i32>(-1, 0));
@@ -332,6 +435,10 @@ fn shading_k(pixel: vec2<i32>) -> f32 {
     var range = l_max - l_min;
     if TEXTURE_DETAIL {
         range = max(range, texture_range(pixel));
+    }
+    // The light-aware term only where the range so far leaves samples to ask for.
+    if LIGHT_DETAIL && C_SHADING * range * f32(M * M) + 0.5 < f32(M * M - 1u) {
+        range = max(range, specular_range(pixel));
     }
     if range < max(T_MIN, l_max * T_EDGE) {
         return 0.0;

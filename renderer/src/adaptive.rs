@@ -74,6 +74,8 @@ pub enum Reconstruction {
     /// deferred shading, at every M; a texture edge inside a pixel of n samples is filtered
     /// rather than point-sampled n times. The first sample of a pixel that takes more than one
     /// is shaded again for its own cell instead of reusing S, which stands for the whole pixel.
+    /// Its shading metric also counts texture contrast below the pixel and bounds specular
+    /// highlights from the lights (`shaders/adaptive.wgsl`: `texture_range`, `specular_range`).
     Cells,
     /// Beyond the paper's prefix: the M² samples of the G-buffer are grouped into the surfaces
     /// they lie on (material, normal, tangent plane: [`SURFACE_COS`], [`SURFACE_GAP`]); each
@@ -86,7 +88,8 @@ pub enum Reconstruction {
     /// inside the pixel, a shaded sample's light is carried to the mean albedo of its samples,
     /// each read as the reference reads it (shading is affine in albedo): textures are filtered
     /// at the reference's rate while light is shaded at the surfaces' rate. A pixel on one
-    /// surface with nothing more asked reuses S.
+    /// surface with nothing more asked reuses S. Its shading metric bounds highlights from the
+    /// lights as under `Cells`.
     Coverage,
 }
 

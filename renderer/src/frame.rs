@@ -132,8 +132,14 @@ pub(crate) fn frame_graph(
             sources.feed(&mut g, first);
             g.retain(first, "first", Output::First);
             let textured = needs.features.textured;
-            let evaluate_node =
-                EvaluateNode { m, metrics, textured, reconstruction, settings: settings.adaptive };
+            let evaluate_node = EvaluateNode {
+                m,
+                metrics,
+                textured,
+                reconstruction,
+                settings: settings.adaptive,
+                tonemap: settings.color.tonemap,
+            };
             let reads = evaluate_node.gbuffer_reads();
             let evaluate = add(&mut g, evaluate_node);
             g.connect_all(gbuffer, evaluate, reads);

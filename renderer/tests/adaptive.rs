@@ -478,6 +478,39 @@ fn coverage_filters_textures_at_the_references_rate_while_shading_once_per_surfa
     );
 }
 
+/// A highlight narrower than a pixel can fall between the pixel centres where S is shaded, or
+/// saturate S and its neighbours alike: the luma cross then reads the window as flat. The
+/// light-aware term of `-cells` and `-coverage` bounds each light's lobe over the pixel, so on
+/// the glossy spheres every pixel away from a geometric edge where the reference's highlight
+/// differs from deferred shading's by more than eight steps takes more than one sample; the
+/// paper's metric, which has only the cross, leaves some of them at one.
+#[test]
+fn the_light_aware_term_samples_highlights_that_the_luma_cross_misses() {
+    let (mut renderer, _gpu) = renderer(Generator::Specular, &lit(), settings(128, 96));
+    let deferred = render(&mut renderer, "deferred-1x1");
+    let reference = render(&mut renderer, "reference-4x4");
+    let prepared = renderer.prepare("adaptive-4x4-cells".parse().unwrap()).unwrap();
+    prepared.render().unwrap();
+    let cells = prepared.read_images().unwrap();
+    let near_edge = edge_pixels(&prepared.read_gbuffer().unwrap(), 4, 1);
+    let steps = |p: usize| {
+        let (a, b) = (&reference.display.rgba[4 * p..4 * p + 3], &deferred.display.rgba[4 * p..4 * p + 3]);
+        a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0)
+    };
+    let highlights: Vec<usize> = (0..128 * 96).filter(|&p| !near_edge[p] && steps(p) > 8).collect();
+    assert!(highlights.len() >= 20, "only {} highlight pixels", highlights.len());
+    let single = |counts: &[u8]| highlights.iter().filter(|&&p| counts[p] == 1).count();
+    let paper = render(&mut renderer, "adaptive-4x4");
+    let (cells_single, paper_single) = (single(counts(&cells)), single(counts(&paper)));
+    assert_eq!(
+        cells_single,
+        0,
+        "-cells: {cells_single} of {} highlight pixels took one sample",
+        highlights.len()
+    );
+    assert!(paper_single > 0, "the paper's metric sampled every highlight pixel: the test shows nothing");
+}
+
 /// With every sample forced, every cell stands for itself and `-coverage` is the reference
 /// within one step, lit, with textures and thin geometry.
 #[test]

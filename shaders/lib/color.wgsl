@@ -42,14 +42,19 @@ fn power(x: f32, y: f32) -> f32 {
     return select(pow(max(x, 1e-30), y), 0.0, x <= 0.0);
 }
 
+// The tonemap curve on one value above PEAK_FLOOR: a grey's display-relative linear light.
+fn tonemap_curve(peak: f32) -> f32 {
+    let z = pow(min(peak, HDR_MAX), CONTRAST);
+    return min(z / (pow(z, SHOULDER) * CURVE_B + CURVE_C), 1.0);
+}
+
 // Linear exposed HDR (finite, ≥ 0) to display-relative linear [0, 1].
 fn tonemap_rgb(rgb: vec3<f32>) -> vec3<f32> {
     let peak = max(rgb.r, max(rgb.g, rgb.b));
     if peak <= PEAK_FLOOR {
         return vec3<f32>(0.0);
     }
-    let z = pow(min(peak, HDR_MAX), CONTRAST);
-    let mapped = min(z / (pow(z, SHOULDER) * CURVE_B + CURVE_C), 1.0);
+    let mapped = tonemap_curve(peak);
     let white = power(mapped, CROSSTALK);
     let ratio = pow(max(rgb / peak, vec3<f32>(RATIO_FLOOR)), vec3<f32>(SATURATION / CROSS_SATURATION));
     return pow(mix(ratio, vec3<f32>(1.0), white), vec3<f32>(CROSS_SATURATION)) * mapped;

@@ -46,6 +46,24 @@ struct Reflected {
     slope: vec3<f32>,
 }
 
+// GGX's distribution of normals at n·h = `n_h`, for a2 = roughness⁴.
+fn ggx(n_h: f32, a2: f32) -> f32 {
+    let d_denominator = n_h * n_h * (a2 - 1.0) + 1.0;
+    return a2 / (PI * d_denominator * d_denominator);
+}
+
+// Hammon's approximation of height-correlated Smith visibility, for a = roughness².
+fn smith_visibility(n_l: f32, n_v: f32, a: f32) -> f32 {
+    return 0.5 / mix(2.0 * n_l * n_v, n_l + n_v, a);
+}
+
+// Schlick's Fresnel weight (1 − v·h)⁵, by multiplication rather than pow() (exp2 of log2).
+fn schlick_weight(v_h: f32) -> f32 {
+    let x = 1.0 - v_h;
+    let x2 = x * x;
+    return x2 * x2 * x;
+}
+
 // glTF's metallic-roughness model: Lambert diffuse, GGX distribution, Schlick Fresnel, and
 // Hammon's approximation of height-correlated Smith visibility (no square roots; Filament's
 // "fast" variant), with its slope in albedo. `n_l` > 0 is the caller's.
@@ -54,14 +72,10 @@ fn reflect_light(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, n_l: f32, albedo: vec
     let n_v = max(dot(n, v), 1e-4);
     let n_h = max(dot(n, h), 0.0);
     let v_h = max(dot(v, h), 0.0);
-    let d_denominator = n_h * n_h * (a2 - 1.0) + 1.0;
-    let distribution = a2 / (PI * d_denominator * d_denominator);
-    let visibility = 0.5 / mix(2.0 * n_l * n_v, n_l + n_v, a);
+    let distribution = ggx(n_h, a2);
+    let visibility = smith_visibility(n_l, n_v, a);
     let f0 = mix(vec3<f32>(0.04), albedo, metallic);
-    // (1 − v·h)⁵ by multiplication rather than pow() (exp2 of log2).
-    let x = 1.0 - v_h;
-    let x2 = x * x;
-    let x5 = x2 * x2 * x;
+    let x5 = schlick_weight(v_h);
     let fresnel = f0 + (1.0 - f0) * x5;
     let diffuse_scale = (1.0 - metallic) / PI;
     let diffuse = (1.0 - fresnel) * diffuse_scale * albedo;
@@ -84,6 +98,39 @@ fn attenuation(distance2: f32, inverse2: f32, range: f32) -> f32 {
 // distance: the inverse square stays finite for a light on a surface, in any unit (a fixed
 // floor in world units darkened a Cornell box modelled in kilometres).
 const NEAREST_LIGHT: f32 = 1e-4;
+
+// The way from a shading point to a light: `to_light` (not normalized; the reverse of a
+// directional light's direction) and its squared length, kept at least NEAREST_LIGHT of the
+// light's range (1 for a directional light, which does not fall off).
+struct LightRay {
+    to_light: vec3<f32>,
+    distance2: f32,
+    positional: bool,
+}
+
+fn light_ray(light: Light, position: vec3<f32>) -> LightRay {
+#ifdef LIGHT_KINDS
+    // Kinds are told apart with `select`, never with a branch: lavapipe specializes a shader
+    // on uniform values that steer control flow and then looks the variant up on every pass
+    // (a branch on `kind` added 2 ms to every 160×120 frame). A point light's cone factor is
+    // exactly 1 (scale 0, offset 1).
+    let positional = light.kind != LIGHT_DIRECTIONAL;
+    let to_light = select(-light.direction, light.position - position, positional);
+    let nearest = NEAREST_LIGHT * light.range;
+    let distance2 = select(1.0, max(dot(to_light, to_light), nearest * nearest), positional);
+    return LightRay(to_light, distance2, positional);
+#else
+    let to_light = light.position - position;
+    let nearest = NEAREST_LIGHT * light.range;
+    return LightRay(to_light, max(dot(to_light, to_light), nearest * nearest), true);
+#endif
+}
+
+// A spot light's fade at the unit direction `l` towards it: clamp(cos θ · scale + offset, 0, 1)².
+fn spot_fade(light: Light, l: vec3<f32>) -> f32 {
+    let cone = clamp(dot(light.direction, -l) * light.spot_scale + light.spot_offset, 0.0, 1.0);
+    return cone * cone;
+}
 
 #ifdef TEXTURED
 // Most taps of one anisotropic lookup.
@@ -236,33 +283,20 @@ fn light_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f
 #endif
     for (var i = 0u; i < LIGHT_COUNT; i += 1u) {
         let light = lights.entries[i];
-#ifdef LIGHT_KINDS
-        // Kinds are told apart with `select`, never with a branch: lavapipe specializes a
-        // shader on uniform values that steer control flow and then looks the variant up on
-        // every pass (a branch on `kind` added 2 ms to every 160×120 frame). A point light's
-        // cone factor is exactly 1 (scale 0, offset 1).
-        let positional = light.kind != LIGHT_DIRECTIONAL;
-        let to_light = select(-light.direction, light.position - position, positional);
-        let nearest = NEAREST_LIGHT * light.range;
-        let distance2 = select(1.0, max(dot(to_light, to_light), nearest * nearest), positional);
-#else
-        let to_light = light.position - position;
-        let nearest = NEAREST_LIGHT * light.range;
-        let distance2 = max(dot(to_light, to_light), nearest * nearest);
-#endif
-        let inverse = inverseSqrt(distance2);
-        let l = to_light * inverse;
+        let ray = light_ray(light, position);
+        let inverse = inverseSqrt(ray.distance2);
+        let l = ray.to_light * inverse;
         let n_l = dot(s.normal, l);
         if n_l > 0.0 {
 #ifdef LIGHT_KINDS
-            let falloff = select(1.0, attenuation(distance2, inverse * inverse, light.range), positional);
-            let cone = clamp(dot(light.direction, -l) * light.spot_scale + light.spot_offset, 0.0, 1.0);
+            let falloff = select(1.0, attenuation(ray.distance2, inverse * inverse, light.range), ray.positional);
+            let cone = spot_fade(light, l);
             let reflected = reflect_light(s.normal, v, l, n_l, albedo, metallic, a2, a);
-            var contribution = reflected.value * light.radiance * falloff * (cone * cone);
-            var contribution_slope = reflected.slope * light.radiance * falloff * (cone * cone);
+            var contribution = reflected.value * light.radiance * falloff * cone;
+            var contribution_slope = reflected.slope * light.radiance * falloff * cone;
 #else
             let reflected = reflect_light(s.normal, v, l, n_l, albedo, metallic, a2, a);
-            let falloff = attenuation(distance2, inverse * inverse, light.range);
+            let falloff = attenuation(ray.distance2, inverse * inverse, light.range);
             var contribution = reflected.value * light.radiance * falloff;
             var contribution_slope = reflected.slope * light.radiance * falloff;
 #endif

@@ -1,5 +1,6 @@
 //! The passes of an adaptive mode (see `shaders/adaptive.wgsl` for the algorithm's outline).
 
+use super::tonemap::curve_constants;
 use super::{
     BuildContext, Compute, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, gbuffer, shading_inputs,
 };
@@ -8,6 +9,7 @@ use crate::adaptive::{
     packed_sample_order,
 };
 use crate::bindings::Bound;
+use crate::color::Tonemap;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
 use crate::mode::Metrics;
 use crate::pipelines::Constants;
@@ -159,20 +161,25 @@ pub(crate) struct EvaluateNode {
     pub textured: bool,
     pub reconstruction: Reconstruction,
     pub settings: AdaptiveSettings,
+    /// The scene's tonemap, through which the light-aware term reads highlights as the display
+    /// will show them (None: exposed and clamped to [0, 1]).
+    pub tonemap: Option<Tonemap>,
 }
 
 impl EvaluateNode {
+    /// Whether the shading metric bounds specular highlights from the lights (`-cells` and
+    /// `-coverage`).
+    fn light_detail(&self) -> bool {
+        matches!(self.reconstruction, Reconstruction::Cells | Reconstruction::Coverage)
+            && self.metrics != Metrics::Geometry
+    }
+
     /// The G-buffer ports the pass reads: normals and depths; the UVs in a textured scene (for
-    /// the texture detail, even where it is off), and under `-coverage` at least the UV
-    /// target's size (`view_ray`).
+    /// the texture detail), else at least the UV target's size (`view_ray`, in the light-aware
+    /// term and `-coverage`'s grouping). A term switched off by its constant still binds what
+    /// it would read.
     pub fn gbuffer_reads(&self) -> &'static [&'static str] {
-        if self.textured {
-            &gbuffer::PORTS
-        } else if self.reconstruction == Reconstruction::Coverage {
-            &[gbuffer::UV, gbuffer::NORMAL, gbuffer::DEPTH]
-        } else {
-            &[gbuffer::NORMAL, gbuffer::DEPTH]
-        }
+        if self.textured { &gbuffer::PORTS } else { &[gbuffer::UV, gbuffer::NORMAL, gbuffer::DEPTH] }
     }
 }
 
@@ -211,8 +218,16 @@ impl Node for EvaluateNode {
                 "TEXTURE_DETAIL",
                 self.reconstruction == Reconstruction::Cells && self.metrics != Metrics::Geometry,
             )
+            // Both variants also bound specular highlights inside the pixel from the lights.
+            .flag("LIGHT_DETAIL", self.light_detail())
             .with("SURFACE_COS", SURFACE_COS)
             .with("SURFACE_GAP", SURFACE_GAP);
+        // The light-aware term loops over the lights and maps highlights through the tonemap.
+        let constants = match &self.tonemap {
+            _ if !self.light_detail() => constants,
+            Some(tonemap) => curve_constants(constants.extend(&ctx.shading_constants(false)), tonemap)?,
+            None => constants.extend(&ctx.shading_constants(false)),
+        };
         let (fragment, targets): (_, &[&str]) = match self.reconstruction {
             Reconstruction::Coverage => ("evaluate_coverage", &["counts", "groups"]),
             _ => ("evaluate", &["counts"]),

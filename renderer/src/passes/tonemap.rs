@@ -29,19 +29,24 @@ impl Node for TonemapNode {
     }
 
     fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
-        let t = &self.tonemap;
-        let curve = t.curve()?;
-        let constants = Constants::new()
-            .with("CONTRAST", curve.contrast)
-            .with("SHOULDER", curve.shoulder)
-            .with("CURVE_B", curve.b)
-            .with("CURVE_C", curve.c)
-            .with("HDR_MAX", t.hdr_max)
-            .with("CROSSTALK", t.crosstalk)
-            .with("SATURATION", t.saturation)
-            .with("CROSS_SATURATION", t.cross_saturation);
+        let constants = curve_constants(Constants::new(), &self.tonemap)?;
         let program =
             Program { shader: "tonemap.wgsl", vertex: FULLSCREEN.0, fragment: Some("tonemap"), constants };
         Ok(Box::new(ctx.screen(io, "tonemap", program, &["tonemapped"], FULLSCREEN.1, &[])?))
     }
+}
+
+/// `constants` with those of `lib/color.wgsl`'s tonemap set to `tonemap`'s curve, for every
+/// shader that maps exposed HDR as the display will.
+pub(crate) fn curve_constants(constants: Constants, tonemap: &Tonemap) -> Result<Constants, RenderError> {
+    let curve = tonemap.curve()?;
+    Ok(constants
+        .with("CONTRAST", curve.contrast)
+        .with("SHOULDER", curve.shoulder)
+        .with("CURVE_B", curve.b)
+        .with("CURVE_C", curve.c)
+        .with("HDR_MAX", tonemap.hdr_max)
+        .with("CROSSTALK", tonemap.crosstalk)
+        .with("SATURATION", tonemap.saturation)
+        .with("CROSS_SATURATION", tonemap.cross_saturation))
 }

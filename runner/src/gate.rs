@@ -31,6 +31,12 @@ pub struct Tolerances {
     /// Total-variation distance between the normalized sample-count histograms (0 to 1).
     pub histogram: f64,
     pub histogram_cross_platform: f64,
+    /// Mean FLIP against the truth, as a fraction of the baseline's.
+    pub flip_relative: f64,
+    pub flip_relative_cross_platform: f64,
+    /// 1 − SSIM against the truth (the dissimilarity), as a fraction of the baseline's.
+    pub ssim_relative: f64,
+    pub ssim_relative_cross_platform: f64,
     /// In-run time ratios (a mode against deferred-1x1, adaptive-MxM against reference-MxM),
     /// as a fraction: 0.1 flags a ratio 10% above the baseline's.
     pub time_ratio: f64,
@@ -50,6 +56,10 @@ impl Default for Tolerances {
             shaded_percent_cross_platform: 0.5,
             histogram: 0.002,
             histogram_cross_platform: 0.01,
+            flip_relative: 0.005,
+            flip_relative_cross_platform: 0.06,
+            ssim_relative: 0.005,
+            ssim_relative_cross_platform: 0.06,
             time_ratio: 0.10,
             absolute_time: 0.40,
         }
@@ -68,6 +78,10 @@ impl Tolerances {
             ("shaded_percent_cross_platform", self.shaded_percent_cross_platform),
             ("histogram", self.histogram),
             ("histogram_cross_platform", self.histogram_cross_platform),
+            ("flip_relative", self.flip_relative),
+            ("flip_relative_cross_platform", self.flip_relative_cross_platform),
+            ("ssim_relative", self.ssim_relative),
+            ("ssim_relative_cross_platform", self.ssim_relative_cross_platform),
         ];
         for (name, value) in fields {
             if !(value.is_finite() && value >= 0.0) {
@@ -90,6 +104,8 @@ impl Tolerances {
                 mse_relative: self.mse_relative,
                 shaded_percent: self.shaded_percent,
                 histogram: self.histogram,
+                flip_relative: self.flip_relative,
+                ssim_relative: self.ssim_relative,
             }
         } else {
             QualityTolerances {
@@ -97,6 +113,8 @@ impl Tolerances {
                 mse_relative: self.mse_relative_cross_platform,
                 shaded_percent: self.shaded_percent_cross_platform,
                 histogram: self.histogram_cross_platform,
+                flip_relative: self.flip_relative_cross_platform,
+                ssim_relative: self.ssim_relative_cross_platform,
             }
         }
     }
@@ -109,4 +127,6 @@ pub struct QualityTolerances {
     pub mse_relative: f64,
     pub shaded_percent: f64,
     pub histogram: f64,
+    pub flip_relative: f64,
+    pub ssim_relative: f64,
 }

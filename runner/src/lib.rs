@@ -14,6 +14,7 @@ pub mod manifest;
 pub mod markup;
 pub mod merge;
 pub mod metrics;
+pub mod perceptual;
 pub mod plan;
 pub mod progress;
 pub mod record;

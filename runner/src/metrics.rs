@@ -8,6 +8,8 @@
 //! the anti-aliasing.
 
 use aabench_renderer::{DisplayImage, FrameImages, Reconstruction};
+
+use crate::perceptual::{self, FlipMap};
 use serde::{Deserialize, Serialize, Serializer};
 
 /// 20·log10(255): the paper reports PSNR with peak 255 over an MSE taken on [0, 1] values.
@@ -64,6 +66,14 @@ pub struct Quality {
     pub psnr_paper_db: Decibels,
     /// Largest per-channel difference, in code steps of the images' bit depth.
     pub max_abs_diff: u16,
+    /// Mean FLIP error in [0, 1], 0 for identical images (`perceptual::flip`). Against the
+    /// truth only; absent from records from before it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flip: Option<f64>,
+    /// Mean SSIM over R, G and B, 1 for identical images (`perceptual::ssim`). Against the
+    /// truth only; absent from records from before it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ssim: Option<f64>,
 }
 
 /// Compares two display images of the same size and bit depth (alpha ignored).
@@ -91,7 +101,26 @@ pub fn quality(image: &DisplayImage, reference: &DisplayImage, against: &str) ->
         psnr_db: Decibels::from_f64(psnr),
         psnr_paper_db: Decibels::from_f64(psnr + PAPER_PSNR_OFFSET_DB),
         max_abs_diff,
+        flip: None,
+        ssim: None,
     }
+}
+
+/// `quality` against the truth with the perceptual metrics added, and FLIP's error map.
+pub fn quality_vs_truth(
+    image: &DisplayImage,
+    truth: &DisplayImage,
+    width: u32,
+    height: u32,
+    against: &str,
+) -> (Quality, FlipMap) {
+    let map = perceptual::flip(image, truth, width, height);
+    let quality = Quality {
+        flip: Some(map.mean()),
+        ssim: Some(perceptual::ssim(image, truth, width, height)),
+        ..quality(image, truth, against)
+    };
+    (quality, map)
 }
 
 /// How many samples an adaptive mode shaded.

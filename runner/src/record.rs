@@ -268,6 +268,9 @@ pub struct ImageFiles {
     /// Heatmap of |image − reference| (reference: the same-M reference for adaptive modes,
     /// deferred-1x1 for FXAA, else the ground truth).
     pub difference: Option<String>,
+    /// FLIP's error map against the ground truth, in its magma scale.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flip: Option<String>,
 }
 
 /// An adaptive mode's time against its reference and against its own limit.

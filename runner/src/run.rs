@@ -18,6 +18,7 @@ use crate::inputs::SceneInputs;
 use crate::machine::Machine;
 use crate::manifest::Manifest;
 use crate::metrics::{self, FrameChecks, Quality};
+use crate::perceptual::FlipMap;
 use crate::plan::{RunPlan, SceneEntry, Tier, fallback_name};
 use crate::progress::Progress;
 use crate::record::{
@@ -637,7 +638,10 @@ async fn finish_modes(
                 )
             };
             let vs_reference = reference.map(|(i, m)| vs(i, &m.to_string()));
-            let vs_truth = truth.as_deref().map(|truth| metrics::quality(&own.display, truth, TRUTH_ID));
+            let (vs_truth, flip_map) = truth
+                .as_deref()
+                .map(|truth| metrics::quality_vs_truth(&own.display, truth, own.width, own.height, TRUTH_ID))
+                .unzip();
             let diff_against = match reference {
                 Some((i, _)) => Some(&images[i].as_ref().expect("reference images").display),
                 None => truth.as_deref(),
@@ -647,7 +651,15 @@ async fn finish_modes(
                 .as_ref()
                 .map(|counts| metrics::sample_stats(counts, mode.m, mode.reconstruction()));
             let mut files = ImageFiles::default();
-            let written = write_mode_images(&scene_dir, &scene_name, mode, own, diff_against, &mut files);
+            let written = write_mode_images(
+                &scene_dir,
+                &scene_name,
+                mode,
+                own,
+                diff_against,
+                flip_map.as_ref(),
+                &mut files,
+            );
             (files, samples, vs_reference, vs_truth, written)
         })));
     }
@@ -823,6 +835,7 @@ fn write_mode_images(
     mode: Mode,
     images: &FrameImages,
     diff_against: Option<&DisplayImage>,
+    flip_map: Option<&FlipMap>,
     files: &mut ImageFiles,
 ) -> anyhow::Result<()> {
     let (w, h) = (images.width, images.height);
@@ -840,6 +853,10 @@ fn write_mode_images(
         let heatmap = images::difference_heatmap(&images.display, other, DIFFERENCE_FULL_SCALE);
         images::write_png(&path(".diff.png"), w, h, &heatmap)?;
         files.difference = relative(".diff.png");
+    }
+    if let Some(map) = flip_map {
+        images::write_png(&path(".flip.png"), map.width, map.height, &map.magma_rgba())?;
+        files.flip = relative(".flip.png");
     }
     Ok(())
 }
@@ -860,8 +877,16 @@ fn report_scene(progress: &Progress, scene: &SceneRecord) {
         )),
     }
     progress.line(&format!(
-        "  {:<28} {:>10} {:>21} {:>8} {:>9} {:>9} {:>10}  {}",
-        "mode", "median ms", "interval ms", "×1x1", "samples%", "PSNR ref", "PSNR truth", "front"
+        "  {:<28} {:>10} {:>21} {:>8} {:>9} {:>9} {:>10} {:>10}  {}",
+        "mode",
+        "median ms",
+        "interval ms",
+        "×1x1",
+        "samples%",
+        "PSNR ref",
+        "PSNR truth",
+        "FLIP truth",
+        "front"
     ));
     let db = |q: &Option<Quality>| q.as_ref().map_or("-".into(), |q| format!("{:.2}", q.psnr_db.value()));
     for mode in &scene.modes {
@@ -870,7 +895,7 @@ fn report_scene(progress: &Progress, scene: &SceneRecord) {
             continue;
         };
         progress.line(&format!(
-            "  {:<28} {:>10.1} {:>21} {:>8} {:>9} {:>9} {:>10}  {}{}",
+            "  {:<28} {:>10.1} {:>21} {:>8} {:>9} {:>9} {:>10} {:>10}  {}{}",
             mode.mode,
             frame.median,
             format!("[{:.1}, {:.1}]", frame.ci_low, frame.ci_high),
@@ -878,6 +903,7 @@ fn report_scene(progress: &Progress, scene: &SceneRecord) {
             mode.samples.as_ref().map_or("-".into(), |s| format!("{:.1}", s.shaded_percent)),
             db(&mode.vs_reference),
             db(&mode.vs_ground_truth),
+            mode.vs_ground_truth.as_ref().and_then(|q| q.flip).map_or("-".into(), |f| format!("{f:.4}")),
             mode.front.as_ref().map_or("-".into(), |place| place.describe()),
             mode.error.as_ref().map_or(String::new(), |e| format!("  ({e})")),
         ));

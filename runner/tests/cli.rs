@@ -86,6 +86,14 @@ fn a_run_writes_its_record_and_images_and_exits_zero() {
     }
     assert!(ws.run_dir().join(adaptive["images"]["samples"].as_str().unwrap()).exists());
     assert!(ws.run_dir().join(adaptive["images"]["difference"].as_str().unwrap()).exists());
+    // Perceptual error against the truth, ranked as PSNR ranks the edge's aliasing, and
+    // FLIP's error map beside the difference heatmap.
+    let perceptual = |id: &str, metric: &str| mode(scene, id)["vs_ground_truth"][metric].as_f64().unwrap();
+    assert!(perceptual("reference-2x2", "flip") < perceptual("deferred-1x1", "flip"));
+    assert!(perceptual("reference-2x2", "ssim") > perceptual("deferred-1x1", "ssim"));
+    assert!(perceptual("deferred-1x1", "flip") > 0.0 && perceptual("deferred-1x1", "ssim") < 1.0);
+    assert!(ws.run_dir().join(adaptive["images"]["flip"].as_str().unwrap()).exists());
+    assert!(adaptive["vs_reference"].get("flip").is_none(), "perceptual metrics are taken against the truth");
     let graph = &adaptive["graph"];
     assert_eq!(
         graph["passes"],

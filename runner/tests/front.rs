@@ -13,15 +13,20 @@ fn psnr(mode: &Value) -> f64 {
     mode["vs_ground_truth"]["psnr_db"].as_f64().expect("a finite PSNR against the truth")
 }
 
+/// The record of a quick run of the texture stress scene in `modes`, in a workspace of its own.
+fn texture_run(name: &str, modes: &str, repetitions: &str) -> Value {
+    let ws = Workspace::new(name);
+    let manifest = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/texture.json");
+    std::fs::copy(manifest, ws.dir.join("scenes/texture.json")).unwrap();
+    let output = ws.run(&["run", "scenes/texture.json", "--modes", modes, "--repetitions", repetitions]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    ws.record()
+}
+
 #[test]
 fn the_texture_scene_places_every_mode_on_or_behind_the_front_and_cells_recover_the_texture() {
     let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let ws = Workspace::new("front");
-    let manifest = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/texture.json");
-    std::fs::copy(manifest, ws.dir.join("scenes/texture.json")).unwrap();
-    let output = ws.run(&["run", "scenes/texture.json", "--modes", MODES, "--repetitions", "3"]);
-    assert!(output.status.success(), "{}", stderr(&output));
-    let record = ws.record();
+    let record = texture_run("front", MODES, "3");
     let scene = &record["scenes"][0];
     let modes = scene["modes"].as_array().unwrap();
     assert_eq!(modes.len(), 6);
@@ -62,4 +67,43 @@ fn the_texture_scene_places_every_mode_on_or_behind_the_front_and_cells_recover_
     let area = psnr(support::mode(scene, "adaptive-4x4-area"));
     assert!(cells >= paper + 3.0, "cells {cells:.2} dB against the paper's {paper:.2} dB");
     assert!(cells > area, "cells {cells:.2} dB against the area weights' {area:.2} dB");
+
+    // Which technique for this scene: levels rise, each row's mode reaches its level and no
+    // mode that reaches it is faster; the last row is the mode nearest the truth.
+    let parsed: aabench::record::RunRecord = serde_json::from_value(record.clone()).unwrap();
+    let rows = aabench::report::fastest_by_level(&parsed.scenes[0]);
+    assert!(rows.len() >= 2, "{} levels", rows.len());
+    let median = |m: &Value| m["frame_ms"]["median"].as_f64().unwrap();
+    for pair in rows.windows(2) {
+        assert!(pair[0].0 < pair[1].0, "levels {} and {}", pair[0].0, pair[1].0);
+    }
+    for (level, chosen) in &rows {
+        let chosen = support::mode(scene, &chosen.mode);
+        assert!(psnr(chosen) >= *level);
+        for other in modes.iter().filter(|m| psnr(m) >= *level) {
+            assert!(
+                median(other) >= median(chosen),
+                "{} is faster than {} at {level}",
+                other["mode"],
+                chosen["mode"]
+            );
+        }
+    }
+    assert_eq!(rows.last().unwrap().1.mode, nearest["mode"].as_str().unwrap());
+}
+
+/// The texture stress scene at the quick tier (the gate's): the best adaptive variant at 4×4,
+/// `-coverage`, which reads every sample's albedo as the reference does, is within 1 dB of
+/// reference-4x4 against the truth (the tolerance the issue set; measured 0.1 dB behind at the
+/// nightly tier), where the paper's adaptive-4x4 is 10 dB behind.
+#[test]
+fn the_best_adaptive_variant_at_4x4_is_within_a_decibel_of_the_reference_on_the_texture_scene() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let record = texture_run("front-texture", "reference-4x4,adaptive-4x4,adaptive-4x4-coverage", "1");
+    let scene = &record["scenes"][0];
+    let reference = psnr(support::mode(scene, "reference-4x4"));
+    let coverage = psnr(support::mode(scene, "adaptive-4x4-coverage"));
+    let paper = psnr(support::mode(scene, "adaptive-4x4"));
+    assert!(coverage >= reference - 1.0, "coverage {coverage:.2} dB, reference {reference:.2} dB");
+    assert!(paper < reference - 5.0, "the paper's mode {paper:.2} dB: the scene no longer stresses textures");
 }

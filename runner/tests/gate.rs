@@ -150,6 +150,39 @@ fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
     let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(summary.find("### Regressed").unwrap() < summary.find("checks unchanged").unwrap(), "{summary}");
 
+    // A baseline from before the perceptual metrics reads and checks neither; one whose
+    // FLIP and SSIM were 10 % less of an error fails them.
+    let mut older = baseline.clone();
+    for scene in older["scenes"].as_array_mut().unwrap() {
+        for m in scene["modes"].as_array_mut().unwrap() {
+            if let Some(quality) = m["vs_ground_truth"].as_object_mut() {
+                assert!(quality.remove("flip").is_some() && quality.remove("ssim").is_some(), "{m}");
+            }
+        }
+    }
+    write_json(&file, &older);
+    let without = compare(&ws, &second, &out);
+    assert_eq!(without.status.code(), Some(0), "{}", stderr(&without));
+    let verdict = read_json(&out.join("verdict.json"));
+    assert!(checks_of(&verdict, "adaptive-2x2", "flip_vs_truth").is_empty());
+    let mut sharper = baseline.clone();
+    for m in sharper["scenes"][0]["modes"].as_array_mut().unwrap() {
+        if m["mode"] == "adaptive-2x2" {
+            let flip = &mut m["vs_ground_truth"]["flip"];
+            *flip = json!(flip.as_f64().unwrap() * 0.9);
+        } else if m["mode"] == "reference-2x2" {
+            let ssim = &mut m["vs_ground_truth"]["ssim"];
+            *ssim = json!(1.0 - (1.0 - ssim.as_f64().unwrap()) * 0.9);
+        }
+    }
+    write_json(&file, &sharper);
+    let blurrier = compare(&ws, &second, &out);
+    assert_eq!(blurrier.status.code(), Some(1), "{}", stderr(&blurrier));
+    let verdict = read_json(&out.join("verdict.json"));
+    assert_eq!(checks_of(&verdict, "adaptive-2x2", "flip_vs_truth")[0]["outcome"], "regressed");
+    assert_eq!(checks_of(&verdict, "adaptive-2x2", "ssim_vs_truth")[0]["outcome"], "unchanged");
+    assert_eq!(checks_of(&verdict, "reference-2x2", "ssim_vs_truth")[0]["outcome"], "regressed");
+
     // A baseline of another platform is not overwritten without --force, and says why.
     doctored["platform"]["key"] = json!("another-platform");
     write_json(&file, &doctored);

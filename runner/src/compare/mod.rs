@@ -132,8 +132,8 @@ pub enum Against {
 pub struct Check {
     pub scene: String,
     pub mode: String,
-    /// `status`, `psnr_vs_truth`, `mse_vs_truth`, `psnr_vs_reference`, `mse_vs_reference`,
-    /// `shaded_percent`, `sample_histogram`, `output_hash`, `relative_time`,
+    /// `status`, `psnr_vs_truth`, `mse_vs_truth`, `flip_vs_truth`, `ssim_vs_truth`,
+    /// `psnr_vs_reference`, `mse_vs_reference`, `shaded_percent`, `sample_histogram`, `output_hash`, `relative_time`,
     /// `time_vs_reference`, `frame_time`; `run` for the run as a whole.
     pub metric: String,
     /// What the check compares with: the committed baseline or the base build's processes.
@@ -666,6 +666,7 @@ impl ModeContext<'_> {
                 (Some(now), Some(then)) => {
                     checks.push(self.psnr_check(name, now, then, tolerance));
                     checks.push(self.mse_check(name, now, then, tolerance));
+                    checks.extend(self.perceptual_checks(name, now, then, tolerance));
                 }
                 (None, Some(_)) => checks.push(self.check(
                     &format!("psnr_vs_{name}"),
@@ -790,6 +791,58 @@ impl ModeContext<'_> {
                 ),
             )
         }
+    }
+
+    /// FLIP and SSIM where both records have them: a baseline from before them checks
+    /// neither; a run that lost one fails it. Each moves by its relative change (of 1 − SSIM
+    /// for SSIM, so that both read as errors).
+    fn perceptual_checks(
+        &self,
+        against: &str,
+        now: &Quality,
+        then: &Quality,
+        tolerance: QualityTolerances,
+    ) -> Vec<Check> {
+        let metrics = [
+            ("flip", "FLIP", now.flip, then.flip, tolerance.flip_relative, 0.0),
+            ("ssim", "SSIM", now.ssim, then.ssim, tolerance.ssim_relative, 1.0),
+        ];
+        let mut checks = Vec::new();
+        for (metric, label, now, then, threshold, perfect) in metrics {
+            let name = format!("{metric}_vs_{against}");
+            let (now, then) = match (now, then) {
+                (Some(now), Some(then)) => (now, then),
+                (None, Some(_)) => {
+                    let detail = format!("the baseline has {label} against the {against}, the run has none");
+                    checks.push(self.check(&name, Outcome::Failed, "relative", detail));
+                    continue;
+                }
+                _ => continue,
+            };
+            let (error_now, error_then) = ((now - perfect).abs(), (then - perfect).abs());
+            let change = match (error_now, error_then) {
+                (a, b) if a == b => 0.0,
+                (_, 0.0) => f64::INFINITY,
+                (a, b) => (a - b) / b,
+            };
+            checks.push(Check {
+                baseline: Some(then),
+                current: Some(now),
+                change: Some(change).filter(|v| v.is_finite()),
+                threshold: Some(threshold),
+                ..self.check(
+                    &name,
+                    beyond(change, threshold, false),
+                    "relative",
+                    format!(
+                        "{label} against the {against} {then:.5} → {now:.5} ({} of its error; tolerance ±{:.1}%)",
+                        show_percent(change),
+                        threshold * 100.0
+                    ),
+                )
+            });
+        }
+        checks
     }
 
     fn time_checks(&self) -> Vec<Check> {

@@ -8,7 +8,10 @@ use std::path::Path;
 
 use image::RgbaImage;
 
-use super::{MODE_COLUMNS, VARIANTS, decibels, error_points, mode_cells, open_rgba, plots, worst_window};
+use super::{
+    ErrorMetric, MODE_COLUMNS, VARIANTS, decibels, error_points, fastest_by_level, mode_cells, open_rgba,
+    plots, technique_cell, worst_window,
+};
 use crate::record::{ModeRecord, RunRecord, SceneRecord};
 use crate::truth::TRUTH_ID;
 
@@ -36,6 +39,7 @@ pub fn document(run: &RunRecord) -> String {
     provenance(&mut out, run);
     out.push_str("\n### Overview\n\n");
     overview(&mut out, run);
+    techniques(&mut out, run);
     variants(&mut out, run);
     passes(&mut out, run);
     for scene in &run.scenes {
@@ -91,6 +95,27 @@ pub fn overview(out: &mut String, run: &RunRecord) {
         "\nEach cell: frame ms / PSNR against the truth in dB; **bold** where the mode is on the \
          scene's error-against-run-time front.\n",
     );
+}
+
+/// Which technique for each scene: the fastest mode at each PSNR level its front reaches.
+fn techniques(out: &mut String, run: &RunRecord) {
+    let rows: Vec<(&str, Vec<String>)> = run
+        .scenes
+        .iter()
+        .map(|s| (s.name.as_str(), fastest_by_level(s).iter().map(|(l, m)| technique_cell(*l, m)).collect()))
+        .filter(|(_, cells): &(&str, Vec<String>)| !cells.is_empty())
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    out.push_str(
+        "\n### Which technique for this scene\n\nFor each PSNR against the truth that a mode on the \
+         scene's front reaches, the fastest unstalled mode that reaches it (frame ms, mean FLIP).\n\n\
+         | scene | at least … dB: the fastest mode |\n|---|---|\n",
+    );
+    for (scene, cells) in rows {
+        let _ = writeln!(out, "| {} | {} |", cell_text(scene), cell_text(&cells.join(" · ")));
+    }
 }
 
 /// Per scene, M and stall: the reference, the paper's adaptive mode and its variants side by
@@ -230,16 +255,19 @@ pub fn figures(run_dir: &Path, run: &RunRecord, dir: &Path) -> Result<(Vec<Strin
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let (mut written, mut left_out) = (Vec::new(), Vec::new());
     for scene in &run.scenes {
-        let points = error_points(scene);
-        if points.is_empty() {
-            left_out.push(format!("{}: no mode has an error against the truth to plot", scene.name));
-        } else {
-            let svg = plots::error_against_time(&format!("{}: error against run time", scene.name), &points)?;
-            let path = dir.join(format!("{}-front.svg", scene.name));
+        for (metric, suffix) in [(ErrorMetric::Mse, "front"), (ErrorMetric::Flip, "front-flip")] {
+            let points = error_points(scene, metric);
+            if points.is_empty() {
+                left_out.push(format!("{}: no mode has a {} to plot", scene.name, metric.axis()));
+                continue;
+            }
+            let title = format!("{}: {}", scene.name, metric.title());
+            let svg = plots::error_against_time(&title, metric.axis(), &points)?;
+            let path = dir.join(format!("{}-{suffix}.svg", scene.name));
             crate::fs::write(&path, standalone(&svg).as_bytes())?;
             written.push(path.display().to_string());
         }
-        if points.is_empty() {
+        if error_points(scene, ErrorMetric::Mse).is_empty() {
             continue;
         }
         match strip(run_dir, scene) {

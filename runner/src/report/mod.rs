@@ -100,6 +100,7 @@ fn summary(page: &mut String, run: &RunRecord, verdict: Option<&Verdict>) {
             verdict.notes.iter().map(|n| format!("<br>{}", escape(n))).collect::<String>()
         );
     }
+    technique_table(page, run);
     page.push_str("<nav>");
     for scene in &run.scenes {
         let _ = write!(page, "<a href=\"#{0}\">{0}</a> ", escape(&scene.name));
@@ -139,13 +140,17 @@ fn scene_section(
     let checks: Vec<&Check> =
         verdict.map_or_else(Vec::new, |v| v.checks.iter().filter(|c| c.scene == scene.name).collect());
     mode_table(page, scene, &checks);
-    let points = error_points(scene);
-    if points.is_empty() {
-        page.push_str("<p>No mode has an error against the truth to plot.</p>\n");
-    } else {
-        let title = format!("{}: error against run time", scene.name);
-        let _ =
-            writeln!(page, "<figure class=\"plot\">{}</figure>", plots::error_against_time(&title, &points)?);
+    for metric in [ErrorMetric::Mse, ErrorMetric::Flip] {
+        let points = error_points(scene, metric);
+        if points.is_empty() {
+            if metric == ErrorMetric::Mse {
+                page.push_str("<p>No mode has an error against the truth to plot.</p>\n");
+            }
+            continue;
+        }
+        let title = format!("{}: {}", scene.name, metric.title());
+        let plot = plots::error_against_time(&title, metric.axis(), &points)?;
+        let _ = writeln!(page, "<figure class=\"plot\">{plot}</figure>");
     }
     verdict_table(page, &checks);
     images(page, run_dir, scene, left_out)?;
@@ -212,7 +217,7 @@ fn adaptive_costs(page: &mut String, run: &RunRecord) {
 }
 
 /// The columns of a scene's mode table, in the HTML report and in Markdown alike.
-pub const MODE_COLUMNS: [&str; 11] = [
+pub const MODE_COLUMNS: [&str; 13] = [
     "mode",
     "frame ms",
     "interval ms",
@@ -221,6 +226,8 @@ pub const MODE_COLUMNS: [&str; 11] = [
     "MSE ×1e-5 vs truth",
     "PSNR vs ref",
     "PSNR vs truth",
+    "FLIP vs truth",
+    "SSIM vs truth",
     "front",
     "speed-up vs ref",
     "efficiency",
@@ -231,7 +238,7 @@ pub const VARIANTS: [&str; 3] = ["area", "cells", "coverage"];
 
 /// One row of the mode table, unescaped, in the order of [`MODE_COLUMNS`]; `–` where the mode
 /// has no such number.
-pub fn mode_cells(mode: &ModeRecord) -> [String; 11] {
+pub fn mode_cells(mode: &ModeRecord) -> [String; 13] {
     let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
     let frame = mode.frame_ms.as_ref();
     [
@@ -243,6 +250,8 @@ pub fn mode_cells(mode: &ModeRecord) -> [String; 11] {
         cell(mode.vs_ground_truth.as_ref().map(|q| format!("{:.3}", q.mse_e5))),
         decibels(mode.vs_reference.as_ref()),
         decibels(mode.vs_ground_truth.as_ref()),
+        cell(mode.vs_ground_truth.as_ref().and_then(|q| q.flip).map(|v| format!("{v:.4}"))),
+        cell(mode.vs_ground_truth.as_ref().and_then(|q| q.ssim).map(|v| format!("{v:.4}"))),
         cell(mode.front.as_ref().map(|place| place.describe())),
         cell(mode.adaptive.as_ref().map(|a| format!("{:.2}×", a.speedup))),
         cell(mode.adaptive.as_ref().map(|a| format!("{:.2}", a.efficiency))),
@@ -319,14 +328,48 @@ fn verdict_table(page: &mut String, checks: &[&Check]) {
     page.push_str("</tbody></table>\n");
 }
 
-/// The modes with an error against the truth and a frame time.
-pub fn error_points(scene: &SceneRecord) -> Vec<Point> {
-    scene
+/// The error an error-against-run-time plot draws.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ErrorMetric {
+    /// MSE against the truth ×10⁻⁵; its front is run.json's (by PSNR, with intervals).
+    Mse,
+    /// Mean FLIP against the truth; its front is drawn by medians: no faster mode of the same
+    /// stall has less FLIP.
+    Flip,
+}
+
+impl ErrorMetric {
+    pub fn axis(self) -> &'static str {
+        match self {
+            ErrorMetric::Mse => "MSE against the truth ×1e-5 (log)",
+            ErrorMetric::Flip => "mean FLIP against the truth (log)",
+        }
+    }
+
+    /// What a plot of this metric is called, after the scene's name.
+    pub fn title(self) -> &'static str {
+        match self {
+            ErrorMetric::Mse => "error against run time",
+            ErrorMetric::Flip => "FLIP against run time",
+        }
+    }
+
+    fn of(self, quality: &crate::metrics::Quality) -> Option<f64> {
+        match self {
+            ErrorMetric::Mse => Some(quality.mse_e5),
+            ErrorMetric::Flip => quality.flip,
+        }
+    }
+}
+
+/// The modes with an error against the truth (in `metric`) and a frame time.
+pub fn error_points(scene: &SceneRecord, metric: ErrorMetric) -> Vec<Point> {
+    let mut points: Vec<Point> = scene
         .modes
         .iter()
         .filter_map(|mode| {
             let frame = mode.frame_ms.as_ref()?;
-            let error = mode.vs_ground_truth.as_ref()?.mse_e5;
+            let error = metric.of(mode.vs_ground_truth.as_ref()?)?;
             let kind = match mode.mode.split('-').next()? {
                 "deferred" => Kind::Deferred,
                 "fxaa" => Kind::Fxaa,
@@ -345,7 +388,82 @@ pub fn error_points(scene: &SceneRecord) -> Vec<Point> {
                 on_front: mode.front.as_ref().is_some_and(|place| place.on_front),
             })
         })
-        .collect()
+        .collect();
+    if metric == ErrorMetric::Flip {
+        let dominated: Vec<bool> = points
+            .iter()
+            .map(|p| points.iter().any(|q| q.stalled == p.stalled && q.time < p.time && q.error < p.error))
+            .collect();
+        for (point, dominated) in points.iter_mut().zip(dominated) {
+            point.on_front = !dominated;
+        }
+    }
+    points
+}
+
+/// Which technique for this scene: for each PSNR against the truth that an unstalled mode on
+/// the scene's front reaches, lowest first, the fastest unstalled mode (by median) that
+/// reaches it, once per mode.
+pub fn fastest_by_level(scene: &SceneRecord) -> Vec<(f64, &ModeRecord)> {
+    let measured: Vec<(f64, f64, &ModeRecord)> = scene
+        .modes
+        .iter()
+        .filter(|m| !m.stalled)
+        .filter_map(|m| Some((m.vs_ground_truth.as_ref()?.psnr_db.value(), m.frame_ms.as_ref()?.median, m)))
+        .collect();
+    let mut levels: Vec<f64> = measured
+        .iter()
+        .filter(|(_, _, m)| m.front.as_ref().is_some_and(|place| place.on_front))
+        .map(|&(psnr, _, _)| psnr)
+        .collect();
+    levels.sort_by(f64::total_cmp);
+    let mut rows: Vec<(f64, &ModeRecord)> = Vec::new();
+    for level in levels {
+        let fastest =
+            measured.iter().filter(|(psnr, _, _)| *psnr >= level).min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some(&(_, _, mode)) = fastest
+            && rows.last().is_none_or(|(_, last)| last.mode != mode.mode)
+        {
+            rows.push((level, mode));
+        }
+    }
+    rows
+}
+
+/// `fastest_by_level` of every scene as one table: a row per scene, its levels in a cell.
+fn technique_table(page: &mut String, run: &RunRecord) {
+    let rows: Vec<(&SceneRecord, Vec<(f64, &ModeRecord)>)> =
+        run.scenes.iter().map(|s| (s, fastest_by_level(s))).filter(|(_, r)| !r.is_empty()).collect();
+    if rows.is_empty() {
+        return;
+    }
+    page.push_str(
+        "<h2>Which technique for this scene</h2>\n<p>For each PSNR against the truth that a mode on the \
+         scene's front reaches, the fastest unstalled mode that reaches it (frame ms, FLIP).</p>\n\
+         <table><thead><tr><th>scene</th><th>at least … dB: the fastest mode</th></tr></thead><tbody>\n",
+    );
+    for (scene, levels) in rows {
+        let cells: Vec<String> = levels.iter().map(|(level, mode)| technique_cell(*level, mode)).collect();
+        let _ = writeln!(
+            page,
+            "<tr><td>{}</td><td>{}</td></tr>",
+            escape(&scene.name),
+            escape(&cells.join(" · "))
+        );
+    }
+    page.push_str("</tbody></table>\n");
+}
+
+/// `36.00 dB: reference-2x2 (280.7 ms, FLIP 0.0196)`.
+pub fn technique_cell(level: f64, mode: &ModeRecord) -> String {
+    let level = if level.is_finite() { format!("{level:.2} dB") } else { "∞ dB".into() };
+    let ms = mode.frame_ms.as_ref().map_or(0.0, |f| f.median);
+    let flip = mode
+        .vs_ground_truth
+        .as_ref()
+        .and_then(|q| q.flip)
+        .map_or(String::new(), |f| format!(", FLIP {f:.4}"));
+    format!("{level}: {} ({ms:.1} ms{flip})", mode.mode)
 }
 
 /// `adaptive-3x3-geometry-stalled` → `ada 3×3 geometry`: the series says whether it is stalled.
@@ -363,6 +481,13 @@ fn short_label(mode: &str) -> String {
         return "1×1".into();
     }
     parts.iter().map(|p| p.replace('x', "×")).collect::<Vec<_>>().join(" ")
+}
+
+/// A mode's FLIP error map against the truth, where it has one.
+fn flip_figure(page: &mut String, mode: Option<&ModeRecord>) {
+    if let Some((mode, image)) = mode.and_then(|m| Some((m, m.images.flip.as_deref()?))) {
+        figure(page, image, &format!("{}: FLIP against the truth (0 black to 1 yellow)", mode.mode));
+    }
 }
 
 /// The truth, deferred-1x1, and per M: reference, adaptive (and its `-area` and `-cells`
@@ -385,6 +510,9 @@ fn images(
     }
     if let Some(image) = scene.mode("fxaa").and_then(|m| m.images.difference.as_deref()) {
         figure(page, image, "|fxaa − deferred-1x1|: the pixels FXAA changed (32 steps full scale)");
+    }
+    for id in ["deferred-1x1", "fxaa"] {
+        flip_figure(page, scene.mode(id));
     }
     page.push_str("</div>\n");
     for m in 2..=4 {
@@ -409,6 +537,9 @@ fn images(
             if let Some(image) = &mode.images.difference {
                 figure(page, image, &format!("|{} − reference| (32 steps full scale)", mode.mode));
             }
+        }
+        for &mode in reference.iter().chain(&adaptives) {
+            flip_figure(page, Some(mode));
         }
         // The area variant takes the paper's samples: one heatmap serves both; cells and
         // coverage take their own.

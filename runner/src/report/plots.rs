@@ -26,7 +26,7 @@ pub struct Point {
     pub time: f64,
     pub time_low: f64,
     pub time_high: f64,
-    /// MSE against the truth, ×10⁻⁵.
+    /// The error against the truth the plot draws (report::ErrorMetric).
     pub error: f64,
     /// On the scene's error-against-run-time front (run.json's `front`).
     pub on_front: bool,
@@ -90,7 +90,7 @@ const STALLED: RGBColor = RGBColor(214, 96, 39);
 
 /// Error against the truth over frame time, log-log: one point per mode with its time
 /// interval, stalled and unstalled as two series, each with its Pareto front dashed.
-pub fn error_against_time(title: &str, points: &[Point]) -> Result<String, String> {
+pub fn error_against_time(title: &str, y_desc: &str, points: &[Point]) -> Result<String, String> {
     svg((820, 520), |root| {
         let x = log_range(points.iter().flat_map(|p| [p.time_low, p.time_high]));
         let y = log_range(points.iter().map(|p| p.error));
@@ -104,7 +104,7 @@ pub fn error_against_time(title: &str, points: &[Point]) -> Result<String, Strin
         chart
             .configure_mesh()
             .x_desc("frame time, ms (median and interval; log)")
-            .y_desc("MSE against the truth ×1e-5 (log)")
+            .y_desc(y_desc)
             .x_label_formatter(&|v| short_number(*v))
             .y_label_formatter(&|v| short_number(*v))
             .light_line_style(WHITE.mix(0.0))
@@ -255,7 +255,7 @@ mod tests {
     #[test]
     fn plots_are_svg_with_their_labels_and_no_namespace_url() {
         let points = [point("adaptive 2×2", 40.0, 2.0), point("reference 2×2", 60.0, 1.5)];
-        let text = error_against_time("thin", &points).unwrap();
+        let text = error_against_time("thin", "MSE", &points).unwrap();
         assert!(text.starts_with("<svg"), "{}", &text[..40]);
         assert!(text.contains("adaptive 2×2") && text.contains("reference 2×2"));
         assert!(!text.contains("http"));

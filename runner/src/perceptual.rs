@@ -1,0 +1,162 @@
+//! Perceptual error of a display image against the truth: mean FLIP (Andersson et al. 2020,
+//! LDR-FLIP, through `nv-flip`, which binds NVIDIA's reference implementation) and SSIM (Wang
+//! et al. 2004, computed here and checked against scikit-image in `tests/perceptual.rs`).
+//!
+//! Both read the display's code values, as MSE and PSNR do. FLIP takes them as 8-bit sRGB (a
+//! 10-bit image is rounded to 8 bits first; on a PQ-encoded image FLIP's sRGB model is a
+//! proxy); SSIM scales them to [0, 1].
+
+use aabench_renderer::DisplayImage;
+
+/// The distance at which FLIP judges, in pixels per degree of visual angle: its default, a
+/// 0.7 m wide 4K display seen from 0.7 m.
+pub const FLIP_PIXELS_PER_DEGREE: f32 = nv_flip::DEFAULT_PIXELS_PER_DEGREE;
+
+/// FLIP's per-pixel error of an image against the truth, in [0, 1], row by row.
+#[derive(Debug)]
+pub struct FlipMap {
+    pub width: u32,
+    pub height: u32,
+    pub errors: Vec<f32>,
+}
+
+impl FlipMap {
+    /// The mean error over the image: FLIP's summary of a comparison.
+    pub fn mean(&self) -> f64 {
+        self.errors.iter().map(|&e| f64::from(e)).sum::<f64>() / self.errors.len().max(1) as f64
+    }
+
+    /// The error map in FLIP's own colour scale (magma, black for no error), as RGBA bytes.
+    pub fn magma_rgba(&self) -> Vec<u8> {
+        let lut = nv_flip::magma_lut().to_vec();
+        self.errors
+            .iter()
+            .flat_map(|&e| {
+                let i = 3 * (e.clamp(0.0, 1.0) * 255.0).round() as usize;
+                [lut[i], lut[i + 1], lut[i + 2], 255]
+            })
+            .collect()
+    }
+}
+
+/// The image's colour channels as 8-bit values, alpha dropped.
+fn rgb8(image: &DisplayImage) -> Vec<u8> {
+    let max = f64::from(image.max_code());
+    image
+        .rgba
+        .chunks_exact(4)
+        .flat_map(|p| p[..3].iter().map(move |&v| (f64::from(v) * 255.0 / max).round() as u8))
+        .collect()
+}
+
+/// FLIP of `image` against `truth`, both `width` × `height`.
+pub fn flip(image: &DisplayImage, truth: &DisplayImage, width: u32, height: u32) -> FlipMap {
+    let reference = nv_flip::FlipImageRgb8::with_data(width, height, &rgb8(truth));
+    let test = nv_flip::FlipImageRgb8::with_data(width, height, &rgb8(image));
+    let errors = nv_flip::flip(reference, test, FLIP_PIXELS_PER_DEGREE).to_vec();
+    FlipMap { width, height, errors }
+}
+
+/// SSIM's window: a Gaussian of σ 1.5 truncated at 3.5σ, 11 taps.
+const SSIM_SIGMA: f64 = 1.5;
+const SSIM_RADIUS: usize = 5;
+/// The stabilizing constants' factors for a data range of 1.
+const SSIM_K1: f64 = 0.01;
+const SSIM_K2: f64 = 0.03;
+
+/// Mean SSIM of `image` against `truth` over their R, G and B channels, each scaled to
+/// [0, 1]: local means, variances and covariance under the Gaussian window (population
+/// moments, edges mirrored), the map averaged over pixels at least the window's radius from
+/// the border (all pixels in an image too small for that). This is scikit-image's
+/// `structural_similarity(gaussian_weights=True, sigma=1.5, use_sample_covariance=False,
+/// data_range=1)`, the form of Wang et al.'s paper.
+pub fn ssim(image: &DisplayImage, truth: &DisplayImage, width: u32, height: u32) -> f64 {
+    let (w, h) = (width as usize, height as usize);
+    let max = f64::from(image.max_code());
+    let channel = |d: &DisplayImage, c: usize| -> Vec<f64> {
+        d.rgba.chunks_exact(4).map(|p| f64::from(p[c]) / max).collect()
+    };
+    (0..3).map(|c| ssim_channel(&channel(image, c), &channel(truth, c), w, h)).sum::<f64>() / 3.0
+}
+
+fn ssim_channel(x: &[f64], y: &[f64], w: usize, h: usize) -> f64 {
+    let window = gaussian_window();
+    let blur = |plane: Vec<f64>| blur(&plane, w, h, &window);
+    let mu_x = blur(x.to_vec());
+    let mu_y = blur(y.to_vec());
+    let xx = blur(x.iter().map(|v| v * v).collect());
+    let yy = blur(y.iter().map(|v| v * v).collect());
+    let xy = blur(x.iter().zip(y).map(|(a, b)| a * b).collect());
+    let (c1, c2) = (SSIM_K1 * SSIM_K1, SSIM_K2 * SSIM_K2);
+    let inset = if w > 2 * SSIM_RADIUS && h > 2 * SSIM_RADIUS { SSIM_RADIUS } else { 0 };
+    let mut sum = 0.0;
+    for row in inset..h - inset {
+        for col in inset..w - inset {
+            let i = row * w + col;
+            let (mx, my) = (mu_x[i], mu_y[i]);
+            let (vx, vy, cov) = (xx[i] - mx * mx, yy[i] - my * my, xy[i] - mx * my);
+            sum += (2.0 * mx * my + c1) * (2.0 * cov + c2) / ((mx * mx + my * my + c1) * (vx + vy + c2));
+        }
+    }
+    sum / ((w - 2 * inset) * (h - 2 * inset)) as f64
+}
+
+/// The normalized Gaussian taps, −radius…radius.
+fn gaussian_window() -> Vec<f64> {
+    let taps: Vec<f64> = (-(SSIM_RADIUS as i64)..=SSIM_RADIUS as i64)
+        .map(|i| (-0.5 * (i * i) as f64 / (SSIM_SIGMA * SSIM_SIGMA)).exp())
+        .collect();
+    let total: f64 = taps.iter().sum();
+    taps.into_iter().map(|t| t / total).collect()
+}
+
+/// The index `i` (which may lie outside 0…n) mirrored into 0…n the way scipy's `reflect`
+/// does: … c b a | a b c … (the edge sample repeated).
+fn mirror(i: i64, n: usize) -> usize {
+    let n = n as i64;
+    let period = 2 * n;
+    let i = i.rem_euclid(period);
+    (if i < n { i } else { period - 1 - i }) as usize
+}
+
+/// `plane` filtered by the separable `window` along rows, then columns, edges mirrored.
+fn blur(plane: &[f64], w: usize, h: usize, window: &[f64]) -> Vec<f64> {
+    let r = (window.len() / 2) as i64;
+    // Where each tap of each output lands, mirrored once here rather than per tap.
+    let sources = |n: usize| -> Vec<usize> { (-r..n as i64 + r).map(|i| mirror(i, n)).collect() };
+    let (across, down) = (sources(w), sources(h));
+    let mut rows = vec![0.0; plane.len()];
+    for (line, out) in plane.chunks_exact(w).zip(rows.chunks_exact_mut(w)) {
+        for (x, value) in out.iter_mut().enumerate() {
+            *value = window.iter().zip(&across[x..]).map(|(t, &i)| t * line[i]).sum();
+        }
+    }
+    let mut out = vec![0.0; plane.len()];
+    for (y, line) in out.chunks_exact_mut(w).enumerate() {
+        for (t, &source) in window.iter().zip(&down[y..]) {
+            for (value, v) in line.iter_mut().zip(&rows[source * w..(source + 1) * w]) {
+                *value += t * v;
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mirroring_repeats_the_edge_sample() {
+        let mirrored: Vec<usize> = (-3..7).map(|i| mirror(i, 4)).collect();
+        assert_eq!(mirrored, [2, 1, 0, 0, 1, 2, 3, 3, 2, 1]);
+    }
+
+    #[test]
+    fn the_window_sums_to_one_and_is_symmetric() {
+        let window = gaussian_window();
+        assert_eq!(window.len(), 11);
+        assert!((window.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        assert!(window.iter().zip(window.iter().rev()).all(|(a, b)| a == b));
+    }
+}

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs what aabench needs on a fresh Debian/Ubuntu machine: lavapipe (Mesa's CPU Vulkan
-# driver) when no lavapipe driver manifest is present. With --browser it also installs Debian's
+# driver) when no lavapipe driver manifest is present, and a C++ compiler when none is. With --browser it also installs Debian's
 # Chromium, which the report test opens the HTML report in; that install is best effort (the
 # test says it skipped the browser check when Chromium is missing). Rust comes from rustup, as
 # on the CI machines. Safe to run again: it installs only what is missing.
@@ -35,6 +35,12 @@ if ! have_lavapipe; then
     echo "ci/setup.sh: installing lavapipe (mesa-vulkan-drivers)" >&2
     install mesa-vulkan-drivers
     have_lavapipe || { echo "ci/setup.sh: lavapipe is still missing after the install" >&2; exit 1; }
+fi
+
+# The FLIP metric builds NVIDIA's C++ reference implementation (nv-flip-sys, through cc).
+if ! command -v c++ >/dev/null 2>&1; then
+    echo "ci/setup.sh: installing a C++ compiler (g++) for the FLIP metric" >&2
+    install g++
 fi
 
 if $browser && ! command -v chromium >/dev/null 2>&1; then

@@ -767,11 +767,7 @@ impl ModeContext<'_> {
     }
 
     fn mse_check(&self, against: &str, now: &Quality, then: &Quality, tolerance: QualityTolerances) -> Check {
-        let change = match (now.mse, then.mse) {
-            (a, b) if a == b => 0.0,
-            (_, 0.0) => f64::INFINITY,
-            (a, b) => (a - b) / b,
-        };
+        let change = relative_change(now.mse, then.mse);
         let outcome = beyond(change, tolerance.mse_relative, false);
         Check {
             baseline: Some(then.mse),
@@ -819,12 +815,7 @@ impl ModeContext<'_> {
                 }
                 _ => continue,
             };
-            let (error_now, error_then) = ((now - perfect).abs(), (then - perfect).abs());
-            let change = match (error_now, error_then) {
-                (a, b) if a == b => 0.0,
-                (_, 0.0) => f64::INFINITY,
-                (a, b) => (a - b) / b,
-            };
+            let change = relative_change((now - perfect).abs(), (then - perfect).abs());
             checks.push(Check {
                 baseline: Some(then),
                 current: Some(now),
@@ -1024,6 +1015,16 @@ fn show_time(value: f64, unit: &str) -> String {
 
 /// Improved or regressed when `change` is past `tolerance`; `higher_is_better` says which way
 /// is which.
+/// An error's change over its baseline value, as a fraction: 0 when unchanged (two zeros
+/// included), infinite from an error of zero.
+fn relative_change(now: f64, then: f64) -> f64 {
+    match (now, then) {
+        (a, b) if a == b => 0.0,
+        (_, 0.0) => f64::INFINITY,
+        (a, b) => (a - b) / b,
+    }
+}
+
 fn beyond(change: f64, tolerance: f64, higher_is_better: bool) -> Outcome {
     let better = if higher_is_better { change } else { -change };
     if better > tolerance {

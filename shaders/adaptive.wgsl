@@ -29,6 +29,7 @@
 #include "lib/gbuffer.wgsl"
 #include "lib/shading.wgsl"
 #include "lib/color.wgsl"
+#include "lib/compact.wgsl"
 
 // Set by passes/adaptive.rs from AdaptiveSettings; no defaults here, so Rust is the one source.
 override M: u32;
@@ -43,25 +44,6 @@ override T_EDGE: f32;
 override USE_GEOMETRY: bool;
 override USE_SHADING: bool;
 override FORCE_ALL: bool;
-// Size of the compact target that holds the extra samples, one per texel in list order.
-override COMPACT_WIDTH: u32;
-override COMPACT_HEIGHT: u32;
-
-// List index ↔ texel of the compact target, in 4×4 blocks of 16 consecutive entries: lavapipe
-// shades 4×4 blocks together, and consecutive entries belong to neighbouring pixels, so each
-// SIMD batch reads G-buffer texels close together.
-fn compact_texel(index: u32) -> vec2<u32> {
-    let block = index / 16u;
-    let within = index % 16u;
-    let blocks_per_row = COMPACT_WIDTH / 4u;
-    return vec2<u32>((block % blocks_per_row) * 4u + within % 4u, (block / blocks_per_row) * 4u + within / 4u);
-}
-
-fn compact_index(texel: vec2<u32>) -> u32 {
-    let block = (texel.y / 4u) * (COMPACT_WIDTH / 4u) + texel.x / 4u;
-    return block * 16u + (texel.y % 4u) * 4u + texel.x % 4u;
-}
-
 // Each sample stands for its cell of the pixel (the `-cells` variant): S is the pixel's
 // centre, and extra samples are shaded at their cells' centroids with their cells' footprints.
 override CELLS: bool;
@@ -528,36 +510,15 @@ fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
 @group(2) @binding(7) var<storage, read> list_entries: array<u32>;
 @group(2) @binding(8) var<storage, read> list_totals: array<u32>;
 
-// Two rectangles over the compact target's entries, so that no fragment lies past the list's
-// end: the full bands of 4 rows, then the last band up to the end of its last block. Only that
-// block's tail (at most 15 fragments) reads past the end: a stale or zero entry, or past the
-// buffer (robust access clamps or reads 0), it decodes to some texel below 2^14 and 1 ≤ n ≤ 16,
-// and its colour lands where gather never reads. So shade_extra needs no test against the
-// length: a storage load per fragment (per SIMD lane on lavapipe) that cost 4–5% of
-// shade_extra (thin, every sample listed), and a rectangle over whole bands shaded up to
-// 65 535 fragments more.
+// The compact target's rectangles (`compact_rect`). The tail of the last block reads past
+// the list's end: a stale or zero entry, or past the buffer (robust access clamps or reads 0),
+// it decodes to some texel below 2^14 and 1 ≤ n ≤ 16, and its colour lands where gather never
+// reads. So shade_extra needs no test against the length: a storage load per fragment (per
+// SIMD lane on lavapipe) that cost 4–5% of shade_extra (thin, every sample listed), and a
+// rectangle over whole bands shaded up to 65 535 fragments more.
 @vertex
 fn compact_rows(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> {
-    let total = list_totals[0];
-    let band = 4u * COMPACT_WIDTH;
-    let full_rows = 4u * (total / band);
-    let last_columns = 4u * ((total % band + 15u) / 16u);
-    // Rectangle 0 spans the full bands, rectangle 1 the last band's used blocks; either may
-    // be empty.
-    var low = vec2<u32>(0u, 0u);
-    var high = vec2<u32>(COMPACT_WIDTH, full_rows);
-    if index >= 6u {
-        low = vec2<u32>(0u, full_rows);
-        high = vec2<u32>(last_columns, select(full_rows, full_rows + 4u, last_columns > 0u));
-    }
-    // Two triangles: (0 1 2) (2 1 3) over the corners low/high × low/high.
-    let corner = array<vec2<bool>, 6>(
-        vec2<bool>(false, false), vec2<bool>(true, false), vec2<bool>(false, true),
-        vec2<bool>(false, true), vec2<bool>(true, false), vec2<bool>(true, true),
-    )[index % 6u];
-    let texel = vec2<f32>(select(low, high, corner));
-    let size = vec2<f32>(f32(COMPACT_WIDTH), f32(COMPACT_HEIGHT));
-    return vec4<f32>(texel.x / size.x * 2.0 - 1.0, 1.0 - texel.y / size.y * 2.0, 0.0, 1.0);
+    return compact_rect(index, list_totals[0]);
 }
 
 @fragment

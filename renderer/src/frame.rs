@@ -13,6 +13,7 @@ use crate::passes::fxaa::FxaaNode;
 use crate::passes::gbuffer::{self, GBufferNode};
 use crate::passes::shade::{ResolveNode, ShadeNode};
 use crate::passes::shadow::{self, ShadowNode};
+use crate::passes::smaa::{SmaaNode, SmaaStep};
 use crate::passes::tonemap::TonemapNode;
 use crate::passes::{Node, gbuffer::PORTS as GBUFFER};
 use crate::scene::{Lighting, Scene, ShadowCubes};
@@ -115,7 +116,7 @@ pub(crate) fn frame_graph(
     let sources = Sources { gbuffer, shadow };
     let (m, stalled) = (mode.m, mode.stalled);
     let hdr = match mode.technique {
-        Technique::Deferred | Technique::Fxaa | Technique::Reference => {
+        Technique::Deferred | Technique::Fxaa | Technique::Smaa | Technique::Reference => {
             let shade = add(&mut g, ShadeNode { stalled, shadows: cubes });
             sources.feed(&mut g, shade);
             if mode.technique != Technique::Reference {
@@ -190,7 +191,7 @@ pub(crate) fn frame_graph(
 }
 
 /// The colour end of a frame: the tonemap pass in an HDR scene, the display encoding, and in
-/// FXAA modes FXAA on the encoded image.
+/// FXAA and SMAA modes their passes on the encoded image.
 fn add_display(g: &mut FrameGraph, hdr: PassId, mode: Mode, settings: &RenderSettings) {
     let color = &settings.color;
     let bits = color.bits;
@@ -204,13 +205,28 @@ fn add_display(g: &mut FrameGraph, hdr: PassId, mode: Mode, settings: &RenderSet
     };
     let display = add(g, DisplayNode { expose: color.tonemap.is_none(), bits });
     g.connect(linear, port, display, "linear");
-    if mode.technique == Technique::Fxaa {
-        let fxaa = add(g, FxaaNode { bits });
-        g.connect(display, "display", fxaa, "encoded");
-        g.retain(fxaa, "display", Output::Display);
-    } else {
-        g.retain(display, "display", Output::Display);
-    }
+    let last = match mode.technique {
+        Technique::Fxaa => {
+            let fxaa = add(g, FxaaNode { bits });
+            g.connect(display, "display", fxaa, "encoded");
+            fxaa
+        }
+        Technique::Smaa => {
+            let (width, height) = (settings.width, settings.height);
+            let [edges, weights, blend] = [SmaaStep::Edges, SmaaStep::Weights, SmaaStep::Blend]
+                .map(|step| add(g, SmaaNode { step, bits, width, height }));
+            g.connect(display, "display", edges, "encoded");
+            g.connect(display, "display", blend, "encoded");
+            for pass in [weights, blend] {
+                g.connect(edges, "edge_words", pass, "edges");
+                g.connect(edges, "list_words", pass, "list");
+            }
+            g.connect(weights, "blend_weights", blend, "blend_weights");
+            blend
+        }
+        _ => display,
+    };
+    g.retain(last, "display", Output::Display);
 }
 
 /// The dimensions a mode's graph resolves against.

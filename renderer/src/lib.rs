@@ -1,6 +1,7 @@
 //! The GPU side of aabench: a Vulkan device (lavapipe on CI machines), scenes imported from
 //! glTF, an enlarged G-buffer, deferred shading, brute-force reference supersampling and
-//! adaptive supersampling (Holländer, Boubekeur & Eisemann 2013).
+//! adaptive supersampling (Holländer, Boubekeur & Eisemann 2013), and the post-process
+//! anti-aliasing it is compared with (FXAA, SMAA).
 //!
 //! The renderer knows nothing of manifests, baselines or reports: the runner turns those into
 //! a [`Scene`](scene::Scene), [`Lighting`](scene::Lighting) and [`RenderSettings`], asks a
@@ -21,6 +22,7 @@ mod render;
 pub mod scene;
 mod settings;
 pub mod shaders;
+pub mod smaa;
 
 pub use adaptive::{AdaptiveSettings, ExtraSamples, Reconstruction};
 pub use color::ColorSettings;

@@ -1,4 +1,4 @@
-//! Render modes and their ids: `deferred-1x1`, `reference-4x4-stalled`, `adaptive-3x3-geometry`,
+//! Render modes and their ids: `deferred-1x1`, `smaa`, `reference-4x4-stalled`, `adaptive-3x3-geometry`,
 //! `adaptive-3x3-area`, `adaptive-4x4-cells`, `adaptive-4x4-coverage`.
 
 use std::fmt;
@@ -23,6 +23,8 @@ pub enum Technique {
     Deferred,
     /// One sample per pixel, then FXAA 3.11 on the display-encoded image.
     Fxaa,
+    /// One sample per pixel, then SMAA 1x on the display-encoded image.
+    Smaa,
     /// All M² samples of an M·w × M·h G-buffer shaded, box-filtered.
     Reference,
     /// Holländer et al. 2013: the same G-buffer, samples shaded where the metrics ask, and the
@@ -44,13 +46,14 @@ impl Mode {
         Mode { technique, m, stalled }
     }
 
-    /// The ten modes that adaptive is measured against: deferred 1×1, FXAA and reference
-    /// 2×2–4×4, each plain and stalled.
+    /// The twelve modes that adaptive is measured against: deferred 1×1, FXAA, SMAA and
+    /// reference 2×2–4×4, each plain and stalled.
     pub fn baseline_modes() -> Vec<Mode> {
         let mut modes = Vec::new();
         for stalled in [false, true] {
             modes.push(Mode::new(Technique::Deferred, 1, stalled));
             modes.push(Mode::new(Technique::Fxaa, 1, stalled));
+            modes.push(Mode::new(Technique::Smaa, 1, stalled));
             for m in 2..=4 {
                 modes.push(Mode::new(Technique::Reference, m, stalled));
             }
@@ -101,8 +104,9 @@ impl fmt::Display for Mode {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
         let name = match self.technique {
             Technique::Deferred => "deferred",
-            // FXAA has no supersampling factor to name.
+            // Post-process modes have no supersampling factor to name.
             Technique::Fxaa => return f.write_str(if self.stalled { "fxaa-stalled" } else { "fxaa" }),
+            Technique::Smaa => return f.write_str(if self.stalled { "smaa-stalled" } else { "smaa" }),
             Technique::Reference => "reference",
             Technique::Adaptive(..) => "adaptive",
         };
@@ -130,7 +134,7 @@ impl fmt::Display for Mode {
 /// A mode id that does not parse, with the reason.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry, adaptive-4x4-area, adaptive-4x4-cells, adaptive-4x4-coverage)"
+    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, smaa, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry, adaptive-4x4-area, adaptive-4x4-cells, adaptive-4x4-coverage)"
 )]
 pub struct ModeError {
     pub id: String,
@@ -154,6 +158,8 @@ impl FromStr for Mode {
         match id {
             "fxaa" => return Ok(Mode::new(Technique::Fxaa, 1, false)),
             "fxaa-stalled" => return Ok(Mode::new(Technique::Fxaa, 1, true)),
+            "smaa" => return Ok(Mode::new(Technique::Smaa, 1, false)),
+            "smaa-stalled" => return Ok(Mode::new(Technique::Smaa, 1, true)),
             _ => {}
         }
         let mut parts = id.split('-');
@@ -185,10 +191,11 @@ impl FromStr for Mode {
             ("adaptive", ["shading"]) => Technique::Adaptive(Metrics::Shading, reconstruction),
             ("deferred" | "reference" | "adaptive", _) => return Err(fail("unexpected suffix")),
             ("fxaa", _) => return Err(fail("FXAA has no size: `fxaa` or `fxaa-stalled`")),
-            _ => return Err(fail("the technique must be deferred, fxaa, reference or adaptive")),
+            ("smaa", _) => return Err(fail("SMAA has no size: `smaa` or `smaa-stalled`")),
+            _ => return Err(fail("the technique must be deferred, fxaa, smaa, reference or adaptive")),
         };
         let allowed = match technique {
-            Technique::Deferred | Technique::Fxaa => 1..=1,
+            Technique::Deferred | Technique::Fxaa | Technique::Smaa => 1..=1,
             // reference-1x1 exists to check that the supersampling path equals deferred-1x1.
             Technique::Reference => 1..=4,
             Technique::Adaptive(..) => 2..=4,
@@ -217,8 +224,9 @@ mod tests {
         let all =
             [Mode::baseline_modes(), Mode::adaptive_modes(), Mode::ablation_modes(), Mode::variant_modes()]
                 .concat();
-        assert_eq!(all.len(), 10 + 6 + 12 + 18);
+        assert_eq!(all.len(), 12 + 6 + 12 + 18);
         assert!(all.iter().any(|m| m.to_string() == "fxaa-stalled"));
+        assert!(all.iter().any(|m| m.to_string() == "smaa-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-3x3-area-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-4x4-cells"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-2x2-coverage-stalled"));
@@ -242,6 +250,7 @@ mod tests {
         check("reference-2x3", "equal sides");
         check("fxaa3", "missing the size");
         check("fxaa-2x2", "FXAA has no size");
+        check("smaa-1x1", "SMAA has no size");
         check("reference-2x2-geometry", "unexpected suffix");
         check("reference-2x2-area", "unexpected suffix");
         check("reference-2x2-cells", "unexpected suffix");

@@ -75,6 +75,8 @@ pub(crate) struct ComputeKey {
 #[derive(Debug)]
 pub(crate) struct Pipelines {
     device: wgpu::Device,
+    /// Uploads the constant textures that passes own.
+    queue: wgpu::Queue,
     features: Features,
     /// Where shader files are read from; `None`: `shaders::compose`'s default.
     shader_dir: Option<PathBuf>,
@@ -84,12 +86,14 @@ pub(crate) struct Pipelines {
     compute: HashMap<ComputeKey, wgpu::ComputePipeline>,
     sample_cells: HashMap<u32, wgpu::Buffer>,
     texel_sampler: Option<wgpu::Sampler>,
+    smaa_lookup: Option<[wgpu::Texture; 2]>,
 }
 
 impl Pipelines {
-    pub fn new(device: wgpu::Device, features: Features) -> Pipelines {
+    pub fn new(device: wgpu::Device, queue: wgpu::Queue, features: Features) -> Pipelines {
         Pipelines {
             device,
+            queue,
             features,
             shader_dir: None,
             shaders: HashMap::new(),
@@ -98,6 +102,7 @@ impl Pipelines {
             compute: HashMap::new(),
             sample_cells: HashMap::new(),
             texel_sampler: None,
+            smaa_lookup: None,
         }
     }
 
@@ -212,6 +217,39 @@ impl Pipelines {
                     label: Some("sample cells"),
                     contents: bytemuck::cast_slice(&crate::adaptive::sample_cells(m)),
                     usage: wgpu::BufferUsages::STORAGE,
+                })
+            })
+            .clone()
+    }
+}
+
+impl Pipelines {
+    /// SMAA's area and search textures (`renderer/data/smaa`), uploaded on first use.
+    pub fn smaa_lookup(&mut self) -> [wgpu::Texture; 2] {
+        use wgpu::util::DeviceExt;
+        let (device, queue) = (&self.device, &self.queue);
+        self.smaa_lookup
+            .get_or_insert_with(|| {
+                crate::smaa::LOOKUP_TEXTURES.map(|lookup| {
+                    device.create_texture_with_data(
+                        queue,
+                        &wgpu::TextureDescriptor {
+                            label: Some(lookup.name),
+                            size: wgpu::Extent3d {
+                                width: lookup.width,
+                                height: lookup.height,
+                                depth_or_array_layers: 1,
+                            },
+                            mip_level_count: 1,
+                            sample_count: 1,
+                            dimension: wgpu::TextureDimension::D2,
+                            format: lookup.format,
+                            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                            view_formats: &[],
+                        },
+                        wgpu::util::TextureDataOrder::LayerMajor,
+                        lookup.bytes,
+                    )
                 })
             })
             .clone()

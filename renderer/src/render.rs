@@ -171,7 +171,7 @@ impl SceneRenderer {
         let gpu_scene = GpuScene::new(&gpu.device, &gpu.queue, scene, lighting, &frame);
         gpu.check()?;
         Ok(SceneRenderer {
-            pipelines: Pipelines::new(gpu.device.clone(), needs.features),
+            pipelines: Pipelines::new(gpu.device.clone(), gpu.queue.clone(), needs.features),
             gpu,
             scene: gpu_scene,
             needs,
@@ -450,7 +450,7 @@ fn fits_texture_array(scene: &Scene, limits: &wgpu::Limits) -> Result<(), Render
 }
 
 /// The passes that turn the HDR image into the display image, in the order a frame runs them.
-const COLOR_PASSES: [&str; 3] = ["tonemap", "display", "fxaa"];
+const COLOR_PASSES: [&str; 6] = ["tonemap", "display", "fxaa", "smaa_edges", "smaa_weights", "smaa_blend"];
 
 /// The retained outputs' textures.
 fn outputs(plan: &Plan, allocated: &[Allocated]) -> BTreeMap<Output, wgpu::Texture> {

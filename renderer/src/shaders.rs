@@ -28,6 +28,7 @@ sources!(
     "lib/shadows.wgsl",
     "lib/shading.wgsl",
     "lib/color.wgsl",
+    "lib/compact.wgsl",
     "gbuffer.wgsl",
     "shadow.wgsl",
     "shade.wgsl",
@@ -35,6 +36,7 @@ sources!(
     "tonemap.wgsl",
     "display.wgsl",
     "fxaa.wgsl",
+    "smaa.wgsl",
     "adaptive.wgsl",
 );
 

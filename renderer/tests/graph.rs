@@ -84,7 +84,11 @@ fn every_mode_of_every_scene_compiles_binds_and_reaches_the_allocation_bound() {
                         Some(if shadows { "shadow" } else { "gbuffer" })
                     );
                     assert_eq!(has("tonemap"), color.tonemap.is_some(), "{context}");
-                    let last = if mode.technique == Technique::Fxaa { "fxaa" } else { "display" };
+                    let last = match mode.technique {
+                        Technique::Fxaa => "fxaa",
+                        Technique::Smaa => "smaa_blend",
+                        _ => "display",
+                    };
                     assert_eq!(graph.passes.last().map(String::as_str), Some(last), "{context}");
                 }
             }

@@ -698,11 +698,11 @@ fn fail_mode(record: &mut ModeRecord, error: String) {
 
 /// The image a mode is compared with, with the same stall if it ran, else the other (their
 /// images are identical): for adaptive modes the reference at the same M; for FXAA the image
-/// it post-processes, deferred-1x1, which is the 1×1 reference bit for bit.
+/// and SMAA the image they post-process, deferred-1x1, which is the 1×1 reference bit for bit.
 fn comparison_reference(modes: &[Mode], images: &[Option<FrameImages>], mode: Mode) -> Option<(usize, Mode)> {
     let technique = match mode.technique {
         Technique::Adaptive(..) => Technique::Reference,
-        Technique::Fxaa => Technique::Deferred,
+        Technique::Fxaa | Technique::Smaa => Technique::Deferred,
         Technique::Deferred | Technique::Reference => return None,
     };
     [mode.stalled, !mode.stalled].into_iter().find_map(|stalled| {

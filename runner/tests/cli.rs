@@ -250,7 +250,8 @@ fn bad_arguments_exit_two_before_any_work() {
     ws.manifest("edge", "edge", |_| {});
     for (args, reason) in [
         (vec!["run", "--modes", "reference-9x9"], "M must be in 1..=4"),
-        (vec!["run", "--modes", "smaa-1x1"], "technique must be"),
+        (vec!["run", "--modes", "ssaa-2x2"], "technique must be"),
+        (vec!["run", "--modes", "smaa-1x1"], "SMAA has no size"),
         (vec!["run", "--modes", "fxaa-1x1"], "FXAA has no size"),
         (vec!["run", "scenes/nope.json"], "no such file or folder"),
         (vec!["run", "--repetitions", "0"], "0 is not in 1..=10000"),

@@ -85,6 +85,31 @@ fn transfer_encode(l: f32) -> f32 {
     }
 }
 
+fn pq_decode(signal: f32) -> f32 {
+    let p = power(signal, 1.0 / 78.84375);
+    return power(max(p - 0.8359375, 0.0) / (18.8515625 - 18.6875 * p), 1.0 / 0.1593017578125);
+}
+
+// The signal back to display-relative linear [0, 1]: the inverse of `transfer_encode`.
+fn transfer_decode(s: f32) -> f32 {
+    switch TRANSFER {
+        case 0u: {
+            return select(pow((max(s, 0.04045) + 0.055) / 1.055, 2.4), s / 12.92, s <= 0.04045);
+        }
+        case 1u: {
+            let alpha = 1.09929682680944;
+            let beta = 0.018053968510807;
+            return select(pow((max(s, 4.5 * beta) + alpha - 1.0) / alpha, 1.0 / 0.45), s / 4.5, s < 4.5 * beta);
+        }
+        case 2u: {
+            return power(s, 2.2);
+        }
+        default: {
+            return pq_decode(s) / PEAK_FRACTION;
+        }
+    }
+}
+
 // PCG's output permutation as a hash (Jarzynski & Olano 2020): integers only, so the grain is
 // the same bits on every device.
 fn hash(v: u32) -> u32 {

@@ -12,6 +12,7 @@ pub(crate) mod fxaa;
 pub(crate) mod gbuffer;
 pub(crate) mod shade;
 pub(crate) mod shadow;
+pub(crate) mod smaa;
 pub(crate) mod tonemap;
 
 use std::collections::{BTreeSet, HashMap};

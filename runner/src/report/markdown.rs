@@ -17,9 +17,10 @@ use crate::truth::TRUTH_ID;
 
 /// The modes of the overview table, where the run has them: the baselines, then M = 2 and
 /// M = 4 of the reference, the paper's adaptive mode and the variant nearest the truth.
-const OVERVIEW: [&str; 7] = [
+const OVERVIEW: [&str; 8] = [
     "deferred-1x1",
     "fxaa",
+    "smaa",
     "reference-2x2",
     "adaptive-2x2",
     "reference-4x4",
@@ -294,13 +295,14 @@ fn standalone(svg: &str) -> String {
 }
 
 /// The modes a strip shows after the truth, left to right, at the largest M of the scene's
-/// adaptive modes: deferred-1x1, fxaa, the reference, the paper's adaptive mode (whose worst
+/// adaptive modes: deferred-1x1, fxaa, smaa, the reference, the paper's adaptive mode (whose worst
 /// window against the truth the strip shows) and the `-cells` variant, those the scene has.
 fn strip_modes(scene: &SceneRecord) -> Option<Vec<&ModeRecord>> {
     let m = (2..=4).rev().find(|m| scene.mode(&format!("adaptive-{m}x{m}")).is_some())?;
     let ids = [
         "deferred-1x1".to_string(),
         "fxaa".into(),
+        "smaa".into(),
         format!("reference-{m}x{m}"),
         format!("adaptive-{m}x{m}"),
         format!("adaptive-{m}x{m}-cells"),

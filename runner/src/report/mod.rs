@@ -373,6 +373,7 @@ pub fn error_points(scene: &SceneRecord, metric: ErrorMetric) -> Vec<Point> {
             let kind = match mode.mode.split('-').next()? {
                 "deferred" => Kind::Deferred,
                 "fxaa" => Kind::Fxaa,
+                "smaa" => Kind::Smaa,
                 "reference" => Kind::Reference,
                 _ if mode.mode.split('-').any(|part| VARIANTS.contains(&part)) => Kind::Variant,
                 _ => Kind::Adaptive,
@@ -503,15 +504,21 @@ fn images(
     if let Some(image) = scene.truth.as_ref().and_then(|t| t.image.as_deref()) {
         figure(page, image, TRUTH_ID);
     }
-    for id in ["deferred-1x1", "fxaa"] {
+    for id in ["deferred-1x1", "fxaa", "smaa"] {
         if let Some(image) = scene.mode(id).and_then(|m| m.images.display.as_deref()) {
             figure(page, image, id);
         }
     }
-    if let Some(image) = scene.mode("fxaa").and_then(|m| m.images.difference.as_deref()) {
-        figure(page, image, "|fxaa − deferred-1x1|: the pixels FXAA changed (32 steps full scale)");
+    for (id, name) in [("fxaa", "FXAA"), ("smaa", "SMAA")] {
+        if let Some(image) = scene.mode(id).and_then(|m| m.images.difference.as_deref()) {
+            figure(
+                page,
+                image,
+                &format!("|{id} − deferred-1x1|: the pixels {name} changed (32 steps full scale)"),
+            );
+        }
     }
-    for id in ["deferred-1x1", "fxaa"] {
+    for id in ["deferred-1x1", "fxaa", "smaa"] {
         flip_figure(page, scene.mode(id));
     }
     page.push_str("</div>\n");

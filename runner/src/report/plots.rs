@@ -9,6 +9,8 @@ use plotters::prelude::*;
 pub enum Kind {
     Deferred,
     Fxaa,
+    /// SMAA: a hollow square beside deferred's filled one.
+    Smaa,
     Reference,
     Adaptive,
     /// An adaptive variant beyond the paper (`-area`, `-cells`, `-coverage`): a hollow
@@ -133,7 +135,9 @@ pub fn error_against_time(title: &str, y_desc: &str, points: &[Point]) -> Result
                 .map_err(fail)?
                 .label(format!("{name} (dashed: the front)"))
                 .legend(move |(x, y)| Circle::new((x, y), 4, style));
-            for kind in [Kind::Deferred, Kind::Fxaa, Kind::Reference, Kind::Adaptive, Kind::Variant] {
+            for kind in
+                [Kind::Deferred, Kind::Fxaa, Kind::Smaa, Kind::Reference, Kind::Adaptive, Kind::Variant]
+            {
                 let of_kind = series.iter().filter(|p| p.kind == kind);
                 chart
                     .draw_series(of_kind.map(|p| {
@@ -141,6 +145,9 @@ pub fn error_against_time(title: &str, y_desc: &str, points: &[Point]) -> Result
                         match kind {
                             Kind::Deferred => at + Rectangle::new([(-4, -4), (4, 4)], style).into_dyn(),
                             Kind::Fxaa => at + Cross::new((0, 0), 5, colour.stroke_width(2)).into_dyn(),
+                            Kind::Smaa => {
+                                at + Rectangle::new([(-4, -4), (4, 4)], colour.stroke_width(2)).into_dyn()
+                            }
                             Kind::Reference => at + TriangleMarker::new((0, 0), 6, style).into_dyn(),
                             Kind::Adaptive => at + Circle::new((0, 0), 4, style).into_dyn(),
                             Kind::Variant => at + Circle::new((0, 0), 4, colour.stroke_width(2)).into_dyn(),

@@ -1,0 +1,141 @@
+//! SMAA 1x on the display-encoded image, in three passes (`shaders/smaa.wgsl`): luma edges
+//! packed as bits, blending weights from the area and search textures, neighbourhood blending.
+
+use super::{BuildContext, Compute, FULLSCREEN, Io, Node, Pass, Program, display_format};
+use crate::bindings::Bound;
+use crate::error::RenderError;
+use crate::graph::{Access, Extent, PassDecl, Port, Resource};
+use crate::pipelines::Constants;
+use crate::smaa::PRESET_HIGH;
+
+const SHADER: &str = "smaa.wgsl";
+
+/// Which of SMAA's passes a node is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum SmaaStep {
+    Edges,
+    Weights,
+    Blend,
+}
+
+#[derive(Debug)]
+pub(crate) struct SmaaNode {
+    pub step: SmaaStep,
+    pub bits: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Pixels per word of the edge bits: two bits each (left and top edge).
+const SLOTS: u32 = 16;
+
+impl SmaaNode {
+    /// The pass's name.
+    fn name(&self) -> &'static str {
+        match self.step {
+            SmaaStep::Edges => "smaa_edges",
+            SmaaStep::Weights => "smaa_weights",
+            SmaaStep::Blend => "smaa_blend",
+        }
+    }
+
+    /// The edge bits: the image's rows, then its columns, sixteen pixels to a word.
+    fn edge_bits(&self) -> Resource {
+        let (w, h) = (u64::from(self.width), u64::from(self.height));
+        let words = h * w.div_ceil(u64::from(SLOTS)) + w * h.div_ceil(u64::from(SLOTS));
+        Resource::Buffer { bytes: 4 * words }
+    }
+
+    /// The list of edge pixels: its length, row starts, word starts and entries.
+    fn list(&self) -> Resource {
+        let (w, h) = (u64::from(self.width), u64::from(self.height));
+        Resource::Buffer { bytes: 4 * (4 + h + h * w.div_ceil(u64::from(SLOTS)) + w * h) }
+    }
+
+    /// The compact target of the list's weights: 4×4 blocks, room for every pixel.
+    fn compact_size(&self) -> (u32, u32) {
+        let width = self.width.next_multiple_of(4);
+        let height = (self.width * self.height).div_ceil(width).next_multiple_of(4);
+        (width, height)
+    }
+
+    /// The blending weights of each listed pixel's top (red, green) and left (blue, alpha)
+    /// edges, stored at 8 bits as the reference stores them.
+    fn weights(&self) -> Resource {
+        let (width, height) = self.compact_size();
+        Resource::texture(wgpu::TextureFormat::Rgba8Unorm, Extent::Fixed { width, height })
+    }
+
+    fn constants(&self, ctx: &BuildContext) -> Constants {
+        let preset = PRESET_HIGH;
+        super::display::encoding(&ctx.settings.color)
+            .with("THRESHOLD", preset.threshold)
+            .with("LOCAL_CONTRAST_ADAPTATION", preset.local_contrast_adaptation)
+            .with("MAX_SEARCH_STEPS", preset.max_search_steps)
+            .with("MAX_SEARCH_STEPS_DIAG", preset.max_search_steps_diag)
+            .with("CORNER_ROUNDING", preset.corner_rounding)
+            .with("WIDTH", self.width)
+            .with("HEIGHT", self.height)
+            .with("COMPACT_WIDTH", self.compact_size().0)
+            .with("COMPACT_HEIGHT", self.compact_size().1)
+    }
+}
+
+impl Node for SmaaNode {
+    fn decl(&self) -> PassDecl {
+        let image = Resource::texture(display_format(self.bits), Extent::Output);
+        let ports = match self.step {
+            SmaaStep::Edges => vec![
+                Port::new("encoded", image, Access::Loaded),
+                Port::new("edge_words", self.edge_bits(), Access::StorageWrite),
+                Port::new("list_words", self.list(), Access::StorageWrite),
+            ],
+            SmaaStep::Weights => vec![
+                Port::new("edges", self.edge_bits(), Access::StorageRead),
+                Port::new("list", self.list(), Access::StorageRead),
+                Port::new("blend_weights", self.weights(), Access::Attachment),
+            ],
+            SmaaStep::Blend => vec![
+                Port::new("encoded", image, Access::Loaded),
+                Port::new("edges", self.edge_bits(), Access::StorageRead),
+                Port::new("list", self.list(), Access::StorageRead),
+                Port::new("blend_weights", self.weights(), Access::Loaded),
+                Port::new("display", image, Access::Attachment),
+            ],
+        };
+        PassDecl { name: self.name(), ports }
+    }
+
+    fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
+        let constants = self.constants(ctx);
+        let name = self.name();
+        let fragment = match self.step {
+            SmaaStep::Edges => {
+                // The rows' words, the columns' from them, then the list of edge pixels.
+                let (w, h) = (self.width, self.height);
+                let row_words = h * w.div_ceil(SLOTS);
+                let column_words = w * h.div_ceil(SLOTS);
+                let mut steps = Vec::new();
+                for (entry, invocations) in [
+                    ("smaa_detect", row_words),
+                    ("smaa_transpose", column_words),
+                    ("smaa_count_rows", h),
+                    ("smaa_scan_rows", 64),
+                    ("smaa_emit", row_words),
+                ] {
+                    let groups = [invocations.div_ceil(64), 1, 1];
+                    steps.push(ctx.compute_step(io, SHADER, entry, constants.clone(), groups)?);
+                }
+                return Ok(Box::new(Compute { name, steps }));
+            }
+            SmaaStep::Weights => ("smaa_rows", 12, "smaa_weights", "blend_weights"),
+            SmaaStep::Blend => (FULLSCREEN.0, FULLSCREEN.1, "smaa_blend", "display"),
+        };
+        let (vertex, vertices, entry, target) = fragment;
+        let program = Program { shader: SHADER, vertex, fragment: Some(entry), constants };
+        let [area, search] = ctx.pipelines.smaa_lookup();
+        let lookup = |texture| Bound::Texture { texture, filterable: false, view_format: None };
+        let owned = [("smaa_area", lookup(area)), ("smaa_search", lookup(search))];
+        Ok(Box::new(ctx.screen(io, name, program, &[target], vertices, &owned)?))
+    }
+}

@@ -374,8 +374,7 @@ fn search_length(e: vec2<f32>, offset: f32) -> f32 {
 
 // Bit 0 of each slot of word `w` of row `y`: the pixel lets a line through (a top edge, no
 // left edge, none on the pixel above). Pixels outside the plane, and whole words before or
-// after it, are its border pixel's, as a clamping read sees them. No branches: lanes of one
-// SIMD group search different lines.
+// after it, are its border pixel's, as a clamping read sees them.
 fn open_slots(plane: u32, w: i32, y: i32) -> u32 {
     let c = clamp(w, 0, plane_words(plane) - 1);
     let here = edge_word(plane, c, y);

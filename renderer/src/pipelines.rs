@@ -221,9 +221,7 @@ impl Pipelines {
             })
             .clone()
     }
-}
 
-impl Pipelines {
     /// SMAA's area and search textures (`renderer/data/smaa`), uploaded on first use.
     pub fn smaa_lookup(&mut self) -> [wgpu::Texture; 2] {
         use wgpu::util::DeviceExt;

@@ -120,9 +120,11 @@ impl Node for SmaaNode {
                     ("smaa_detect", row_words),
                     ("smaa_transpose", column_words),
                     ("smaa_count_rows", h),
-                    ("smaa_scan_rows", 64),
+                    // One invocation: the rows are few and the scan is serial.
+                    ("smaa_scan_rows", 1),
                     ("smaa_emit", row_words),
                 ] {
+                    // Workgroups of 64 (`smaa_scan_rows`: of 1).
                     let groups = [invocations.div_ceil(64), 1, 1];
                     steps.push(ctx.compute_step(io, SHADER, entry, constants.clone(), groups)?);
                 }

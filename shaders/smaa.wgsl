@@ -30,6 +30,7 @@
 #include "lib/common.wgsl"
 #include "lib/color.wgsl"
 #include "lib/compact.wgsl"
+#include "lib/pixel_list.wgsl"
 
 // Luma contrast that makes an edge, in code values / STEPS.
 override THRESHOLD: f32 = 0.1;
@@ -42,9 +43,6 @@ override MAX_SEARCH_STEPS: u32 = 16u;
 override MAX_SEARCH_STEPS_DIAG: f32 = 8.0;
 // How much sharp corners are rounded, in percent.
 override CORNER_ROUNDING: f32 = 25.0;
-// The image's size in pixels.
-override WIDTH: u32 = 1u;
-override HEIGHT: u32 = 1u;
 
 // The lookup textures' layout (`renderer/data/smaa/README.md`).
 const AREA_MAX_DISTANCE: f32 = 16.0;
@@ -53,26 +51,17 @@ const AREA_MAX_DISTANCE_DIAG: f32 = 20.0;
 const AREA_DIAG_COLUMN: f32 = 80.0;
 
 @group(2) @binding(0) var encoded: texture_2d<f32>;
-// The edge bits and the list of edge pixels: written by `smaa_edges` (the first two), read by
-// the passes after it (the same buffers, under the second two names).
-@group(2) @binding(1) var<storage, read_write> edge_words: array<u32>;
-@group(2) @binding(2) var<storage, read_write> list_words: array<u32>;
-@group(2) @binding(3) var<storage, read> edges: array<u32>;
-@group(2) @binding(4) var<storage, read> list: array<u32>;
+// The edge bits and the list of edge pixels are `lib/pixel_list.wgsl`'s.
 // The weights of the listed pixels, in list order in the compact target.
 @group(2) @binding(5) var blend_weights: texture_2d<f32>;
 @group(2) @binding(6) var smaa_area: texture_2d<f32>;
 @group(2) @binding(7) var smaa_search: texture_2d<f32>;
 
 // ---------------------------------------------------------------------------------------------
-// The edge bits. Plane 0 holds the image's rows: word y · ROW_WORDS + x / 16, bits 2·(x % 16)
-// (left edge) and 2·(x % 16) + 1 (top edge). Plane 1 holds its columns the same way, as if the
-// image were transposed: its "rows" are the image's columns and its left and top swapped, so
-// that one search serves both directions.
-
-const SLOTS: u32 = 16u;
-// Bit 0 of every slot.
-const LOW_BITS: u32 = 0x55555555u;
+// The edge bits. Plane 0 holds the image's rows as `lib/pixel_list.wgsl` lays them out: bit
+// 2·(x % 16) the left edge, 2·(x % 16) + 1 the top edge; the list holds the pixels with an
+// edge. Plane 1 holds its columns the same way, as if the image were transposed: its "rows" are
+// the image's columns and its left and top swapped, so that one search serves both directions.
 
 fn plane_size(plane: u32) -> vec2<i32> {
     return select(vec2<i32>(i32(WIDTH), i32(HEIGHT)), vec2<i32>(i32(HEIGHT), i32(WIDTH)), plane == 1u);
@@ -162,23 +151,15 @@ fn detect(p: vec2<i32>) -> u32 {
     return select(0u, 1u, kept.x) | select(0u, 2u, kept.y);
 }
 
+// The pixel's marks (`lib/pixel_list.wgsl`): its edges.
+fn pixel_marks(p: vec2<i32>) -> u32 {
+    return detect(p);
+}
+
 // One word of plane 0: sixteen pixels of a row.
 @compute @workgroup_size(64)
 fn smaa_detect(@builtin(global_invocation_id) id: vec3<u32>) {
-    let words = u32(plane_words(0u));
-    if id.x >= HEIGHT * words {
-        return;
-    }
-    let y = i32(id.x / words);
-    let x0 = i32((id.x % words) * SLOTS);
-    var word = 0u;
-    for (var i = 0u; i < SLOTS; i++) {
-        let x = x0 + i32(i);
-        if x < i32(WIDTH) {
-            word |= detect(vec2<i32>(x, y)) << (2u * i);
-        }
-    }
-    edge_words[id.x] = word;
+    write_mark_word(id.x);
 }
 
 // One word of plane 1 from sixteen words of plane 0: sixteen pixels of a column, left and top
@@ -201,75 +182,6 @@ fn smaa_transpose(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     edge_words[u32(plane_base(1u)) + id.x] = word;
-}
-
-// ---------------------------------------------------------------------------------------------
-// The list: the pixels with an edge, in row order. Only they have blending weights, and
-// lavapipe shades 4×4 blocks of fragments as one, so the weights pass runs over the list in a
-// compact target (`lib/compact.wgsl`) instead of over the image, where most blocks with an
-// edge pixel would carry idle lanes. Layout of the list buffer, in words: the length; each
-// row's first index; each edge word's first index within its row; the entries (x | y << 16).
-
-const LIST_LENGTH: u32 = 0u;
-const ROW_STARTS: u32 = 4u;
-
-fn word_starts() -> u32 {
-    return ROW_STARTS + HEIGHT;
-}
-
-fn entries() -> u32 {
-    return word_starts() + HEIGHT * u32(plane_words(0u));
-}
-
-// Bit 0 of each slot of an edge word: the pixel has an edge.
-fn edge_pixels(word: u32) -> u32 {
-    return (word | (word >> 1u)) & LOW_BITS;
-}
-
-// Each edge word's first index within its row, and each row's length (in ROW_STARTS).
-@compute @workgroup_size(64)
-fn smaa_count_rows(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= HEIGHT {
-        return;
-    }
-    let words = u32(plane_words(0u));
-    var count = 0u;
-    for (var w = 0u; w < words; w++) {
-        let index = id.x * words + w;
-        list_words[word_starts() + index] = count;
-        count += countOneBits(edge_pixels(edge_words[index]));
-    }
-    list_words[ROW_STARTS + id.x] = count;
-}
-
-// Row lengths to row starts, and the list's length.
-@compute @workgroup_size(1)
-fn smaa_scan_rows() {
-    var total = 0u;
-    for (var y = 0u; y < HEIGHT; y++) {
-        let count = list_words[ROW_STARTS + y];
-        list_words[ROW_STARTS + y] = total;
-        total += count;
-    }
-    list_words[LIST_LENGTH] = total;
-}
-
-// The entries of one edge word.
-@compute @workgroup_size(64)
-fn smaa_emit(@builtin(global_invocation_id) id: vec3<u32>) {
-    let words = u32(plane_words(0u));
-    if id.x >= HEIGHT * words {
-        return;
-    }
-    let y = id.x / words;
-    var pending = edge_pixels(edge_words[id.x]);
-    var index = list_words[ROW_STARTS + y] + list_words[word_starts() + id.x];
-    let x0 = (id.x % words) * SLOTS;
-    while pending != 0u {
-        list_words[entries() + index] = (x0 + firstTrailingBit(pending) / 2u) | (y << 16u);
-        pending &= pending - 1u;
-        index += 1u;
-    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -494,8 +406,7 @@ fn smaa_rows(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32> 
 // block's tail past the list's end computes weights that nothing reads.
 @fragment
 fn smaa_weights(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
-    let entry = list[entries() + compact_index(vec2<u32>(position.xy))];
-    let p = vec2<i32>(vec2<u32>(entry & 0xFFFFu, entry >> 16u));
+    let p = listed_pixel(compact_index(vec2<u32>(position.xy)));
     let pixel = vec2<f32>(p) + 0.5;
     var weights = vec4<f32>(0.0);
     var e = edge(p);
@@ -543,15 +454,11 @@ fn linear_at(p: vec2<i32>) -> vec3<f32> {
 
 // The blending weights of pixel `p`: zero without an edge, else its list entry's.
 fn weights_of(p: vec2<i32>) -> vec4<f32> {
-    let words = u32(plane_words(0u));
-    let at = vec2<u32>(p);
-    let word = edges[at.y * words + at.x / SLOTS];
-    let before = edge_pixels(word) & ((1u << (2u * (at.x % SLOTS))) - 1u);
-    if ((word >> (2u * (at.x % SLOTS))) & 3u) == 0u {
+    let index = list_index(vec2<u32>(p));
+    if index < 0 {
         return vec4<f32>(0.0);
     }
-    let index = list[ROW_STARTS + at.y] + list[word_starts() + at.y * words + at.x / SLOTS] + countOneBits(before);
-    return textureLoad(blend_weights, compact_texel(index), 0);
+    return textureLoad(blend_weights, compact_texel(u32(index)), 0);
 }
 
 @fragment

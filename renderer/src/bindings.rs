@@ -29,6 +29,8 @@ pub(crate) enum Kind {
     Texture {
         sample: Sample,
         dimension: wgpu::TextureViewDimension,
+        /// `texture_multisampled_2d` or `texture_depth_multisampled_2d`: read sample by sample.
+        multisampled: bool,
     },
     /// A non-comparison sampler.
     Sampler,
@@ -117,16 +119,16 @@ impl Shader {
             _ => match self.naga.types[global.ty].inner {
                 naga::TypeInner::Sampler { comparison: false } => Kind::Sampler,
                 naga::TypeInner::Image { dim, arrayed, class } => {
-                    let sample = match class {
-                        naga::ImageClass::Depth { multi: false } => Sample::Depth,
-                        naga::ImageClass::Sampled { kind: naga::ScalarKind::Uint, multi: false } => {
-                            Sample::Uint
+                    let (sample, multisampled) = match class {
+                        naga::ImageClass::Depth { multi } => (Sample::Depth, multi),
+                        naga::ImageClass::Sampled { kind: naga::ScalarKind::Uint, multi } => {
+                            (Sample::Uint, multi)
                         }
-                        naga::ImageClass::Sampled { kind: naga::ScalarKind::Sint, multi: false } => {
-                            Sample::Sint
+                        naga::ImageClass::Sampled { kind: naga::ScalarKind::Sint, multi } => {
+                            (Sample::Sint, multi)
                         }
-                        naga::ImageClass::Sampled { kind: naga::ScalarKind::Float, multi: false } => {
-                            Sample::Float
+                        naga::ImageClass::Sampled { kind: naga::ScalarKind::Float, multi } => {
+                            (Sample::Float, multi)
                         }
                         _ => return None,
                     };
@@ -138,7 +140,7 @@ impl Shader {
                         (naga::ImageDimension::Cube, false) => wgpu::TextureViewDimension::Cube,
                         (naga::ImageDimension::Cube, true) => wgpu::TextureViewDimension::CubeArray,
                     };
-                    Kind::Texture { sample, dimension }
+                    Kind::Texture { sample, dimension, multisampled }
                 }
                 _ => return None,
             },
@@ -245,7 +247,10 @@ fn layout_type(
         (Kind::Storage { writable }, Bound::Buffer(b)) => {
             (buffer(wgpu::BufferBindingType::Storage { read_only: !writable }), Held::Buffer(b))
         }
-        (Kind::Texture { sample, dimension }, Bound::Texture { texture, filterable, view_format }) => {
+        (
+            Kind::Texture { sample, dimension, multisampled },
+            Bound::Texture { texture, filterable, view_format },
+        ) => {
             let format = view_format.unwrap_or(texture.format());
             let fits = match (sample, format.sample_type(None, None)) {
                 (Sample::Float, Some(wgpu::TextureSampleType::Float { filterable: can })) => {
@@ -263,9 +268,14 @@ fn layout_type(
                 wgpu::TextureViewDimension::CubeArray => layers % 6 == 0,
                 _ => true,
             };
-            if !fits || !layers_fit {
+            // A multisampled texture is read sample by sample, never filtered.
+            let samples = texture.sample_count();
+            let samples_fit = multisampled == (samples > 1) && !(multisampled && filterable);
+            if !fits || !layers_fit || !samples_fit {
                 let how = if filterable { "filtered" } else { "loaded" };
-                return Err(mismatch(format!("a {format:?} texture of {layers} layers, {how}")));
+                return Err(mismatch(format!(
+                    "a {format:?} texture of {layers} layers and {samples} samples, {how}"
+                )));
             }
             let sample_type = match sample {
                 Sample::Float => wgpu::TextureSampleType::Float { filterable },
@@ -279,7 +289,7 @@ fn layout_type(
                 ..Default::default()
             });
             (
-                wgpu::BindingType::Texture { sample_type, view_dimension: dimension, multisampled: false },
+                wgpu::BindingType::Texture { sample_type, view_dimension: dimension, multisampled },
                 Held::View(view),
             )
         }

@@ -5,17 +5,18 @@
 use crate::adaptive::{ExtraSamples, Reconstruction};
 use crate::graph::{Dims, Graph, Output, PassId, Plan};
 use crate::mode::{Mode, Technique};
+use crate::passes::Node;
 use crate::passes::adaptive::{
     CompactNode, EvaluateNode, Extra, GatherNode, List, ShadeExtraNode, ShadeFirstNode,
 };
 use crate::passes::display::DisplayNode;
 use crate::passes::fxaa::FxaaNode;
-use crate::passes::gbuffer::{self, GBufferNode};
+use crate::passes::gbuffer::{self, GBufferNode, MSAA_SAMPLES};
+use crate::passes::msaa::{MsaaNode, MsaaStep};
 use crate::passes::shade::{ResolveNode, ShadeNode};
 use crate::passes::shadow::{self, ShadowNode};
 use crate::passes::smaa::{SmaaNode, SmaaStep};
 use crate::passes::tonemap::TonemapNode;
-use crate::passes::{Node, gbuffer::PORTS as GBUFFER};
 use crate::scene::{Lighting, Scene, ShadowCubes};
 use crate::shaders::Features;
 use crate::{error::RenderError, settings::RenderSettings};
@@ -83,12 +84,14 @@ fn add(graph: &mut FrameGraph, node: impl Node + 'static) -> PassId {
 #[derive(Debug, Clone, Copy)]
 struct Sources {
     gbuffer: PassId,
+    /// The G-buffer's ports: single- or multisampled.
+    ports: [&'static str; 4],
     shadow: Option<PassId>,
 }
 
 impl Sources {
     fn feed(self, graph: &mut FrameGraph, pass: PassId) {
-        graph.connect_all(self.gbuffer, pass, &GBUFFER);
+        graph.connect_all(self.gbuffer, pass, &self.ports);
         if let Some(shadow) = self.shadow {
             graph.connect(shadow, shadow::CUBES, pass, shadow::CUBES);
         }
@@ -110,12 +113,31 @@ pub(crate) fn frame_graph(
     if let Some(shadow) = shadow {
         g.retain(shadow, shadow::CUBES, Output::ShadowCubes);
     }
-    let gbuffer = add(&mut g, GBufferNode);
-    g.retain(gbuffer, gbuffer::NORMAL, Output::GBufferNormal);
-    g.retain(gbuffer, gbuffer::DEPTH, Output::GBufferDepth);
-    let sources = Sources { gbuffer, shadow };
+    let samples = if mode.technique == Technique::Msaa { MSAA_SAMPLES } else { 1 };
+    let gbuffer = add(&mut g, GBufferNode { samples });
+    if samples == 1 {
+        g.retain(gbuffer, gbuffer::NORMAL, Output::GBufferNormal);
+        g.retain(gbuffer, gbuffer::DEPTH, Output::GBufferDepth);
+    }
+    let sources = Sources { gbuffer, ports: gbuffer::ports(samples), shadow };
     let (m, stalled) = (mode.m, mode.stalled);
     let hdr = match mode.technique {
+        Technique::Msaa => {
+            let (width, height) = (settings.width, settings.height);
+            let [classify, shade_samples, pixels] = [MsaaStep::Classify, MsaaStep::Samples, MsaaStep::Pixels]
+                .map(|step| add(&mut g, MsaaNode { step, stalled, shadows: cubes, width, height }));
+            for port in [gbuffer::MULTISAMPLED_PORTS[1], gbuffer::MULTISAMPLED_PORTS[3]] {
+                g.connect(gbuffer, port, classify, port);
+            }
+            for pass in [shade_samples, pixels] {
+                sources.feed(&mut g, pass);
+                g.connect(classify, "list_words", pass, "list");
+            }
+            g.connect(classify, "edge_words", pixels, "edges");
+            g.connect(shade_samples, "shaded_samples", pixels, "shaded_samples");
+            g.retain(pixels, "counts", Output::SampleCounts);
+            pixels
+        }
         Technique::Deferred | Technique::Fxaa | Technique::Smaa | Technique::Reference => {
             let shade = add(&mut g, ShadeNode { stalled, shadows: cubes });
             sources.feed(&mut g, shade);

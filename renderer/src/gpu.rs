@@ -97,9 +97,12 @@ impl Gpu {
         // The adapter's own limits, not wgpu's conservative defaults: 4×4 G-buffers at
         // 1024×768 need 4096×3072 targets and more than the default buffer size.
         let limits = adapter.limits();
+        // The 4× G-buffer's formats (Rg32Float, Rgba16Float) multisample on Vulkan devices,
+        // lavapipe among them, but WebGPU guarantees it for neither.
+        let features = adapter.features() & wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("aabench"),
-            required_features: wgpu::Features::empty(),
+            required_features: features,
             required_limits: limits,
             ..Default::default()
         }))

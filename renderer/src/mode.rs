@@ -1,4 +1,4 @@
-//! Render modes and their ids: `deferred-1x1`, `smaa`, `reference-4x4-stalled`, `adaptive-3x3-geometry`,
+//! Render modes and their ids: `deferred-1x1`, `smaa`, `msaa-4x`, `reference-4x4-stalled`, `adaptive-3x3-geometry`,
 //! `adaptive-3x3-area`, `adaptive-4x4-cells`, `adaptive-4x4-coverage`.
 
 use std::fmt;
@@ -25,6 +25,10 @@ pub enum Technique {
     Fxaa,
     /// One sample per pixel, then SMAA 1x on the display-encoded image.
     Smaa,
+    /// MSAA-based deferred shading: a w × h G-buffer of 4 samples per pixel (M = 2: as many
+    /// samples as the 2×2 grid, at the rotated-grid positions), shaded per sample where they
+    /// lie on more than one surface and once per pixel elsewhere.
+    Msaa,
     /// All M² samples of an M·w × M·h G-buffer shaded, box-filtered.
     Reference,
     /// Holländer et al. 2013: the same G-buffer, samples shaded where the metrics ask, and the
@@ -46,14 +50,15 @@ impl Mode {
         Mode { technique, m, stalled }
     }
 
-    /// The twelve modes that adaptive is measured against: deferred 1×1, FXAA, SMAA and
-    /// reference 2×2–4×4, each plain and stalled.
+    /// The fourteen modes that adaptive is measured against: deferred 1×1, FXAA, SMAA, 4×
+    /// MSAA and reference 2×2–4×4, each plain and stalled.
     pub fn baseline_modes() -> Vec<Mode> {
         let mut modes = Vec::new();
         for stalled in [false, true] {
             modes.push(Mode::new(Technique::Deferred, 1, stalled));
             modes.push(Mode::new(Technique::Fxaa, 1, stalled));
             modes.push(Mode::new(Technique::Smaa, 1, stalled));
+            modes.push(Mode::new(Technique::Msaa, 2, stalled));
             for m in 2..=4 {
                 modes.push(Mode::new(Technique::Reference, m, stalled));
             }
@@ -91,6 +96,16 @@ impl Mode {
         }
     }
 
+    /// Whether a pixel of `n` samples shades its first sample a second time: adaptive modes
+    /// whose S stands for the whole pixel (see [`Reconstruction::reshades_first`]); never
+    /// MSAA, whose pixels of four samples skip the shading at the centre.
+    pub fn reshades_first(&self, n: u32) -> bool {
+        match self.technique {
+            Technique::Adaptive(_, reconstruction) => reconstruction.reshades_first(self.m, n),
+            _ => false,
+        }
+    }
+
     fn adaptive(metrics: Metrics, reconstruction: Reconstruction) -> Vec<Mode> {
         let technique = Technique::Adaptive(metrics, reconstruction);
         [false, true]
@@ -107,6 +122,7 @@ impl fmt::Display for Mode {
             // Post-process modes have no supersampling factor to name.
             Technique::Fxaa => return f.write_str(if self.stalled { "fxaa-stalled" } else { "fxaa" }),
             Technique::Smaa => return f.write_str(if self.stalled { "smaa-stalled" } else { "smaa" }),
+            Technique::Msaa => return f.write_str(if self.stalled { "msaa-4x-stalled" } else { "msaa-4x" }),
             Technique::Reference => "reference",
             Technique::Adaptive(..) => "adaptive",
         };
@@ -134,7 +150,7 @@ impl fmt::Display for Mode {
 /// A mode id that does not parse, with the reason.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, smaa, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry, adaptive-4x4-area, adaptive-4x4-cells, adaptive-4x4-coverage)"
+    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, smaa, msaa-4x, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry, adaptive-4x4-area, adaptive-4x4-cells, adaptive-4x4-coverage)"
 )]
 pub struct ModeError {
     pub id: String,
@@ -160,10 +176,15 @@ impl FromStr for Mode {
             "fxaa-stalled" => return Ok(Mode::new(Technique::Fxaa, 1, true)),
             "smaa" => return Ok(Mode::new(Technique::Smaa, 1, false)),
             "smaa-stalled" => return Ok(Mode::new(Technique::Smaa, 1, true)),
+            "msaa-4x" => return Ok(Mode::new(Technique::Msaa, 2, false)),
+            "msaa-4x-stalled" => return Ok(Mode::new(Technique::Msaa, 2, true)),
             _ => {}
         }
         let mut parts = id.split('-');
         let technique = parts.next().unwrap_or_default();
+        if technique == "msaa" {
+            return Err(fail("lavapipe renders 4× MSAA only: `msaa-4x` or `msaa-4x-stalled`"));
+        }
         let size = parts.next().ok_or_else(|| fail("missing the size, e.g. `-2x2`"))?;
         let m = match size.split_once('x') {
             Some((a, b)) if a == b => a.parse::<u32>().map_err(|_| fail("the size must be MxM"))?,
@@ -192,10 +213,11 @@ impl FromStr for Mode {
             ("deferred" | "reference" | "adaptive", _) => return Err(fail("unexpected suffix")),
             ("fxaa", _) => return Err(fail("FXAA has no size: `fxaa` or `fxaa-stalled`")),
             ("smaa", _) => return Err(fail("SMAA has no size: `smaa` or `smaa-stalled`")),
-            _ => return Err(fail("the technique must be deferred, fxaa, smaa, reference or adaptive")),
+            _ => return Err(fail("the technique must be deferred, fxaa, smaa, msaa, reference or adaptive")),
         };
         let allowed = match technique {
             Technique::Deferred | Technique::Fxaa | Technique::Smaa => 1..=1,
+            Technique::Msaa => 2..=2,
             // reference-1x1 exists to check that the supersampling path equals deferred-1x1.
             Technique::Reference => 1..=4,
             Technique::Adaptive(..) => 2..=4,
@@ -224,9 +246,10 @@ mod tests {
         let all =
             [Mode::baseline_modes(), Mode::adaptive_modes(), Mode::ablation_modes(), Mode::variant_modes()]
                 .concat();
-        assert_eq!(all.len(), 12 + 6 + 12 + 18);
+        assert_eq!(all.len(), 14 + 6 + 12 + 18);
         assert!(all.iter().any(|m| m.to_string() == "fxaa-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "smaa-stalled"));
+        assert!(all.iter().any(|m| m.to_string() == "msaa-4x-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-3x3-area-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-4x4-cells"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-2x2-coverage-stalled"));
@@ -251,6 +274,8 @@ mod tests {
         check("fxaa3", "missing the size");
         check("fxaa-2x2", "FXAA has no size");
         check("smaa-1x1", "SMAA has no size");
+        check("msaa-8x", "4× MSAA only");
+        check("msaa-2x2", "4× MSAA only");
         check("reference-2x2-geometry", "unexpected suffix");
         check("reference-2x2-area", "unexpected suffix");
         check("reference-2x2-cells", "unexpected suffix");

@@ -44,8 +44,9 @@ impl Constants {
 pub(crate) enum Raster {
     /// No vertex buffers, colour targets of these formats.
     Screen(ScreenTargets),
-    /// The scene's vertices into the G-buffer, culled as the draw class says.
-    GBuffer(DrawClass),
+    /// The scene's vertices into the G-buffer of `samples` per texel, culled as the draw class
+    /// says.
+    GBuffer { class: DrawClass, samples: u32 },
     /// The scene's vertices into a depth-only target, both faces.
     ShadowDepth,
 }

@@ -543,12 +543,12 @@ impl Pool {
 fn create(device: &wgpu::Device, physical: &Physical) -> Allocated {
     let label = Some(physical.desc.to_string());
     match (physical.desc, physical.usage) {
-        (Resolved::Texture { format, width, height, layers }, Usage::Texture(usage)) => {
+        (Resolved::Texture { format, width, height, layers, samples }, Usage::Texture(usage)) => {
             Allocated::Texture(device.create_texture(&wgpu::TextureDescriptor {
                 label: label.as_deref(),
                 size: wgpu::Extent3d { width, height, depth_or_array_layers: layers },
                 mip_level_count: 1,
-                sample_count: 1,
+                sample_count: samples,
                 dimension: wgpu::TextureDimension::D2,
                 format,
                 usage,

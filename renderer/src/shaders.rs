@@ -29,6 +29,7 @@ sources!(
     "lib/shading.wgsl",
     "lib/color.wgsl",
     "lib/compact.wgsl",
+    "lib/pixel_list.wgsl",
     "gbuffer.wgsl",
     "shadow.wgsl",
     "shade.wgsl",
@@ -38,6 +39,7 @@ sources!(
     "fxaa.wgsl",
     "smaa.wgsl",
     "adaptive.wgsl",
+    "msaa.wgsl",
 );
 
 /// The pass shaders: every source that is not an include under `lib/`.

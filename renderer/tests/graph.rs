@@ -79,6 +79,10 @@ fn every_mode_of_every_scene_compiles_binds_and_reaches_the_allocation_bound() {
                         || mode.reconstruction() == aabench_renderer::Reconstruction::Coverage;
                     assert_eq!(has("shade_extra"), adaptive && listed, "{context}");
                     assert_eq!(has("resolve"), mode.technique == Technique::Reference, "{context}");
+                    let msaa = mode.technique == Technique::Msaa;
+                    for pass in ["msaa_classify", "msaa_samples", "msaa_pixels"] {
+                        assert_eq!(has(pass), msaa, "{context}");
+                    }
                     assert_eq!(
                         graph.passes.first().map(String::as_str),
                         Some(if shadows { "shadow" } else { "gbuffer" })

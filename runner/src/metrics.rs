@@ -7,7 +7,7 @@
 //! dither turns quantization into unbiased noise instead of banding that would shift with
 //! the anti-aliasing.
 
-use aabench_renderer::{DisplayImage, FrameImages, Reconstruction};
+use aabench_renderer::{DisplayImage, FrameImages, Mode};
 
 use crate::perceptual::{self, FlipMap};
 use serde::{Deserialize, Serialize, Serializer};
@@ -145,9 +145,10 @@ pub struct SampleStats {
     pub histogram: Vec<u64>,
 }
 
-/// Statistics of a sample-count map of a mode that reconstructs pixels as `reconstruction`
-/// says. Counts outside [1, M²] are a bug upstream: `Err` says so.
-pub fn sample_stats(counts: &[u8], m: u32, reconstruction: Reconstruction) -> Result<SampleStats, String> {
+/// Statistics of a sample-count map of `mode`. Counts outside [1, M²] are a bug upstream:
+/// `Err` says so.
+pub fn sample_stats(counts: &[u8], mode: Mode) -> Result<SampleStats, String> {
+    let m = mode.m;
     let window = (m * m) as usize;
     let mut histogram = vec![0u64; window];
     for (pixel, &n) in counts.iter().enumerate() {
@@ -158,10 +159,8 @@ pub fn sample_stats(counts: &[u8], m: u32, reconstruction: Reconstruction) -> Re
     }
     let shaded: u64 = counts.iter().map(|&n| u64::from(n)).sum();
     let full_pixels = histogram[window - 1];
-    let reshaded = (1..=window as u32)
-        .filter(|&n| reconstruction.reshades_first(m, n))
-        .map(|n| histogram[n as usize - 1])
-        .sum();
+    let reshaded =
+        (1..=window as u32).filter(|&n| mode.reshades_first(n)).map(|n| histogram[n as usize - 1]).sum();
     let total = (window * counts.len()) as u64;
     let percent = |count: u64| 100.0 * count as f64 / total.max(1) as f64;
     Ok(SampleStats {
@@ -178,6 +177,7 @@ pub fn sample_stats(counts: &[u8], m: u32, reconstruction: Reconstruction) -> Re
 #[cfg(test)]
 mod tests {
     use super::*;
+    use aabench_renderer::{Metrics, Reconstruction, Technique};
     use proptest::prelude::*;
 
     /// MSE over a 4096² image equals an exact integer computation within a relative 10⁻¹², at 8
@@ -263,15 +263,20 @@ mod tests {
 
     #[test]
     fn sample_stats_count_and_reject_out_of_range() {
-        let stats = sample_stats(&[1, 1, 4, 2], 2, Reconstruction::Equal).unwrap();
+        let adaptive =
+            |reconstruction| Mode::new(Technique::Adaptive(Metrics::Both, reconstruction), 2, false);
+        let stats = sample_stats(&[1, 1, 4, 2], adaptive(Reconstruction::Equal)).unwrap();
         assert_eq!(stats.histogram, vec![2, 1, 0, 1]);
         assert_eq!((stats.shaded, stats.total, stats.full_pixels), (8, 16, 1));
         assert_eq!((stats.shaded_percent, stats.work_percent), (50.0, 56.25));
-        let cells = sample_stats(&[1, 1, 4, 2], 2, Reconstruction::Cells).unwrap();
+        let cells = sample_stats(&[1, 1, 4, 2], adaptive(Reconstruction::Cells)).unwrap();
         assert_eq!((cells.shaded, cells.full_pixels, cells.reshaded), (8, 1, 2));
         assert_eq!(cells.work_percent, 100.0 * 10.0 / 16.0);
-        assert!(sample_stats(&[0], 2, Reconstruction::Equal).is_err());
-        assert!(sample_stats(&[5], 2, Reconstruction::Equal).is_err());
+        // MSAA shades a pixel of four samples four times, not five.
+        let msaa = sample_stats(&[1, 1, 4, 4], Mode::new(Technique::Msaa, 2, false)).unwrap();
+        assert_eq!((msaa.shaded, msaa.reshaded, msaa.work_percent), (10, 0, msaa.shaded_percent));
+        assert!(sample_stats(&[0], adaptive(Reconstruction::Equal)).is_err());
+        assert!(sample_stats(&[5], adaptive(Reconstruction::Equal)).is_err());
     }
 }
 

@@ -646,10 +646,7 @@ async fn finish_modes(
                 Some((i, _)) => Some(&images[i].as_ref().expect("reference images").display),
                 None => truth.as_deref(),
             };
-            let samples = own
-                .sample_counts
-                .as_ref()
-                .map(|counts| metrics::sample_stats(counts, mode.m, mode.reconstruction()));
+            let samples = own.sample_counts.as_ref().map(|counts| metrics::sample_stats(counts, mode));
             let mut files = ImageFiles::default();
             let written = write_mode_images(
                 &scene_dir,
@@ -697,11 +694,12 @@ fn fail_mode(record: &mut ModeRecord, error: String) {
 }
 
 /// The image a mode is compared with, with the same stall if it ran, else the other (their
-/// images are identical): for adaptive modes the reference at the same M; for FXAA the image
-/// and SMAA the image they post-process, deferred-1x1, which is the 1×1 reference bit for bit.
+/// images are identical): for adaptive modes the reference at the same M; for 4× MSAA the 2×2
+/// reference, which shades as many samples everywhere; for FXAA and SMAA the image they
+/// post-process, deferred-1x1, which is the 1×1 reference bit for bit.
 fn comparison_reference(modes: &[Mode], images: &[Option<FrameImages>], mode: Mode) -> Option<(usize, Mode)> {
     let technique = match mode.technique {
-        Technique::Adaptive(..) => Technique::Reference,
+        Technique::Adaptive(..) | Technique::Msaa => Technique::Reference,
         Technique::Fxaa | Technique::Smaa => Technique::Deferred,
         Technique::Deferred | Technique::Reference => return None,
     };
@@ -795,7 +793,7 @@ fn adaptive_cost(modes: &[Mode], runs: &[ModeRun], mode: Mode, run: &ModeRun) ->
     let reference_run = &runs[modes.iter().position(|m| *m == reference)?];
     let own = frame_median(run)?;
     let counts = run.images.as_ref()?.sample_counts.as_ref()?;
-    let stats = metrics::sample_stats(counts, mode.m, mode.reconstruction()).ok()?;
+    let stats = metrics::sample_stats(counts, mode).ok()?;
     // Shading work beyond S, as a fraction of the reference's.
     let pixels = counts.len() as f64;
     let extra_fraction = ((stats.shaded + stats.reshaded) as f64 - pixels) / stats.total as f64;

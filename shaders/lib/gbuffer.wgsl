@@ -31,7 +31,10 @@ struct Surface {
 // Linear view depth from reversed depth d (near → 1, far → 0): n·f / (d·(f − n) + n). With f32
 // depth its relative precision is about 2^-24 at every distance, as good as storing it.
 fn linear_depth(texel: vec2<i32>) -> f32 {
-    let d = textureLoad(gb_depth, texel, 0);
+    return linear_depth_of(textureLoad(gb_depth, texel, 0));
+}
+
+fn linear_depth_of(d: f32) -> f32 {
     let near = frame.projection.z;
     let far = frame.projection.w;
     return near * far / (d * (far - near) + near);
@@ -56,12 +59,21 @@ fn world_position(texel: vec2<i32>, depth: f32) -> vec3<f32> {
 // World position of the point `point` (in G-buffer texels, a texel's centre at + 0.5) seen at
 // view depth `depth`.
 fn world_position_at(point: vec2<f32>, depth: f32) -> vec3<f32> {
-    return (frame.inv_view * vec4<f32>(view_ray(point) * depth, 1.0)).xyz;
+    return world_position_in(point, vec2<f32>(textureDimensions(gb_uv)), depth);
+}
+
+// The same point in a target of `size` texels.
+fn world_position_in(point: vec2<f32>, size: vec2<f32>, depth: f32) -> vec3<f32> {
+    return (frame.inv_view * vec4<f32>(view_ray_in(point, size) * depth, 1.0)).xyz;
 }
 
 // The view-space ray through `point` (as in world_position_at) that reaches view depth 1.
 fn view_ray(point: vec2<f32>) -> vec3<f32> {
-    let size = vec2<f32>(textureDimensions(gb_uv));
+    return view_ray_in(point, vec2<f32>(textureDimensions(gb_uv)));
+}
+
+// The same ray through a target of `size` texels.
+fn view_ray_in(point: vec2<f32>, size: vec2<f32>) -> vec3<f32> {
     let tile_ndc = point / size * vec2<f32>(2.0, -2.0) + vec2<f32>(-1.0, 1.0);
     let ndc = tile_ndc * frame.tile.xy + frame.tile.zw;
     return vec3<f32>(ndc * frame.projection.xy, -1.0);

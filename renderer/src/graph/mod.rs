@@ -39,14 +39,27 @@ pub enum Extent {
 /// What a port carries.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Resource {
-    Texture { format: wgpu::TextureFormat, extent: Extent, layers: u32 },
-    Buffer { bytes: u64 },
+    /// A 2D texture of `layers` layers; `samples` > 1 makes it multisampled (one layer only).
+    Texture {
+        format: wgpu::TextureFormat,
+        extent: Extent,
+        layers: u32,
+        samples: u32,
+    },
+    Buffer {
+        bytes: u64,
+    },
 }
 
 impl Resource {
-    /// A single-layer 2D texture.
+    /// A single-layer, single-sampled 2D texture.
     pub fn texture(format: wgpu::TextureFormat, extent: Extent) -> Resource {
-        Resource::Texture { format, extent, layers: 1 }
+        Resource::Texture { format, extent, layers: 1, samples: 1 }
+    }
+
+    /// A single-layer 2D texture of `samples` samples per texel.
+    pub fn multisampled(format: wgpu::TextureFormat, extent: Extent, samples: u32) -> Resource {
+        Resource::Texture { format, extent, layers: 1, samples }
     }
 }
 
@@ -159,13 +172,13 @@ impl Dims {
     pub fn resolve(self, resource: Resource) -> Resolved {
         match resource {
             Resource::Buffer { bytes } => Resolved::Buffer { bytes },
-            Resource::Texture { format, extent, layers } => {
+            Resource::Texture { format, extent, layers, samples } => {
                 let (width, height) = match extent {
                     Extent::Output => (self.width, self.height),
                     Extent::GBuffer => (self.m * self.width, self.m * self.height),
                     Extent::Fixed { width, height } => (width, height),
                 };
-                Resolved::Texture { format, width, height, layers }
+                Resolved::Texture { format, width, height, layers, samples }
             }
         }
     }
@@ -174,7 +187,7 @@ impl Dims {
 /// A resource's descriptor with its size in texels or bytes: what an allocation is keyed by.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Resolved {
-    Texture { format: wgpu::TextureFormat, width: u32, height: u32, layers: u32 },
+    Texture { format: wgpu::TextureFormat, width: u32, height: u32, layers: u32, samples: u32 },
     Buffer { bytes: u64 },
 }
 
@@ -182,9 +195,9 @@ impl Resolved {
     pub fn bytes(&self) -> u64 {
         match *self {
             Resolved::Buffer { bytes } => bytes,
-            Resolved::Texture { format, width, height, layers } => {
+            Resolved::Texture { format, width, height, layers, samples } => {
                 let texel = format.block_copy_size(None).unwrap_or(4);
-                u64::from(width) * u64::from(height) * u64::from(layers) * u64::from(texel)
+                u64::from(width) * u64::from(height) * u64::from(layers * samples) * u64::from(texel)
             }
         }
     }
@@ -194,11 +207,15 @@ impl fmt::Display for Resolved {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Resolved::Buffer { bytes } => write!(f, "buffer {bytes} B"),
-            Resolved::Texture { format, width, height, layers: 1 } => {
-                write!(f, "{format:?} {width}×{height}")
-            }
-            Resolved::Texture { format, width, height, layers } => {
-                write!(f, "{format:?} {width}×{height}×{layers}")
+            Resolved::Texture { format, width, height, layers, samples } => {
+                write!(f, "{format:?} {width}×{height}")?;
+                if *layers > 1 {
+                    write!(f, "×{layers}")?;
+                }
+                if *samples > 1 {
+                    write!(f, " ({samples} samples)")?;
+                }
+                Ok(())
             }
         }
     }

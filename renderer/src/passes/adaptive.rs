@@ -185,7 +185,7 @@ impl EvaluateNode {
 
 impl Node for EvaluateNode {
     fn decl(&self) -> PassDecl {
-        let mut ports: Vec<Port> = gbuffer::outputs()
+        let mut ports: Vec<Port> = gbuffer::outputs(1)
             .into_iter()
             .filter(|port| self.gbuffer_reads().contains(&port.name))
             .map(|port| Port { access: Access::Loaded, ..port })

@@ -1,4 +1,5 @@
-//! The G-buffer pass: rasterizes the scene once into M·w × M·h targets.
+//! The G-buffer pass: rasterizes the scene once into M·w × M·h targets, or into w × h targets
+//! of 4 samples per pixel for MSAA.
 
 use super::{BuildContext, Bundle, Io, Node, Pass, Program};
 use crate::error::RenderError;
@@ -25,24 +26,38 @@ pub(crate) const UV_GRAD: &str = "gb_uv_grad";
 pub(crate) const DEPTH: &str = "gb_depth";
 pub(crate) const PORTS: [&str; 4] = [UV, NORMAL, UV_GRAD, DEPTH];
 
-/// What the G-buffer pass writes, at the G-buffer's extent.
-pub(crate) fn outputs() -> [Port; 4] {
-    let target =
-        |name, format| Port::new(name, Resource::texture(format, Extent::GBuffer), Access::Attachment);
-    [
-        target(UV, UV_FORMAT),
-        target(NORMAL, NORMAL_FORMAT),
-        target(UV_GRAD, UV_GRAD_FORMAT),
-        Port::new(DEPTH, Resource::texture(DEPTH_FORMAT, Extent::GBuffer), Access::Depth),
-    ]
+/// The same targets multisampled, under the names that `shaders/msaa.wgsl` binds them as.
+pub(crate) const MULTISAMPLED_PORTS: [&str; 4] = ["ms_uv", "ms_normal", "ms_uv_grad", "ms_depth"];
+
+/// Samples per pixel of the multisampled G-buffer: lavapipe renders 1 or 4.
+pub(crate) const MSAA_SAMPLES: u32 = 4;
+
+/// The port names of a G-buffer of `samples` samples per texel.
+pub(crate) fn ports(samples: u32) -> [&'static str; 4] {
+    if samples == 1 { PORTS } else { MULTISAMPLED_PORTS }
+}
+
+/// What the G-buffer pass writes: at the G-buffer's extent, or multisampled at the output's.
+pub(crate) fn outputs(samples: u32) -> [Port; 4] {
+    let extent = if samples == 1 { Extent::GBuffer } else { Extent::Output };
+    let formats = [UV_FORMAT, NORMAL_FORMAT, UV_GRAD_FORMAT, DEPTH_FORMAT];
+    std::array::from_fn(|i| {
+        let access = if i == 3 { Access::Depth } else { Access::Attachment };
+        Port::new(ports(samples)[i], Resource::multisampled(formats[i], extent, samples), access)
+    })
 }
 
 #[derive(Debug)]
-pub(crate) struct GBufferNode;
+pub(crate) struct GBufferNode {
+    /// Samples per texel: 1, or [`MSAA_SAMPLES`] (hardware coverage at the standard sample
+    /// positions; the fragment shader runs once per pixel and triangle, so every sample a
+    /// triangle covers holds its attributes at the pixel's centre).
+    pub samples: u32,
+}
 
 impl Node for GBufferNode {
     fn decl(&self) -> PassDecl {
-        PassDecl { name: "gbuffer", ports: outputs().to_vec() }
+        PassDecl { name: "gbuffer", ports: outputs(self.samples).to_vec() }
     }
 
     fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
@@ -60,17 +75,18 @@ impl Node for GBufferNode {
             let tangents = ctx.scene.has_tangents();
             let create =
                 |device: &_, layout: &_, module: &_, key: &_| create(device, layout, module, key, tangents);
-            let bundle = ctx.render_pipeline(io, &program, Raster::GBuffer(class), &[], create)?;
+            let raster = Raster::GBuffer { class, samples: self.samples };
+            let bundle = ctx.render_pipeline(io, &program, raster, &[], create)?;
             pipelines.push((class, bundle));
         }
         Ok(Box::new(GBufferPass {
             pipelines,
             scene: ctx.scene.clone(),
-            targets: [UV, NORMAL, UV_GRAD]
+            targets: ports(self.samples)[..3]
+                .iter()
                 .map(|port| io.texture(port))
-                .into_iter()
                 .collect::<Result<_, _>>()?,
-            depth: io.texture(DEPTH)?,
+            depth: io.texture(ports(self.samples)[3])?,
         }))
     }
 }
@@ -102,7 +118,7 @@ fn create(
     key: &RenderKey,
     tangents: bool,
 ) -> wgpu::RenderPipeline {
-    let Raster::GBuffer(class) = key.raster else { unreachable!("a G-buffer key") };
+    let Raster::GBuffer { class, samples } = key.raster else { unreachable!("a G-buffer key") };
     let targets = [UV_FORMAT, NORMAL_FORMAT, UV_GRAD_FORMAT].map(|format| Some(format.into()));
     // glTF front faces wind counter-clockwise. Double-sided surfaces keep their back faces
     // (the shader flips their normals towards the viewer); culling the others saves 11% of
@@ -112,21 +128,27 @@ fn create(
         cull_mode: (!class.double_sided).then_some(wgpu::Face::Back),
         ..Default::default()
     };
-    scene_pipeline(device, layout, module, key, primitive, DEPTH_FORMAT, &targets, tangents)
+    let target = Target { depth: DEPTH_FORMAT, colors: &targets, samples };
+    scene_pipeline(device, layout, module, key, primitive, target, tangents)
+}
+
+/// What a scene pipeline renders into: a depth target, colour targets when the key has a
+/// fragment stage, and the samples per texel of all of them.
+pub(crate) struct Target<'a> {
+    pub depth: wgpu::TextureFormat,
+    pub colors: &'a [Option<wgpu::ColorTargetState>],
+    pub samples: u32,
 }
 
 /// A pipeline that draws the scene's vertices (with their tangents when `tangents`) with
-/// reversed depth into a `depth` target, and into `targets` when the key has a fragment stage:
-/// what the G-buffer and shadow passes share.
-#[allow(clippy::too_many_arguments)]
+/// reversed depth into `target`: what the G-buffer and shadow passes share.
 pub(crate) fn scene_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     key: &RenderKey,
     primitive: wgpu::PrimitiveState,
-    depth: wgpu::TextureFormat,
-    targets: &[Option<wgpu::ColorTargetState>],
+    target: Target,
     tangents: bool,
 ) -> wgpu::RenderPipeline {
     let with_tangents = [Some(vertex_layout()), Some(TANGENT_LAYOUT)];
@@ -141,13 +163,13 @@ pub(crate) fn scene_pipeline(
             buffers,
         },
         primitive,
-        depth_stencil: Some(reversed_depth_test(depth)),
-        multisample: Default::default(),
+        depth_stencil: Some(reversed_depth_test(target.depth)),
+        multisample: wgpu::MultisampleState { count: target.samples, ..Default::default() },
         fragment: key.fragment.map(|entry| wgpu::FragmentState {
             module,
             entry_point: Some(entry),
             compilation_options: Default::default(),
-            targets,
+            targets: target.colors,
         }),
         multiview_mask: None,
         cache: None,

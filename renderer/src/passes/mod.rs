@@ -10,6 +10,8 @@ pub(crate) mod adaptive;
 pub(crate) mod display;
 pub(crate) mod fxaa;
 pub(crate) mod gbuffer;
+pub(crate) mod msaa;
+pub(crate) mod pixel_list;
 pub(crate) mod shade;
 pub(crate) mod shadow;
 pub(crate) mod smaa;
@@ -268,8 +270,14 @@ impl BuildContext<'_> {
 /// The ports through which shading reads a frame: the G-buffer and, in scenes with
 /// shadow-casting lights, the shadow cubes. `lib/gbuffer.wgsl` and `lib/shadows.wgsl` bind them.
 pub(crate) fn shading_inputs(shadows: Option<Resource>) -> Vec<Port> {
+    shading_inputs_of(1, shadows)
+}
+
+/// [`shading_inputs`] with the G-buffer of `samples` per texel (`shaders/msaa.wgsl` binds the
+/// multisampled one).
+pub(crate) fn shading_inputs_of(samples: u32, shadows: Option<Resource>) -> Vec<Port> {
     let mut ports: Vec<Port> =
-        gbuffer::outputs().into_iter().map(|p| Port { access: Access::Loaded, ..p }).collect();
+        gbuffer::outputs(samples).into_iter().map(|p| Port { access: Access::Loaded, ..p }).collect();
     ports.extend(shadows.map(|resource| Port::new(shadow::CUBES, resource, Access::Loaded)));
     ports
 }

@@ -21,6 +21,7 @@ pub(crate) fn cubes(lights: u32, resolution: u32) -> Resource {
         format: FORMAT,
         extent: Extent::Fixed { width: resolution, height: resolution },
         layers: 6 * lights,
+        samples: 1,
     }
 }
 
@@ -63,7 +64,8 @@ fn create(
 ) -> wgpu::RenderPipeline {
     // Faces of a cube map mirror one axis, so winding flips between faces: draw both sides.
     // Depth needs no tangents.
-    scene_pipeline(device, layout, module, key, wgpu::PrimitiveState::default(), FORMAT, &[], false)
+    let target = super::gbuffer::Target { depth: FORMAT, colors: &[], samples: 1 };
+    scene_pipeline(device, layout, module, key, wgpu::PrimitiveState::default(), target, false)
 }
 
 #[derive(Debug)]

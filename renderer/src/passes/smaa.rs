@@ -1,7 +1,7 @@
 //! SMAA 1x on the display-encoded image, in three passes (`shaders/smaa.wgsl`): luma edges
 //! packed as bits, blending weights from the area and search textures, neighbourhood blending.
 
-use super::{BuildContext, Compute, FULLSCREEN, Io, Node, Pass, Program, display_format};
+use super::{BuildContext, Compute, FULLSCREEN, Io, Node, Pass, Program, display_format, pixel_list};
 use crate::bindings::Bound;
 use crate::error::RenderError;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
@@ -26,9 +26,6 @@ pub(crate) struct SmaaNode {
     pub height: u32,
 }
 
-/// Pixels per word of the edge bits: two bits each (left and top edge).
-const SLOTS: u32 = 16;
-
 impl SmaaNode {
     /// The pass's name.
     fn name(&self) -> &'static str {
@@ -41,22 +38,19 @@ impl SmaaNode {
 
     /// The edge bits: the image's rows, then its columns, sixteen pixels to a word.
     fn edge_bits(&self) -> Resource {
-        let (w, h) = (u64::from(self.width), u64::from(self.height));
-        let words = h * w.div_ceil(u64::from(SLOTS)) + w * h.div_ceil(u64::from(SLOTS));
-        Resource::Buffer { bytes: 4 * words }
+        let words =
+            pixel_list::row_words(self.width, self.height) + pixel_list::row_words(self.height, self.width);
+        Resource::Buffer { bytes: 4 * u64::from(words) }
     }
 
-    /// The list of edge pixels: its length, row starts, word starts and entries.
+    /// The list of edge pixels.
     fn list(&self) -> Resource {
-        let (w, h) = (u64::from(self.width), u64::from(self.height));
-        Resource::Buffer { bytes: 4 * (4 + h + h * w.div_ceil(u64::from(SLOTS)) + w * h) }
+        pixel_list::list(self.width, self.height)
     }
 
-    /// The compact target of the list's weights: 4×4 blocks, room for every pixel.
+    /// The compact target of the list's weights: room for every pixel.
     fn compact_size(&self) -> (u32, u32) {
-        let width = self.width.next_multiple_of(4);
-        let height = (self.width * self.height).div_ceil(width).next_multiple_of(4);
-        (width, height)
+        pixel_list::compact_size(self.width, u64::from(self.width) * u64::from(self.height))
     }
 
     /// The blending weights of each listed pixel's top (red, green) and left (blue, alpha)
@@ -113,21 +107,15 @@ impl Node for SmaaNode {
             SmaaStep::Edges => {
                 // The rows' words, the columns' from them, then the list of edge pixels.
                 let (w, h) = (self.width, self.height);
-                let row_words = h * w.div_ceil(SLOTS);
-                let column_words = w * h.div_ceil(SLOTS);
                 let mut steps = Vec::new();
                 for (entry, invocations) in [
-                    ("smaa_detect", row_words),
-                    ("smaa_transpose", column_words),
-                    ("smaa_count_rows", h),
-                    // One invocation: the rows are few and the scan is serial.
-                    ("smaa_scan_rows", 1),
-                    ("smaa_emit", row_words),
+                    ("smaa_detect", pixel_list::row_words(w, h)),
+                    ("smaa_transpose", pixel_list::row_words(h, w)),
                 ] {
-                    // Workgroups of 64 (`smaa_scan_rows`: of 1).
                     let groups = [invocations.div_ceil(64), 1, 1];
                     steps.push(ctx.compute_step(io, SHADER, entry, constants.clone(), groups)?);
                 }
+                steps.extend(pixel_list::list_steps(ctx, io, SHADER, &constants, w, h)?);
                 return Ok(Box::new(Compute { name, steps }));
             }
             SmaaStep::Weights => ("smaa_rows", 12, "smaa_weights", "blend_weights"),

@@ -17,10 +17,11 @@ use crate::truth::TRUTH_ID;
 
 /// The modes of the overview table, where the run has them: the baselines, then M = 2 and
 /// M = 4 of the reference, the paper's adaptive mode and the variant nearest the truth.
-const OVERVIEW: [&str; 8] = [
+const OVERVIEW: [&str; 9] = [
     "deferred-1x1",
     "fxaa",
     "smaa",
+    "msaa-4x",
     "reference-2x2",
     "adaptive-2x2",
     "reference-4x4",
@@ -295,7 +296,7 @@ fn standalone(svg: &str) -> String {
 }
 
 /// The modes a strip shows after the truth, left to right, at the largest M of the scene's
-/// adaptive modes: deferred-1x1, fxaa, smaa, the reference, the paper's adaptive mode (whose worst
+/// adaptive modes: deferred-1x1, fxaa, smaa, msaa-4x, the reference, the paper's adaptive mode (whose worst
 /// window against the truth the strip shows) and the `-cells` variant, those the scene has.
 fn strip_modes(scene: &SceneRecord) -> Option<Vec<&ModeRecord>> {
     let m = (2..=4).rev().find(|m| scene.mode(&format!("adaptive-{m}x{m}")).is_some())?;
@@ -303,6 +304,7 @@ fn strip_modes(scene: &SceneRecord) -> Option<Vec<&ModeRecord>> {
         "deferred-1x1".to_string(),
         "fxaa".into(),
         "smaa".into(),
+        "msaa-4x".into(),
         format!("reference-{m}x{m}"),
         format!("adaptive-{m}x{m}"),
         format!("adaptive-{m}x{m}-cells"),

@@ -374,6 +374,7 @@ pub fn error_points(scene: &SceneRecord, metric: ErrorMetric) -> Vec<Point> {
                 "deferred" => Kind::Deferred,
                 "fxaa" => Kind::Fxaa,
                 "smaa" => Kind::Smaa,
+                "msaa" => Kind::Msaa,
                 "reference" => Kind::Reference,
                 _ if mode.mode.split('-').any(|part| VARIANTS.contains(&part)) => Kind::Variant,
                 _ => Kind::Adaptive,
@@ -530,7 +531,10 @@ fn images(
         let area = pick(format!("adaptive-{m}x{m}-area"));
         let cells = pick(format!("adaptive-{m}x{m}-cells"));
         let coverage = pick(format!("adaptive-{m}x{m}-coverage"));
-        let adaptives: Vec<&ModeRecord> = [adaptive, area, cells, coverage].into_iter().flatten().collect();
+        // 4× MSAA shades as many samples as the 2×2 grid and is compared with its reference.
+        let msaa = if m == 2 { pick("msaa-4x".into()) } else { None };
+        let adaptives: Vec<&ModeRecord> =
+            [adaptive, area, cells, coverage, msaa].into_iter().flatten().collect();
         if reference.is_none() && adaptives.is_empty() {
             continue;
         }
@@ -548,9 +552,9 @@ fn images(
         for &mode in reference.iter().chain(&adaptives) {
             flip_figure(page, Some(mode));
         }
-        // The area variant takes the paper's samples: one heatmap serves both; cells and
-        // coverage take their own.
-        for mode in [adaptive.or(area), cells, coverage].into_iter().flatten() {
+        // The area variant takes the paper's samples: one heatmap serves both; cells,
+        // coverage and MSAA take their own.
+        for mode in [adaptive.or(area), cells, coverage, msaa].into_iter().flatten() {
             if let Some(image) = &mode.images.samples {
                 figure(
                     page,

@@ -12,6 +12,9 @@ pub enum Kind {
     /// SMAA: a hollow square beside deferred's filled one.
     Smaa,
     Reference,
+    /// 4× MSAA: a hollow triangle beside the reference's filled one (the 2×2 reference shades
+    /// as many samples everywhere).
+    Msaa,
     Adaptive,
     /// An adaptive variant beyond the paper (`-area`, `-cells`, `-coverage`): a hollow
     /// circle beside adaptive's disc.
@@ -135,9 +138,15 @@ pub fn error_against_time(title: &str, y_desc: &str, points: &[Point]) -> Result
                 .map_err(fail)?
                 .label(format!("{name} (dashed: the front)"))
                 .legend(move |(x, y)| Circle::new((x, y), 4, style));
-            for kind in
-                [Kind::Deferred, Kind::Fxaa, Kind::Smaa, Kind::Reference, Kind::Adaptive, Kind::Variant]
-            {
+            for kind in [
+                Kind::Deferred,
+                Kind::Fxaa,
+                Kind::Smaa,
+                Kind::Reference,
+                Kind::Msaa,
+                Kind::Adaptive,
+                Kind::Variant,
+            ] {
                 let of_kind = series.iter().filter(|p| p.kind == kind);
                 chart
                     .draw_series(of_kind.map(|p| {
@@ -149,6 +158,9 @@ pub fn error_against_time(title: &str, y_desc: &str, points: &[Point]) -> Result
                                 at + Rectangle::new([(-4, -4), (4, 4)], colour.stroke_width(2)).into_dyn()
                             }
                             Kind::Reference => at + TriangleMarker::new((0, 0), 6, style).into_dyn(),
+                            Kind::Msaa => {
+                                at + TriangleMarker::new((0, 0), 6, colour.stroke_width(2)).into_dyn()
+                            }
                             Kind::Adaptive => at + Circle::new((0, 0), 4, style).into_dyn(),
                             Kind::Variant => at + Circle::new((0, 0), 4, colour.stroke_width(2)).into_dyn(),
                         }

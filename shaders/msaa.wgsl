@@ -13,7 +13,7 @@
 //
 // Lauritzen's other way, one pass that branches per pixel and loops over the samples of edge
 // pixels, runs the loop for every lane of a block that holds one edge pixel on a CPU
-// rasterizer: on lavapipe it took 29–43 % longer than these three passes (docs/msaa.md).
+// rasterizer: on lavapipe it took 28–43 % longer than these three passes (docs/msaa.md).
 //
 // A pixel's shading reads a texture with the pixel's footprint, whether it shades once or four
 // times: the G-buffer's UV derivatives are per pixel, as MSAA shades at pixel rate.

@@ -172,12 +172,11 @@ fn smaa_transpose(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let x = id.x / words;
     let y0 = (id.x % words) * SLOTS;
-    let row_words = u32(plane_words(0u));
     var word = 0u;
     for (var i = 0u; i < SLOTS; i++) {
         let y = y0 + i;
         if y < HEIGHT {
-            let slot = (edge_words[y * row_words + x / SLOTS] >> (2u * (x % SLOTS))) & 3u;
+            let slot = (edge_words[y * row_words() + x / SLOTS] >> (2u * (x % SLOTS))) & 3u;
             word |= (((slot & 1u) << 1u) | (slot >> 1u)) << (2u * i);
         }
     }

@@ -126,7 +126,7 @@ pub(crate) fn frame_graph(
             let (width, height) = (settings.width, settings.height);
             let [classify, shade_samples, pixels] = [MsaaStep::Classify, MsaaStep::Samples, MsaaStep::Pixels]
                 .map(|step| add(&mut g, MsaaNode { step, stalled, shadows: cubes, width, height }));
-            for port in [gbuffer::MULTISAMPLED_PORTS[1], gbuffer::MULTISAMPLED_PORTS[3]] {
+            for port in [gbuffer::MS_NORMAL, gbuffer::MS_DEPTH] {
                 g.connect(gbuffer, port, classify, port);
             }
             for pass in [shade_samples, pixels] {

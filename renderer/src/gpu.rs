@@ -66,6 +66,7 @@ fn cpu_model() -> String {
 /// The device and queue, with validation errors captured instead of panicking.
 #[derive(Debug)]
 pub struct Gpu {
+    adapter: wgpu::Adapter,
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub platform: PlatformInfo,
@@ -97,8 +98,8 @@ impl Gpu {
         // The adapter's own limits, not wgpu's conservative defaults: 4×4 G-buffers at
         // 1024×768 need 4096×3072 targets and more than the default buffer size.
         let limits = adapter.limits();
-        // The 4× G-buffer's formats (Rg32Float, Rgba16Float) multisample on Vulkan devices,
-        // lavapipe among them, but WebGPU guarantees it for neither.
+        // The 4× G-buffer's UV target (Rg32Float) multisamples on Vulkan devices, lavapipe
+        // among them, but WebGPU does not guarantee it: only with this feature may it.
         let features = adapter.features() & wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("aabench"),
@@ -125,7 +126,19 @@ impl Gpu {
             cpu_cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
             build_profile: if cfg!(debug_assertions) { "debug" } else { "release" }.into(),
         };
-        Ok(Gpu { device, queue, platform, errors })
+        Ok(Gpu { adapter: adapter.clone(), device, queue, platform, errors })
+    }
+
+    /// Whether this device renders `format` targets of `samples` samples per texel.
+    pub fn multisamples(&self, format: wgpu::TextureFormat, samples: u32) -> bool {
+        let adapter_specific =
+            self.device.features().contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
+        let features = if adapter_specific {
+            self.adapter.get_texture_format_features(format)
+        } else {
+            format.guaranteed_format_features(self.device.features())
+        };
+        features.flags.sample_count_supported(samples)
     }
 
     /// Returns the validation errors reported since the last call, as one error.

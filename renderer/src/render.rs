@@ -247,7 +247,23 @@ impl SceneRenderer {
                 self.settings.width, self.settings.height
             )));
         }
+        self.check_samples(mode, plan)?;
         self.check_memory(mode, plan)
+    }
+
+    /// Every multisampled target in a format and sample count the device renders.
+    fn check_samples(&self, mode: Mode, plan: &Plan) -> Result<(), RenderError> {
+        for physical in &plan.allocation.physical {
+            if let Resolved::Texture { format, samples, .. } = physical.desc
+                && samples > 1
+                && !self.gpu.multisamples(format, samples)
+            {
+                return Err(RenderError::Limit(format!(
+                    "{mode}: this device does not render {format:?} targets of {samples} samples per pixel"
+                )));
+            }
+        }
+        Ok(())
     }
 
     /// The loop strategy shades up to M² samples in one invocation, all under lavapipe's loop
@@ -676,14 +692,20 @@ impl PreparedMode {
         self.outputs.get(&Output::SampleCounts).map(|t| self.gpu.read_texture(t)).transpose()
     }
 
-    /// Reads back the G-buffer of the last frame.
+    /// Reads back the single-sampled G-buffer of the last frame (every mode but MSAA's, whose
+    /// multisampled G-buffer is not kept).
     pub fn read_gbuffer(&self) -> Result<GBufferImages, RenderError> {
-        let normal = self.output(Output::GBufferNormal);
+        let kept = |output| {
+            self.outputs.get(&output).ok_or_else(|| {
+                RenderError::Binding("the multisampled G-buffer of msaa-4x is not read back".into())
+            })
+        };
+        let normal = kept(Output::GBufferNormal)?;
         let normal_material = half_texels(&self.gpu.read_texture(normal)?);
         let (near, far) = self.clip;
         let depth = self
             .gpu
-            .read_texture(self.output(Output::GBufferDepth))?
+            .read_texture(kept(Output::GBufferDepth)?)?
             .chunks_exact(4)
             .map(|b| {
                 let d = f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]]));

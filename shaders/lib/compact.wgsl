@@ -1,5 +1,5 @@
-// A list laid out in a compact target, one entry per texel: the adaptive modes' extra samples
-// and SMAA's edge pixels. Its size is the pass's COMPACT_WIDTH × COMPACT_HEIGHT (multiples of 4).
+// A list laid out in a compact target, one entry per texel: the adaptive modes' extra samples,
+// SMAA's edge pixels and the samples of MSAA's listed pixels. Its size is the pass's COMPACT_WIDTH × COMPACT_HEIGHT (multiples of 4).
 
 override COMPACT_WIDTH: u32;
 override COMPACT_HEIGHT: u32;

@@ -27,7 +27,9 @@ pub(crate) const DEPTH: &str = "gb_depth";
 pub(crate) const PORTS: [&str; 4] = [UV, NORMAL, UV_GRAD, DEPTH];
 
 /// The same targets multisampled, under the names that `shaders/msaa.wgsl` binds them as.
-pub(crate) const MULTISAMPLED_PORTS: [&str; 4] = ["ms_uv", "ms_normal", "ms_uv_grad", "ms_depth"];
+pub(crate) const MS_NORMAL: &str = "ms_normal";
+pub(crate) const MS_DEPTH: &str = "ms_depth";
+pub(crate) const MULTISAMPLED_PORTS: [&str; 4] = ["ms_uv", MS_NORMAL, "ms_uv_grad", MS_DEPTH];
 
 /// Samples per pixel of the multisampled G-buffer: lavapipe renders 1 or 4.
 pub(crate) const MSAA_SAMPLES: u32 = 4;

@@ -5,9 +5,10 @@
 //! The edge test's thresholds: samples lie on one surface when they share a material, their
 //! normals' cosine is at least [`EDGE_COS`] (Lauritzen's 0.99, about 8°) and each lies within
 //! [`EDGE_GAP`] of the view depth from the tangent plane of the pixel's first sample: a step
-//! in depth of more than 1 % is an edge, a slanted plane, however steep, is not.
+//! in depth of more than 1 % is an edge, a slanted plane is not (where the stored normal is
+//! the plane's; a shading normal that tilts away may list a steep pixel, which costs time only).
 
-use super::gbuffer::{MSAA_SAMPLES, MULTISAMPLED_PORTS};
+use super::gbuffer::{MS_DEPTH, MS_NORMAL, MSAA_SAMPLES};
 use super::{
     BuildContext, Compute, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, pixel_list, shading_inputs_of,
 };
@@ -54,7 +55,7 @@ impl MsaaNode {
 
     /// The marks: two bits a pixel, sixteen pixels to a word.
     fn marks(&self) -> Resource {
-        Resource::Buffer { bytes: 4 * u64::from(pixel_list::row_words(self.width, self.height)) }
+        Resource::Buffer { bytes: 4 * u64::from(pixel_list::mark_words(self.width, self.height)) }
     }
 
     /// The compact target of the listed pixels' samples: room for every sample of every pixel.
@@ -87,7 +88,7 @@ impl Node for MsaaNode {
             MsaaStep::Classify => {
                 let mut ports: Vec<Port> = shading_inputs_of(MSAA_SAMPLES, None)
                     .into_iter()
-                    .filter(|p| [MULTISAMPLED_PORTS[1], MULTISAMPLED_PORTS[3]].contains(&p.name))
+                    .filter(|p| [MS_NORMAL, MS_DEPTH].contains(&p.name))
                     .collect();
                 ports.extend([
                     Port::new("edge_words", self.marks(), Access::StorageWrite),
@@ -124,7 +125,7 @@ impl Node for MsaaNode {
             MsaaStep::Classify => {
                 let (w, h) = (self.width, self.height);
                 let constants = self.constants();
-                let words = pixel_list::row_words(w, h);
+                let words = pixel_list::mark_words(w, h);
                 let mut steps = vec![ctx.compute_step(
                     io,
                     SHADER,

@@ -9,15 +9,16 @@ use crate::pipelines::Constants;
 /// Pixels per word of marks: two bits each.
 pub(crate) const SLOTS: u32 = 16;
 
-/// The words of one set of marks over a `width` × `height` image, row by row.
-pub(crate) fn row_words(width: u32, height: u32) -> u32 {
+/// All the words of one set of marks over a `width` × `height` image, its rows one after the
+/// other.
+pub(crate) fn mark_words(width: u32, height: u32) -> u32 {
     height * width.div_ceil(SLOTS)
 }
 
 /// The list buffer: its length, row starts, word starts and an entry for every pixel.
 pub(crate) fn list(width: u32, height: u32) -> Resource {
     let (w, h) = (u64::from(width), u64::from(height));
-    Resource::Buffer { bytes: 4 * (4 + h + u64::from(row_words(width, height)) + w * h) }
+    Resource::Buffer { bytes: 4 * (4 + h + u64::from(mark_words(width, height)) + w * h) }
 }
 
 /// A compact target (`shaders/lib/compact.wgsl`) of 4×4 blocks, `width` rounded up to them
@@ -42,7 +43,7 @@ pub(crate) fn list_steps(
         ("list_count_rows", height),
         // One invocation: the rows are few and the scan is serial.
         ("list_scan_rows", 1),
-        ("list_emit", row_words(width, height)),
+        ("list_emit", mark_words(width, height)),
     ]
     .into_iter()
     // Workgroups of 64 (`list_scan_rows`: of 1).

@@ -39,7 +39,7 @@ impl SmaaNode {
     /// The edge bits: the image's rows, then its columns, sixteen pixels to a word.
     fn edge_bits(&self) -> Resource {
         let words =
-            pixel_list::row_words(self.width, self.height) + pixel_list::row_words(self.height, self.width);
+            pixel_list::mark_words(self.width, self.height) + pixel_list::mark_words(self.height, self.width);
         Resource::Buffer { bytes: 4 * u64::from(words) }
     }
 
@@ -109,8 +109,8 @@ impl Node for SmaaNode {
                 let (w, h) = (self.width, self.height);
                 let mut steps = Vec::new();
                 for (entry, invocations) in [
-                    ("smaa_detect", pixel_list::row_words(w, h)),
-                    ("smaa_transpose", pixel_list::row_words(h, w)),
+                    ("smaa_detect", pixel_list::mark_words(w, h)),
+                    ("smaa_transpose", pixel_list::mark_words(h, w)),
                 ] {
                     let groups = [invocations.div_ceil(64), 1, 1];
                     steps.push(ctx.compute_step(io, SHADER, entry, constants.clone(), groups)?);

@@ -533,23 +533,24 @@ fn images(
         let coverage = pick(format!("adaptive-{m}x{m}-coverage"));
         // 4× MSAA shades as many samples as the 2×2 grid and is compared with its reference.
         let msaa = if m == 2 { pick("msaa-4x".into()) } else { None };
-        let adaptives: Vec<&ModeRecord> =
-            [adaptive, area, cells, coverage, msaa].into_iter().flatten().collect();
-        if reference.is_none() && adaptives.is_empty() {
+        let adaptives: Vec<&ModeRecord> = [adaptive, area, cells, coverage].into_iter().flatten().collect();
+        // The modes compared with the reference: the adaptive ones, then MSAA.
+        let compared: Vec<&ModeRecord> = adaptives.iter().copied().chain(msaa).collect();
+        if reference.is_none() && compared.is_empty() {
             continue;
         }
         page.push_str("<div class=\"row\">");
-        for mode in reference.iter().chain(&adaptives) {
+        for mode in reference.iter().chain(&compared) {
             if let Some(image) = &mode.images.display {
                 figure(page, image, &mode.mode);
             }
         }
-        for mode in &adaptives {
+        for mode in &compared {
             if let Some(image) = &mode.images.difference {
                 figure(page, image, &format!("|{} − reference| (32 steps full scale)", mode.mode));
             }
         }
-        for &mode in reference.iter().chain(&adaptives) {
+        for &mode in reference.iter().chain(&compared) {
             flip_figure(page, Some(mode));
         }
         // The area variant takes the paper's samples: one heatmap serves both; cells,
@@ -564,9 +565,10 @@ fn images(
             }
         }
         page.push_str("</div>\n");
+        // The crops sit where adaptive differs most from the truth, so only a run with an
+        // adaptive mode at this M has them.
         if let Some(&worst) = adaptives.first() {
-            let shown: Vec<&ModeRecord> =
-                reference.iter().copied().chain(adaptives.iter().copied()).collect();
+            let shown: Vec<&ModeRecord> = reference.iter().copied().chain(compared.iter().copied()).collect();
             crops(page, run_dir, scene, m, &shown, worst, left_out)?;
         }
     }

@@ -1,5 +1,6 @@
-//! CPU costs that grow with image size: quality metrics over a 1024×768 image pair, sample
-//! statistics, and the CPU twin of the adaptive metric over every window of a 4×4 G-buffer.
+//! CPU costs that grow with image size: quality metrics over a 1024×768 image pair (with and
+//! without the perceptual ones), sample statistics, and the CPU twin of the adaptive metric over
+//! every window of a 4×4 G-buffer.
 
 use aabench::metrics;
 use aabench_renderer::adaptive::{self, MetricSet, WindowSample};
@@ -29,6 +30,12 @@ fn quality(c: &mut Criterion) {
     let (a, b) = (image(0), image(1));
     c.bench_function("quality 1024x768 (MSE, PSNR, max diff)", |bench| {
         bench.iter(|| metrics::quality(black_box(&a), black_box(&b), "reference"))
+    });
+    // What each mode of a run adds against the truth: MSE, FLIP with its error map, and SSIM,
+    // the truth's share of SSIM prepared once per scene as a run prepares it.
+    let truth = metrics::Truth::new(b.clone(), WIDTH as u32, HEIGHT as u32);
+    c.bench_function("quality_vs_truth 1024x768 (MSE, PSNR, FLIP, SSIM)", |bench| {
+        bench.iter(|| metrics::quality_vs_truth(black_box(&a), &truth, "truth"))
     });
     let counts: Vec<u8> = (0..WIDTH * HEIGHT).map(|p| 1 + (p % 16) as u8).collect();
     c.bench_function("sample_stats 1024x768 at 4x4", |bench| {

@@ -106,19 +106,29 @@ pub fn quality(image: &DisplayImage, reference: &DisplayImage, against: &str) ->
     }
 }
 
-/// `quality` against the truth with the perceptual metrics added, and FLIP's error map.
-pub fn quality_vs_truth(
-    image: &DisplayImage,
-    truth: &DisplayImage,
+/// A scene's truth, with what the perceptual metrics compute of it once for all its modes.
+#[derive(Debug)]
+pub struct Truth {
+    pub image: DisplayImage,
     width: u32,
     height: u32,
-    against: &str,
-) -> (Quality, FlipMap) {
-    let map = perceptual::flip(image, truth, width, height);
+    ssim: perceptual::SsimTruth,
+}
+
+impl Truth {
+    pub fn new(image: DisplayImage, width: u32, height: u32) -> Self {
+        let ssim = perceptual::SsimTruth::new(&image, width, height);
+        Self { image, width, height, ssim }
+    }
+}
+
+/// `quality` against the truth with the perceptual metrics added, and FLIP's error map.
+pub fn quality_vs_truth(image: &DisplayImage, truth: &Truth, against: &str) -> (Quality, FlipMap) {
+    let map = perceptual::flip(image, &truth.image, truth.width, truth.height);
     let quality = Quality {
         flip: Some(map.mean()),
-        ssim: Some(perceptual::ssim(image, truth, width, height)),
-        ..quality(image, truth, against)
+        ssim: Some(truth.ssim.ssim(image)),
+        ..quality(image, &truth.image, against)
     };
     (quality, map)
 }

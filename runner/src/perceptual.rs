@@ -71,34 +71,75 @@ const SSIM_K2: f64 = 0.03;
 /// `structural_similarity(gaussian_weights=True, sigma=1.5, use_sample_covariance=False,
 /// data_range=1)`, the form of Wang et al.'s paper.
 pub fn ssim(image: &DisplayImage, truth: &DisplayImage, width: u32, height: u32) -> f64 {
-    let (w, h) = (width as usize, height as usize);
-    let max = f64::from(image.max_code());
-    let channel = |d: &DisplayImage, c: usize| -> Vec<f64> {
-        d.rgba.chunks_exact(4).map(|p| f64::from(p[c]) / max).collect()
-    };
-    (0..3).map(|c| ssim_channel(&channel(image, c), &channel(truth, c), w, h)).sum::<f64>() / 3.0
+    SsimTruth::new(truth, width, height).ssim(image)
 }
 
-fn ssim_channel(x: &[f64], y: &[f64], w: usize, h: usize) -> f64 {
-    let window = gaussian_window();
-    let blur = |plane: Vec<f64>| blur(&plane, w, h, &window);
-    let mu_x = blur(x.to_vec());
-    let mu_y = blur(y.to_vec());
-    let xx = blur(x.iter().map(|v| v * v).collect());
-    let yy = blur(y.iter().map(|v| v * v).collect());
-    let xy = blur(x.iter().zip(y).map(|(a, b)| a * b).collect());
-    let (c1, c2) = (SSIM_K1 * SSIM_K1, SSIM_K2 * SSIM_K2);
-    let inset = if w > 2 * SSIM_RADIUS && h > 2 * SSIM_RADIUS { SSIM_RADIUS } else { 0 };
-    let mut sum = 0.0;
-    for row in inset..h - inset {
-        for col in inset..w - inset {
-            let i = row * w + col;
-            let (mx, my) = (mu_x[i], mu_y[i]);
-            let (vx, vy, cov) = (xx[i] - mx * mx, yy[i] - my * my, xy[i] - mx * my);
-            sum += (2.0 * mx * my + c1) * (2.0 * cov + c2) / ((mx * mx + my * my + c1) * (vx + vy + c2));
-        }
+/// The truth's side of SSIM, computed once for every mode compared with it: per channel its
+/// values, local means and local means of squares. An image is then three blurs per channel
+/// from its score instead of five.
+#[derive(Debug)]
+pub struct SsimTruth {
+    width: usize,
+    height: usize,
+    channels: [TruthChannel; 3],
+}
+
+#[derive(Debug)]
+struct TruthChannel {
+    values: Vec<f64>,
+    mean: Vec<f64>,
+    square_mean: Vec<f64>,
+}
+
+impl SsimTruth {
+    pub fn new(truth: &DisplayImage, width: u32, height: u32) -> Self {
+        let (w, h) = (width as usize, height as usize);
+        let window = gaussian_window();
+        let channels = std::array::from_fn(|c| {
+            let values = channel(truth, c);
+            let squares: Vec<f64> = values.iter().map(|v| v * v).collect();
+            TruthChannel {
+                mean: blur(&values, w, h, &window),
+                square_mean: blur(&squares, w, h, &window),
+                values,
+            }
+        });
+        Self { width: w, height: h, channels }
     }
-    sum / ((w - 2 * inset) * (h - 2 * inset)) as f64
+
+    /// Mean SSIM of `image` against the truth (`ssim`).
+    pub fn ssim(&self, image: &DisplayImage) -> f64 {
+        let scores =
+            self.channels.iter().enumerate().map(|(c, truth)| self.ssim_channel(&channel(image, c), truth));
+        scores.sum::<f64>() / 3.0
+    }
+
+    fn ssim_channel(&self, x: &[f64], truth: &TruthChannel) -> f64 {
+        let (w, h) = (self.width, self.height);
+        let window = gaussian_window();
+        let mu_x = blur(x, w, h, &window);
+        let xx = blur(&x.iter().map(|v| v * v).collect::<Vec<_>>(), w, h, &window);
+        let xy = blur(&x.iter().zip(&truth.values).map(|(a, b)| a * b).collect::<Vec<_>>(), w, h, &window);
+        let (mu_y, yy) = (&truth.mean, &truth.square_mean);
+        let (c1, c2) = (SSIM_K1 * SSIM_K1, SSIM_K2 * SSIM_K2);
+        let inset = if w > 2 * SSIM_RADIUS && h > 2 * SSIM_RADIUS { SSIM_RADIUS } else { 0 };
+        let mut sum = 0.0;
+        for row in inset..h - inset {
+            for col in inset..w - inset {
+                let i = row * w + col;
+                let (mx, my) = (mu_x[i], mu_y[i]);
+                let (vx, vy, cov) = (xx[i] - mx * mx, yy[i] - my * my, xy[i] - mx * my);
+                sum += (2.0 * mx * my + c1) * (2.0 * cov + c2) / ((mx * mx + my * my + c1) * (vx + vy + c2));
+            }
+        }
+        sum / ((w - 2 * inset) * (h - 2 * inset)) as f64
+    }
+}
+
+/// Channel `c` of a display image, scaled to [0, 1].
+fn channel(image: &DisplayImage, c: usize) -> Vec<f64> {
+    let max = f64::from(image.max_code());
+    image.rgba.chunks_exact(4).map(|p| f64::from(p[c]) / max).collect()
 }
 
 /// The normalized Gaussian taps, −radius…radius.

@@ -106,6 +106,14 @@ pub struct SceneRecord {
     pub textures: Option<usize>,
     /// Seconds to generate (if needed) and import the glTF file.
     pub load_s: Option<f64>,
+    /// Wall seconds of the work after the timed rounds: every mode's quality against its
+    /// reference and the truth, and its images written, on the blocking threads in parallel.
+    #[serde(default)]
+    pub images_s: Option<f64>,
+    /// Of that work, the CPU seconds spent comparing with the truth (MSE, FLIP, SSIM), summed
+    /// over the modes: what the perceptual metrics cost, spread over the cores.
+    #[serde(default)]
+    pub perceptual_s: Option<f64>,
     /// Bytes of render targets once every mode was prepared.
     pub target_bytes: Option<u64>,
     /// Bytes of the scene's textures on the device, mipmaps included.

@@ -94,6 +94,10 @@ fn a_run_writes_its_record_and_images_and_exits_zero() {
     assert!(perceptual("deferred-1x1", "flip") > 0.0 && perceptual("deferred-1x1", "ssim") < 1.0);
     assert!(ws.run_dir().join(adaptive["images"]["flip"].as_str().unwrap()).exists());
     assert!(adaptive["vs_reference"].get("flip").is_none(), "perceptual metrics are taken against the truth");
+    // What the work after the timed rounds cost: its wall time, and the CPU time of comparing
+    // with the truth within it.
+    let seconds = |field: &str| scene[field].as_f64().unwrap_or_else(|| panic!("{field}: {scene}"));
+    assert!(seconds("images_s") > 0.0 && seconds("perceptual_s") > 0.0);
     let graph = &adaptive["graph"];
     assert_eq!(
         graph["passes"],

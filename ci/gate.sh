@@ -71,12 +71,17 @@ alternate() {
         for side in "${order[@]}"; do
             echo "ci/gate.sh: process $i of $processes, $side" >&2
             if [ "$side" = head ]; then
-                "$head_bin" run --tier quick --repetitions "$repetitions" --out "$dir/head" "$@"
+                # Sequences are untimed and the same in every process: the first head process of
+                # the gate renders them, the others time the stills alone.
+                local sequences=off
+                if ((i == 1)) && [ "$dir" = "$gate_dir" ]; then sequences=on; fi
+                "$head_bin" run --tier quick --repetitions "$repetitions" --sequences "$sequences" \
+                    --out "$dir/head" "$@"
                 local code=$?
                 if [ "$code" -ne 0 ] && [ "$run_code" -eq 0 ]; then run_code=$code; fi
             else
                 (cd "$base_src" && "$gate_dir/bin/aabench-base" run --tier quick --repetitions "$repetitions" \
-                    --out "$dir/base" "$@") ||
+                    "${base_sequences[@]}" --out "$dir/base" "$@") ||
                     echo "ci/gate.sh: a base process exited $?; compare uses the base runs that finished" >&2
             fi
         done
@@ -124,6 +129,10 @@ else
         exit 2
     }
     cp "$base_target/release/aabench" "$gate_dir/bin/aabench-base" || exit 2
+    # A base that renders sequences renders them in none of its processes: they are untimed and
+    # only the head's first process measures them.
+    base_sequences=()
+    if "$gate_dir/bin/aabench-base" run --help | grep -q -- --sequences; then base_sequences=(--sequences off); fi
     started=$(date +%s)
     run_code=0
     alternate "$gate_dir" "${run_args[@]}"

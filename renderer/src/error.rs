@@ -30,6 +30,9 @@ pub enum RenderError {
     /// A colour-pipeline parameter that cannot make a display image.
     #[error("colour pipeline: {0}")]
     Color(#[from] color::ColorError),
+    /// A camera the renderer cannot draw through, or cannot move to.
+    #[error("camera: {0}")]
+    Camera(String),
     /// A shader's bindings do not match the resources offered for them.
     #[error("bindings: {0}")]
     Binding(String),

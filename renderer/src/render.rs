@@ -376,6 +376,22 @@ impl SceneRenderer {
         Ok(Truth { images, m, tiles: tiles.len() })
     }
 
+    /// Moves the camera: every frame rendered after, each prepared mode's and the truth's, sees
+    /// the scene through `camera`. Its near and far planes must be those the modes were
+    /// prepared with (they read depth back through them); a camera path keeps them.
+    pub fn set_camera(&mut self, camera: &Camera) -> Result<(), RenderError> {
+        camera.validate().map_err(|e| RenderError::Camera(e.to_string()))?;
+        if (camera.near, camera.far) != (self.camera.near, self.camera.far) {
+            return Err(RenderError::Camera(format!(
+                "near and far planes {} and {} differ from the scene's {} and {}",
+                camera.near, camera.far, self.camera.near, self.camera.far
+            )));
+        }
+        self.camera = *camera;
+        self.write_frame_uniforms(Tile::whole(self.settings.width, self.settings.height));
+        Ok(())
+    }
+
     /// Meters the scene's exposure: renders deferred-1x1 once at exposure 1 and returns the
     /// exposure that maps the log-average luminance of its HDR image to `key`
     /// ([`crate::color::metered_exposure`]), clamped to `range`. Every frame rendered after,

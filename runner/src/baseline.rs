@@ -232,8 +232,13 @@ fn check_alike(runs: &[RunRecord]) -> Result<(), String> {
         if run.aabench_version != first.aabench_version {
             return differs("aabench version");
         }
-        // Repetitions may differ; how frames were made may not.
-        let settings = RunSettings { repetitions: first.settings.repetitions, ..run.settings.clone() };
+        // Repetitions may differ, and whether sequences were rendered (the gate renders them in
+        // one process of several); how frames were made may not.
+        let settings = RunSettings {
+            repetitions: first.settings.repetitions,
+            sequences: first.settings.sequences,
+            ..run.settings.clone()
+        };
         if settings != first.settings {
             return differs("settings (modes, warm-up, frame timeout or extra samples)");
         }

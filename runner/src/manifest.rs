@@ -13,6 +13,7 @@ use glam::DVec3;
 use serde::Deserialize;
 
 use crate::gate::Tolerances;
+use crate::motion::MotionSpec;
 
 pub const SCHEMA_VERSION: u32 = 1;
 
@@ -488,6 +489,8 @@ pub struct Manifest {
     pub tonemap: TonemapSpec,
     #[serde(default)]
     pub display: DisplaySpec,
+    /// A camera path: the scene is also rendered as a sequence (`motion.rs`).
+    pub motion: Option<MotionSpec>,
     /// Tolerances of the regression gate; omitted fields take [`Tolerances::default`].
     #[serde(default)]
     pub gate: Tolerances,
@@ -583,6 +586,11 @@ impl Manifest {
         }
     }
 
+    /// Bits per channel of the scene's display images as read back: 8, or 10.
+    pub fn display_bits(&self) -> u32 {
+        if self.display.bits <= 8 { 8 } else { 10 }
+    }
+
     /// The glTF file: `gltf` relative to the manifest's folder, or as given where absolute.
     pub fn gltf_path(&self) -> PathBuf {
         self.path.parent().unwrap_or(Path::new(".")).join(&self.gltf)
@@ -643,6 +651,9 @@ impl Manifest {
                 };
                 (format!("camera.{field}"), e.message)
             })?;
+        }
+        if let Some(motion) = &self.motion {
+            motion.check().map_err(within("motion"))?;
         }
         if self.lights.len() > MAX_LIGHTS {
             return fail(

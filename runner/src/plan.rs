@@ -58,6 +58,10 @@ pub struct RunArgs {
     /// available after the scene's upload].
     #[arg(long, value_name = "GIB", allow_negative_numbers = true)]
     pub memory_limit: Option<f64>,
+    /// Whether scenes with a camera path (`motion`) are also rendered as sequences after their
+    /// stills: off renders the stills alone (the gate's timing processes).
+    #[arg(long, value_enum, default_value = "on")]
+    pub sequences: Switch,
     /// Longest a single frame may take, in seconds.
     #[arg(
         long,
@@ -66,6 +70,12 @@ pub struct RunArgs {
         default_value_t = default_frame_timeout().as_secs_f64()
     )]
     pub frame_timeout: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Switch {
+    On,
+    Off,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -125,6 +135,7 @@ impl RunArgs {
                 warmup: args.warmup,
                 frame_timeout,
                 extra_samples: args.extra_samples.into(),
+                sequences: args.sequences == Switch::On,
                 truth_cache: args.truth_cache.clone(),
                 shard,
                 memory_limit,
@@ -158,6 +169,14 @@ impl Tier {
         match self {
             Tier::Quick => manifest.resolution.quick,
             Tier::Nightly => manifest.resolution.nightly,
+        }
+    }
+
+    /// The frames of a camera path's sequence in this tier.
+    pub fn sequence_frames(self, motion: &crate::motion::MotionSpec) -> u32 {
+        match self {
+            Tier::Quick => motion.frames.quick,
+            Tier::Nightly => motion.frames.nightly,
         }
     }
 
@@ -230,6 +249,8 @@ pub struct RunPlan {
     pub warmup: u32,
     pub frame_timeout: Duration,
     pub extra_samples: ExtraSamples,
+    /// Whether scenes with a camera path are rendered as sequences too.
+    pub sequences: bool,
     /// Where ground truths are cached; `None`: `cache/truth/` beside each manifest.
     pub truth_cache: Option<PathBuf>,
     /// The slice of the scenes this run renders, if not all.

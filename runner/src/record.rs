@@ -1,13 +1,13 @@
 //! The run record, `reports/<run-id>/run.json`: everything a run measured, schema versioned.
 //! It is rewritten atomically after every scene, so a killed run leaves what finished.
 
-use aabench_renderer::PlatformInfo;
+use aabench_renderer::{DisplayImage, PlatformInfo};
 use serde::{Deserialize, Serialize};
 
 use crate::gate::Tolerances;
 use crate::inputs::SceneInputs;
 use crate::machine::Machine;
-use crate::metrics::{FrameChecks, Quality, SampleStats};
+use crate::metrics::{Decibels, FrameChecks, Quality, SampleStats};
 pub use crate::plan::Shard;
 use crate::plan::Tier;
 use crate::stats::Summary;
@@ -93,6 +93,10 @@ pub struct RunSettings {
     pub interleaving: String,
     /// How adaptive modes shaded their extra samples: `compact` or `loop`.
     pub extra_samples: String,
+    /// Whether scenes with a camera path were rendered as sequences too (runs from before
+    /// sequences read as false).
+    #[serde(default)]
+    pub sequences: bool,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -136,6 +140,9 @@ pub struct SceneRecord {
     pub exposure: Option<ExposureRecord>,
     /// The ground truth every mode's `vs_ground_truth` is measured against.
     pub truth: Option<TruthRecord>,
+    /// The sequence along the manifest's camera path, where it has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sequence: Option<SequenceRecord>,
     pub modes: Vec<ModeRecord>,
 }
 
@@ -216,6 +223,9 @@ pub struct ModeRecord {
     /// every frame rendered (warm-up included); any fails the mode.
     #[serde(default)]
     pub checks: Option<FrameChecks>,
+    /// Its sequence against the truth's, where the scene has a camera path.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sequence: Option<ModeSequence>,
 }
 
 /// A mode's pass graph as compiled for this scene: what ran and what it allocated, against
@@ -338,6 +348,11 @@ pub fn run_folder(path: &std::path::Path) -> std::path::PathBuf {
     run_file(path).parent().map_or_else(|| std::path::PathBuf::from("."), std::path::Path::to_path_buf)
 }
 
+/// FNV-1a of a frame's outputs: the display image's code values, then the sample counts if any.
+pub fn fingerprint(display: &DisplayImage, sample_counts: Option<&[u8]>) -> String {
+    fnv1a(&[&display.bytes(), sample_counts.unwrap_or_default()])
+}
+
 /// FNV-1a, 64-bit, over the parts in order: a stable fingerprint of image bytes.
 pub fn fnv1a(parts: &[&[u8]]) -> String {
     let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
@@ -385,4 +400,48 @@ impl FrontPlace {
             }
         }
     }
+}
+
+/// What a scene's sequence rendered (`sequence.rs`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SequenceRecord {
+    /// The camera path: `orbit`, `dolly`, `pan`, `static` or `keyframes`.
+    pub path: String,
+    /// Frames asked for, and frames rendered by every mode still running (fewer when the
+    /// sequence stopped: `error` says why).
+    pub frames: u32,
+    pub frames_done: u32,
+    pub time_step_s: f64,
+    /// Truth frames rendered in this run (the others came from the cache or, frame 0, from
+    /// the still truth), and the seconds they took.
+    pub truth_rendered: u32,
+    pub truth_render_s: f64,
+    /// The truth's own mean squared frame-to-frame change: what every mode's `change_ratio`
+    /// is relative to.
+    pub truth_change: Option<f64>,
+    /// Wall seconds of the whole sequence.
+    pub seconds: f64,
+    pub error: Option<String>,
+}
+
+/// One mode's sequence against the truth's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModeSequence {
+    /// Per frame, against the truth's frame: MSE and PSNR on display code values in [0, 1].
+    pub mse: Vec<f64>,
+    pub psnr_db: Vec<Decibels>,
+    /// The PSNR of the frames' mean MSE.
+    pub mean_psnr_db: Decibels,
+    /// Mean squared frame-to-frame change of the error image (module docs); 0 where the mode
+    /// changes exactly as the truth does.
+    pub instability: f64,
+    /// The mode's own mean squared frame-to-frame change over the truth's (absent where the
+    /// truth does not change).
+    pub change_ratio: Option<f64>,
+    /// Modes with a sample-count map (adaptive, msaa-4x): the share of pixels whose sample count
+    /// changes from one frame to the next, averaged over the frame pairs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub count_changes: Option<f64>,
+    /// FNV-1a 64 of each frame's display image and sample counts, as `output_hash`.
+    pub hashes: Vec<String>,
 }

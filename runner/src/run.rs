@@ -22,10 +22,11 @@ use crate::perceptual::FlipMap;
 use crate::plan::{RunPlan, SceneEntry, Tier, fallback_name};
 use crate::progress::Progress;
 use crate::record::{
-    AdaptiveCost, ExposureRecord, GraphRecord, ImageFiles, ModeRecord, PassRecord, Platform, RUN_SCHEMA,
-    RunRecord, RunSettings, SampleCost, SceneRecord, Status, fnv1a,
+    AdaptiveCost, ExposureRecord, GraphRecord, ImageFiles, ModeRecord, ModeSequence, PassRecord, Platform,
+    RUN_SCHEMA, RunRecord, RunSettings, SampleCost, SceneRecord, Status, fingerprint,
 };
 use crate::scenes;
+use crate::sequence;
 use crate::stats::Summary;
 use crate::truth::{self, TRUTH_ID, TRUTH_M, TruthRecord};
 use crate::worker::Worker;
@@ -69,6 +70,7 @@ pub async fn execute(plan: &RunPlan, progress: Progress, cancel: Arc<AtomicBool>
             frame_timeout_s: plan.frame_timeout.as_secs_f64(),
             interleaving: "round-robin: each repetition renders every mode once, in plan order".into(),
             extra_samples: format!("{:?}", plan.extra_samples).to_lowercase(),
+            sequences: plan.sequences,
         },
         shard: plan.shard,
         merged_from: Vec::new(),
@@ -173,6 +175,7 @@ fn empty_scene_at(manifest: &Path) -> SceneRecord {
         gate: Default::default(),
         exposure: None,
         truth: None,
+        sequence: None,
         modes: Vec::new(),
     }
 }
@@ -185,6 +188,8 @@ struct ModeRun {
     hashes: Vec<String>,
     images: Option<FrameImages>,
     checks: FrameChecks,
+    /// Its sequence, where the scene has a camera path.
+    sequence: Option<ModeSequence>,
     error: Option<String>,
 }
 
@@ -221,6 +226,7 @@ async fn run_scene(
         Ok(loaded) => loaded,
         Err(error) => return fail(record, error),
     };
+    let (still_camera, path) = (loaded.camera, loaded.path.clone());
     match upload(worker, plan, manifest, loaded, progress).await {
         Ok((budget, exposure)) => {
             record.memory_limit_bytes = budget;
@@ -249,6 +255,32 @@ async fn run_scene(
         Err(error) => return fail(record, error),
     };
     timed_rounds(worker, plan, manifest, progress, &cancel, &mut runs).await;
+    if let Some(motion) = manifest.motion.as_ref().filter(|_| plan.sequences)
+        && !cancel.load(Ordering::SeqCst)
+        && !worker.is_stuck()
+    {
+        let modes: Vec<(Mode, bool)> =
+            plan.modes.iter().zip(&runs).map(|(mode, run)| (*mode, run.error.is_none())).collect();
+        let still_key = record.truth.as_ref().map(|truth| truth.key.clone()).unwrap_or_default();
+        let along = sequence::Along {
+            motion,
+            cameras: &path[..plan.tier.sequence_frames(motion) as usize],
+            still_camera: &still_camera,
+            still_truth: truth_image.as_ref(),
+            still_key: &still_key,
+        };
+        let (sequence, outcomes) =
+            sequence::run(worker, plan, manifest, along, &modes, progress, &cancel).await;
+        // A sequence frame is a frame of the mode like any other: NaN in it fails the mode.
+        for (run, outcome) in runs.iter_mut().zip(outcomes) {
+            run.checks.add(outcome.checks);
+            run.sequence = outcome.sequence;
+            if let Some(error) = outcome.error {
+                run.error.get_or_insert(format!("sequence: {error}"));
+            }
+        }
+        record.sequence = Some(sequence);
+    }
     // Free the scene's device memory before the CPU work below.
     free_scene(worker, plan).await;
 
@@ -534,7 +566,7 @@ async fn ground_truth(
         Err(error) => return fail(record, format!("{error:#}")),
     }
     let cache = truth::cache_file(&plan.truth_cache_dir(manifest), &manifest.name, resolution, &record.key);
-    let display = match truth::load_cached(&cache, resolution, display_bits(manifest)) {
+    let display = match truth::load_cached(&cache, resolution, manifest.display_bits()) {
         Some(display) => {
             record.cached = true;
             display
@@ -572,16 +604,6 @@ async fn ground_truth(
         Err(error) => return fail(record, format!("{error:#}")),
     }
     (record, Some(display))
-}
-
-/// FNV-1a of a frame's outputs: the display image's code values, then the sample counts if any.
-fn fingerprint(display: &DisplayImage, sample_counts: Option<&[u8]>) -> String {
-    fnv1a(&[&display.bytes(), sample_counts.unwrap_or_default()])
-}
-
-/// Bits per channel of the scene's display images as read back: 8, or 10.
-fn display_bits(manifest: &Manifest) -> u32 {
-    if manifest.display.bits <= 8 { 8 } else { 10 }
 }
 
 fn fail(mut record: SceneRecord, error: String) -> SceneRecord {
@@ -804,6 +826,7 @@ fn timing_record(
         front: None,
         graph: run.graph.clone(),
         checks: (run.checks.frames > 0).then_some(run.checks),
+        sequence: run.sequence.clone(),
     }
 }
 

@@ -19,6 +19,9 @@ use crate::manifest::{FileLights, Manifest, check_shadows};
 pub struct LoadedScene {
     pub scene: Scene,
     pub camera: Camera,
+    /// The camera of each frame of the manifest's camera path, as many as the longer tier's
+    /// sequence (the shorter is its start); empty without `motion`.
+    pub path: Vec<Camera>,
     pub lighting: Lighting,
     /// Seconds spent generating (if it had to) and importing.
     pub seconds: f64,
@@ -96,6 +99,7 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
         bail!("{}: gltf: {} holds no triangles", manifest.path.display(), path.display());
     }
     let camera = camera(manifest, &scene)?;
+    let path = camera_path(manifest, &scene, &camera)?;
     let lighting = Lighting {
         lights: lights(manifest, &scene)?,
         ambient: Vec3::from(manifest.ambient),
@@ -103,7 +107,30 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
         // Metered once the scene is uploaded where the manifest gives none.
         exposure: manifest.tonemap.exposure.unwrap_or(1.0),
     };
-    Ok(LoadedScene { scene, camera, lighting, seconds: start.elapsed().as_secs_f64() })
+    Ok(LoadedScene { scene, camera, path, lighting, seconds: start.elapsed().as_secs_f64() })
+}
+
+/// The cameras of the manifest's path (`motion.rs`), from `camera`. Its target is the
+/// manifest camera's; a camera from the file or the framing camera has only a direction, so
+/// its target is the point of the view ray nearest the centre of the scene's bounds (at least
+/// a hundredth of the bounds' radius ahead).
+fn camera_path(manifest: &Manifest, scene: &Scene, camera: &Camera) -> anyhow::Result<Vec<Camera>> {
+    let Some(motion) = &manifest.motion else {
+        return Ok(Vec::new());
+    };
+    let pivot = match &manifest.camera {
+        Some(_) => camera.forward.length(),
+        None => {
+            let (lo, hi) = scene.bounds();
+            let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+            let ahead = ((lo + hi) * 0.5 - camera.position).dot(camera.forward.normalize());
+            ahead.max((hi - lo).length() * 0.005)
+        }
+    };
+    let frames = motion.frames.quick.max(motion.frames.nightly);
+    motion
+        .cameras(camera, pivot, frames)
+        .map_err(|(field, message)| anyhow::anyhow!("{}: {field}: {message}", manifest.path.display()))
 }
 
 /// The file's lights (unless the manifest replaces them; with `file_light_shadows`, its point

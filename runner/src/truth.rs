@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
+use aabench_renderer::scene::Camera;
 use aabench_renderer::{DisplayImage, PlatformInfo, shaders};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
@@ -75,6 +76,19 @@ pub fn cache_key(
     add(&platform.driver_info);
     add(&platform.build_profile);
     Ok(hex(&hasher.finalize()))
+}
+
+/// The key of the truth at one frame of a camera path: the still truth's key (everything but
+/// the camera) with the frame's camera added.
+pub fn frame_key(still_key: &str, camera: &Camera) -> String {
+    let mut hasher = Sha256::new();
+    hasher.update(b"aabench.truth-frame/1");
+    hasher.update(still_key.as_bytes());
+    let vectors = [camera.position, camera.forward, camera.up];
+    for value in vectors.iter().flat_map(|v| v.to_array()).chain([camera.fov_y, camera.near, camera.far]) {
+        hasher.update(value.to_le_bytes());
+    }
+    hex(&hasher.finalize())
 }
 
 /// `<dir>/<scene>-<w>x<h>-<first 16 hex digits of the key>.png`

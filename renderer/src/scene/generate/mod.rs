@@ -49,10 +49,13 @@ pub enum Generator {
     /// A checkered ground at a grazing angle, a striped wall along the view and a finely
     /// checkered panel: texture aliasing on flat, rough surfaces.
     Texture,
+    /// Wires far thinner than a pixel and a fence of thin slats before a plain wall: what
+    /// flickers when the camera moves.
+    Wire,
 }
 
 impl Generator {
-    pub const ALL: [Generator; 11] = [
+    pub const ALL: [Generator; 12] = [
         Generator::Atrium,
         Generator::Thin,
         Generator::Specular,
@@ -64,6 +67,7 @@ impl Generator {
         Generator::Degenerate,
         Generator::Gallery,
         Generator::Texture,
+        Generator::Wire,
     ];
 
     /// The `asset.generator` string of a current file made by this generator and seed.
@@ -141,6 +145,7 @@ impl Generated {
             Generator::Degenerate => scenes::degenerate(&mut builder),
             Generator::Gallery => scenes::gallery(&mut builder),
             Generator::Texture => scenes::texture(&mut builder),
+            Generator::Wire => scenes::wire(&mut builder),
         }
         let mut writer = builder.finish();
         if self.placement != Placement::IDENTITY {
@@ -169,6 +174,7 @@ impl fmt::Display for Generator {
             Generator::Degenerate => "degenerate",
             Generator::Gallery => "gallery",
             Generator::Texture => "texture",
+            Generator::Wire => "wire",
         })
     }
 }

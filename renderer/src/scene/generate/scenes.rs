@@ -288,6 +288,31 @@ pub(super) fn texture(b: &mut Builder) {
     b.camera([0.0, 1.2, 4.0], [0.0, 0.6, -20.0], 60.0, 400.0);
 }
 
+/// Five taut wires 4 mm thick, tilted a few degrees, and a fence of slats 1 cm wide every 6 cm,
+/// 10 m from the camera before a plain light wall 30 m away: at 1024×768 a pixel there is 1.5 cm
+/// wide, so a wire covers a quarter of a pixel's width and a slat two thirds of one pixel in
+/// four. Under a slow pan they cross pixel centres at every phase: single samples catch them or
+/// miss them from frame to frame.
+pub(super) fn wire(b: &mut Builder) {
+    let wall = b.material(MaterialDesc::new("wall", [0.8, 0.78, 0.72], 0.9));
+    let cable = b.material(MaterialDesc::new("cable", [0.04, 0.04, 0.04], 0.5));
+    let wood = b.material(MaterialDesc::new("wood", [0.35, 0.25, 0.15], 0.8));
+    b.mesh(wall).append(&mesh::wall(80.0, 40.0, 1, 1, 1.0), at(0.0, 0.0, -30.0));
+    b.mesh(wall).append(&mesh::floor(80.0, 40.0, 1, 1, 1.0), at(0.0, -3.0, -10.0));
+    for wire in 0..5 {
+        let y = 2.2 - 0.3 * wire as f32;
+        let tilt = (1.5 + wire as f32) * std::f32::consts::PI / 180.0;
+        let (dx, dy) = (8.0 * tilt.cos(), 8.0 * tilt.sin());
+        let a = Vec3::new(-dx, y - dy, -10.0);
+        b.mesh(cable).append(&segment(a, Vec3::new(dx, y + dy, -10.0), 0.002, 6), Affine3A::IDENTITY);
+    }
+    let slat = mesh::cuboid(Vec3::new(0.01, 1.6, 0.01), 1.0);
+    for i in 0..60 {
+        b.mesh(wood).append(&slat, at(-1.8 + 0.06 * i as f32, -1.5, -10.0));
+    }
+    b.camera([0.0, 0.0, 0.0], [0.0, 0.0, -10.0], 60.0, 100.0);
+}
+
 /// One untextured plane, 200 m wide, facing the camera 3 m away.
 pub(super) fn plane(b: &mut Builder) {
     let grey = b.material(MaterialDesc::new("grey", [0.6, 0.6, 0.6], 0.8));

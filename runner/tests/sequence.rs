@@ -1,0 +1,89 @@
+//! Sequences along a manifest's camera path, through the `aabench` binary: a static path gives
+//! every mode its still frame bit for bit and no instability; a thin wire under a slow pan
+//! flickers in deferred-1x1 far more than in reference-4x4, and the metric ranks them so.
+
+use serde_json::{Value, json};
+
+mod support;
+
+use support::*;
+
+/// Every mode of the sequence's scene: status ok, a sequence of `frames` frames.
+fn sequence<'a>(scene: &'a Value, id: &str, frames: usize) -> &'a Value {
+    let m = mode(scene, id);
+    assert_eq!(m["status"], "ok", "{id}: {}", m["error"]);
+    let sequence = &m["sequence"];
+    assert_eq!(sequence["mse"].as_array().map(Vec::len), Some(frames), "{id}: {sequence}");
+    sequence
+}
+
+#[test]
+fn a_static_path_repeats_the_still_frame_in_every_mode_without_instability() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("static-path");
+    ws.manifest("edge", "edge", |m| {
+        m["motion"] = json!({"path": "static", "frames": {"quick": 3, "nightly": 3}});
+    });
+    let modes = "deferred-1x1,fxaa,smaa,msaa-4x,reference-2x2,adaptive-2x2,adaptive-2x2-cells";
+    let output = ws.run(&["run", "--modes", modes, "--repetitions", "1"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let scene = &ws.record()["scenes"][0];
+    let record = &scene["sequence"];
+    assert_eq!(
+        (record["path"].as_str(), record["frames_done"].as_u64()),
+        (Some("static"), Some(3)),
+        "{record}"
+    );
+    assert!(record["error"].is_null(), "{record}");
+    assert_eq!(record["truth_change"].as_f64(), Some(0.0));
+    for id in modes.split(',') {
+        let own = sequence(scene, id, 3);
+        let still = &mode(scene, id)["output_hash"];
+        assert!(own["hashes"].as_array().unwrap().iter().all(|h| h == still), "{id}: {own}");
+        assert_eq!(own["instability"].as_f64(), Some(0.0), "{id}");
+        assert!(own["change_ratio"].is_null(), "{id}: the truth does not change");
+        let still_mse = mode(scene, id)["vs_ground_truth"]["mse"].as_f64().unwrap();
+        assert!(own["mse"].as_array().unwrap().iter().all(|e| e.as_f64() == Some(still_mse)), "{id}");
+        // One warm-up, one timed frame and three sequence frames, each checked.
+        assert_eq!(mode(scene, id)["checks"]["frames"], 5, "{id}");
+    }
+    assert_eq!(sequence(scene, "adaptive-2x2", 3)["count_changes"].as_f64(), Some(0.0));
+    // Every frame's camera is the still's: its truth is the still truth, rendered once.
+    assert_eq!(record["truth_rendered"], 0);
+    let cached = std::fs::read_dir(ws.dir.join("scenes/cache/truth")).unwrap().count();
+    assert_eq!(cached, 1);
+}
+
+#[test]
+fn a_wire_under_a_slow_pan_flickers_at_one_sample_and_far_less_at_sixteen() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("wire-pan");
+    ws.manifest("wire", "wire", |m| {
+        m["resolution"] = json!({"quick": [128, 96], "nightly": [128, 96]});
+        m["lights"] = json!([{ "position": [5.0, 10.0, 5.0], "intensity": 900.0, "range": 80.0 }]);
+        m["motion"] = json!({"path": "pan", "rate": 3.0, "frames": {"quick": 6, "nightly": 6}});
+    });
+    let modes = "deferred-1x1,reference-4x4";
+    let output = ws.run(&["run", "--modes", modes, "--repetitions", "1"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let scene = &ws.record()["scenes"][0];
+    let truth_change = scene["sequence"]["truth_change"].as_f64().unwrap();
+    assert!(truth_change > 0.0, "the view moves");
+    // Frame 0 is the still truth; the other five are rendered and cached beside it under keys
+    // of their own.
+    assert_eq!(scene["sequence"]["truth_rendered"], 5);
+    let cached = std::fs::read_dir(ws.dir.join("scenes/cache/truth")).unwrap().count();
+    assert_eq!(cached, 6);
+    let instability = |id: &str| sequence(scene, id, 6)["instability"].as_f64().unwrap();
+    let (deferred, reference) = (instability("deferred-1x1"), instability("reference-4x4"));
+    // A single sample catches the wires and slats or misses them from frame to frame; sixteen
+    // average them out.
+    assert!(deferred > 4.0 * reference, "deferred-1x1 {deferred:e}, reference-4x4 {reference:e}");
+    // Its image changes from frame to frame more than the truth's, and more than sixteen
+    // samples' does.
+    let change = |id: &str| sequence(scene, id, 6)["change_ratio"].as_f64().unwrap();
+    assert!(change("deferred-1x1") > 1.0 && change("deferred-1x1") > change("reference-4x4"));
+    // And the frames move: no two of deferred-1x1's are alike.
+    let hashes = sequence(scene, "deferred-1x1", 6)["hashes"].as_array().unwrap().clone();
+    assert!(hashes.windows(2).all(|w| w[0] != w[1]), "{hashes:?}");
+}

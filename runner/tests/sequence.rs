@@ -87,3 +87,71 @@ fn a_wire_under_a_slow_pan_flickers_at_one_sample_and_far_less_at_sixteen() {
     let hashes = sequence(scene, "deferred-1x1", 6)["hashes"].as_array().unwrap().clone();
     assert!(hashes.windows(2).all(|w| w[0] != w[1]), "{hashes:?}");
 }
+
+/// The gate compares a sequence: against its own baseline nothing moves; a baseline doctored
+/// 20 % steadier in one mode makes that mode's instability regress; a run rendered with
+/// `--sequences off` compared less than the baseline holds, which fails unless `--lenient`.
+#[test]
+fn the_gate_compares_sequences_and_a_run_without_them_compared_less() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("sequence-gate");
+    ws.manifest("wire", "wire", |m| {
+        m["lights"] = json!([{ "position": [5.0, 10.0, 5.0], "intensity": 900.0, "range": 80.0 }]);
+        m["motion"] = json!({"path": "pan", "rate": 3.0, "frames": {"quick": 4, "nightly": 4}});
+    });
+    let run = |folder: &str, extra: &[&str]| {
+        let mut args =
+            vec!["run", "--out", folder, "--modes", "deferred-1x1,adaptive-2x2", "--repetitions", "2"];
+        args.extend_from_slice(extra);
+        let output = ws.run(&args);
+        assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+        let runs: Vec<_> =
+            std::fs::read_dir(ws.dir.join(folder)).unwrap().map(|e| e.unwrap().path()).collect();
+        runs[0].to_str().unwrap().to_string()
+    };
+    let first = run("reports", &[]);
+    let blessed = ws.run(&["bless", &first]);
+    assert_eq!(blessed.status.code(), Some(0), "{}", stderr(&blessed));
+    let out = ws.dir.join("gate");
+    let out = out.to_str().unwrap();
+    let compare = |run: &str, extra: &[&str]| {
+        let mut args = vec!["compare", run, "--baseline", "baselines", "--out", out];
+        args.extend_from_slice(extra);
+        let code = ws.run(&args).status.code();
+        (code, read_json(&ws.dir.join("gate/verdict.json")))
+    };
+    let outcome = |verdict: &Value, mode: &str, metric: &str| {
+        let checks = verdict["checks"].as_array().unwrap();
+        let check = checks.iter().find(|c| c["mode"] == mode && c["metric"] == metric);
+        check.unwrap_or_else(|| panic!("no {metric} check of {mode}")).clone()
+    };
+    let (code, verdict) = compare(&first, &[]);
+    assert_eq!(code, Some(0), "{verdict}");
+    for mode in ["deferred-1x1", "adaptive-2x2"] {
+        assert_eq!(outcome(&verdict, mode, "instability")["outcome"], "unchanged");
+        assert_eq!(outcome(&verdict, mode, "sequence_psnr_vs_truth")["outcome"], "unchanged");
+    }
+
+    let file = std::fs::read_dir(ws.dir.join("baselines")).unwrap().next().unwrap().unwrap().path();
+    let file = file.join("quick/wire.json");
+    let mut doctored = read_json(&file);
+    for m in doctored["scenes"][0]["modes"].as_array_mut().unwrap() {
+        if m["mode"] == "adaptive-2x2" {
+            let instability = &mut m["sequence"]["instability"];
+            *instability = json!(instability.as_f64().unwrap() * 0.8);
+        }
+    }
+    let original = std::fs::read(&file).unwrap();
+    write_json(&file, &doctored);
+    let (code, verdict) = compare(&first, &[]);
+    assert_eq!(code, Some(1), "{verdict}");
+    assert_eq!(outcome(&verdict, "adaptive-2x2", "instability")["outcome"], "regressed");
+    assert_eq!(outcome(&verdict, "deferred-1x1", "instability")["outcome"], "unchanged");
+    std::fs::write(&file, original).unwrap();
+
+    let stills = run("stills", &["--sequences", "off"]);
+    let (code, verdict) = compare(&stills, &[]);
+    assert_eq!(code, Some(1), "{verdict}");
+    assert_eq!(outcome(&verdict, "*", "status")["outcome"], "missing");
+    assert_eq!(compare(&stills, &["--lenient"]).0, Some(0));
+}

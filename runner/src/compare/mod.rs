@@ -626,6 +626,11 @@ fn compare_scene(
         checks.extend(context.quality_checks());
         checks.extend(context.time_checks());
     }
+    // Green means compared in full: a run without the sequence its baseline holds compared less.
+    if then.sequence.is_some() && scene.sequence.is_none() {
+        let detail = "the baseline holds the scene's sequence, the run rendered none (--sequences off?)";
+        checks.push(status_check(scene, "*", Outcome::Missing, detail));
+    }
     for old in &then.modes {
         if scene.mode(&old.mode).is_none() {
             checks.push(status_check(scene, &old.mode, Outcome::Missing, "not in the run"));
@@ -677,6 +682,7 @@ impl ModeContext<'_> {
                 _ => {}
             }
         }
+        checks.extend(self.sequence_checks(tolerance));
         if let (None, Some(_)) = (&self.mode.samples, &self.old.samples) {
             checks.push(self.check(
                 "shaded_percent",
@@ -741,8 +747,26 @@ impl ModeContext<'_> {
         then: &Quality,
         tolerance: QualityTolerances,
     ) -> Check {
-        let (now_db, then_db) = (now.psnr_db.value(), then.psnr_db.value());
-        // Higher is better; two infinities (identical images both times) are no change.
+        let label = format!("PSNR against the {against} ({})", now.against);
+        self.db_check(
+            &format!("psnr_vs_{against}"),
+            &label,
+            now.psnr_db.value(),
+            then.psnr_db.value(),
+            tolerance,
+        )
+    }
+
+    /// A PSNR-like value in dB, higher better, moved by more than the tolerance's dB or not.
+    fn db_check(
+        &self,
+        metric: &str,
+        label: &str,
+        now_db: f64,
+        then_db: f64,
+        tolerance: QualityTolerances,
+    ) -> Check {
+        // Two infinities (identical images both times) are no change.
         let change = if now_db == then_db { 0.0 } else { now_db - then_db };
         let outcome = beyond(change, tolerance.psnr_db, true);
         Check {
@@ -751,12 +775,11 @@ impl ModeContext<'_> {
             change: Some(change).filter(|v| v.is_finite()),
             threshold: Some(tolerance.psnr_db),
             ..self.check(
-                &format!("psnr_vs_{against}"),
+                metric,
                 outcome,
                 "dB",
                 format!(
-                    "PSNR against the {against} ({}) {} → {} dB ({}; tolerance ±{} dB)",
-                    now.against,
+                    "{label} {} → {} dB ({}; tolerance ±{} dB)",
                     show_db(then_db),
                     show_db(now_db),
                     show_signed_db(change),
@@ -764,6 +787,48 @@ impl ModeContext<'_> {
                 ),
             )
         }
+    }
+
+    /// The mode's sequence against the baseline's: its mean PSNR against the truth's frames
+    /// (the PSNR tolerance) and its instability (an error of squared code values, so the MSE
+    /// tolerance, relative). A run that rendered no sequence of the scene is one missing check
+    /// of the scene (`compare_scene`); a mode that has none in a run that did fails.
+    fn sequence_checks(&self, tolerance: QualityTolerances) -> Vec<Check> {
+        let (Some(then), Some(_)) = (&self.old.sequence, &self.scene.sequence) else {
+            return Vec::new();
+        };
+        let Some(now) = &self.mode.sequence else {
+            let detail = "the baseline has a sequence of this mode, the run has none".to_string();
+            return vec![self.check("sequence_psnr_vs_truth", Outcome::Failed, "dB", detail)];
+        };
+        let label = "mean PSNR against the truth's frames";
+        let psnr = self.db_check(
+            "sequence_psnr_vs_truth",
+            label,
+            now.mean_psnr_db.value(),
+            then.mean_psnr_db.value(),
+            tolerance,
+        );
+        let change = relative_change(now.instability, then.instability);
+        let instability = Check {
+            baseline: Some(then.instability),
+            current: Some(now.instability),
+            change: Some(change).filter(|v| v.is_finite()),
+            threshold: Some(tolerance.mse_relative),
+            ..self.check(
+                "instability",
+                beyond(change, tolerance.mse_relative, false),
+                "relative",
+                format!(
+                    "temporal instability {:.4e} → {:.4e} ({}; tolerance ±{:.1}%)",
+                    then.instability,
+                    now.instability,
+                    show_percent(change),
+                    tolerance.mse_relative * 100.0
+                ),
+            )
+        };
+        vec![psnr, instability]
     }
 
     fn mse_check(&self, against: &str, now: &Quality, then: &Quality, tolerance: QualityTolerances) -> Check {

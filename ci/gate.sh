@@ -119,11 +119,14 @@ else
     # The base is built from its own tree into a target folder of its own: cargo names a
     # workspace's artifacts by their path inside the workspace, so two trees sharing one target
     # folder overwrite each other's binaries and each may then look up to date. The folder is
-    # kept, so a later gate on this machine compiles only what changed.
+    # kept, so a later gate on this machine compiles only the workspace's own crates again. The
+    # tree is extracted with fresh times (`tar -m`): git archive stamps files with the commit's
+    # time, which can be older than a previous gate's build of another base, and cargo would
+    # then take that build's binary as up to date.
     echo "ci/gate.sh: building the base ${base:0:12} to gate time against it on this machine" >&2
     base_src="$gate_dir/base-src"
     base_target="$PWD/target/gate-base"
-    mkdir -p "$base_src" && git archive "$base" | tar -x -C "$base_src" || exit 2
+    mkdir -p "$base_src" && git archive "$base" | tar -x -m -C "$base_src" || exit 2
     (cd "$base_src" && CARGO_TARGET_DIR="$base_target" cargo build --release --locked -p aabench) || {
         echo "ci/gate.sh: the base ${base:0:12} does not build" >&2
         exit 2

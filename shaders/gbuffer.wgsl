@@ -88,3 +88,47 @@ fn gbuffer_masked(v: VertexOut, @builtin(front_facing) front_facing: bool) -> GB
     }
     return write_gbuffer(v, front_facing);
 }
+
+// The G-buffer of temporal modes: the same, and the motion of each sample's point.
+struct GBufferMotion {
+    @location(0) uv: vec2<f32>,
+    @location(1) normal_material: vec4<f32>,
+    @location(2) uv_grad: vec4<f32>,
+    // xy: the pixels the point moved since the previous frame, where it lies now (unjittered)
+    // minus where it lay then, y down; z: its linear view depth then.
+    @location(3) motion: vec4<f32>,
+}
+
+// The motion of the point that the fragment at `position` sees. The scenes are static, so a
+// point moves with the camera alone: the fragment's clip position (NDC and depth; `position.w`
+// is 1 / its clip w) goes through the previous frame's camera in one matrix.
+fn motion(position: vec4<f32>) -> vec4<f32> {
+    let size = frame.jitter.zw;
+    let ndc = position.xy / size * vec2<f32>(2.0, -2.0) + vec2<f32>(-1.0, 1.0);
+    let before = frame.reprojection * vec4<f32>(ndc, position.z, 1.0);
+    let then = (before.xy / before.w * vec2<f32>(0.5, -0.5) + 0.5) * size;
+    return vec4<f32>(position.xy + frame.jitter.xy - then, before.w / position.w, 0.0);
+}
+
+fn with_motion(g: GBuffer, position: vec4<f32>) -> GBufferMotion {
+    return GBufferMotion(g.uv, g.normal_material, g.uv_grad, motion(position));
+}
+
+@fragment
+fn gbuffer_opaque_motion(
+    v: VertexOut,
+    @builtin(front_facing) front_facing: bool,
+) -> GBufferMotion {
+    return with_motion(write_gbuffer(v, front_facing), v.clip);
+}
+
+@fragment
+fn gbuffer_masked_motion(
+    v: VertexOut,
+    @builtin(front_facing) front_facing: bool,
+) -> GBufferMotion {
+    if !passes_alpha_test(v.material, v.uv) {
+        discard;
+    }
+    return with_motion(write_gbuffer(v, front_facing), v.clip);
+}

@@ -8,7 +8,11 @@
 #include "lib/gbuffer.wgsl"
 #include "lib/shading.wgsl"
 
+// A texture lookup's footprint in G-buffer texels: 1, but √½ in TAA (a mip bias of −½),
+// whose jittered frames together sample each pixel many times (passes/taa.rs).
+override FOOTPRINT: f32 = 1.0;
+
 @fragment
 fn shade_all(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
-    return shade(vec2<i32>(position.xy), 1.0);
+    return shade(vec2<i32>(position.xy), FOOTPRINT);
 }

@@ -16,6 +16,7 @@ use crate::passes::msaa::{MsaaNode, MsaaStep};
 use crate::passes::shade::{ResolveNode, ShadeNode};
 use crate::passes::shadow::{self, ShadowNode};
 use crate::passes::smaa::{SmaaNode, SmaaStep};
+use crate::passes::taa::{self, KeepHistoryNode, TaaNode};
 use crate::passes::tonemap::TonemapNode;
 use crate::scene::{Lighting, Scene, ShadowCubes};
 use crate::shaders::Features;
@@ -114,10 +115,14 @@ pub(crate) fn frame_graph(
         g.retain(shadow, shadow::CUBES, Output::ShadowCubes);
     }
     let samples = if mode.technique == Technique::Msaa { MSAA_SAMPLES } else { 1 };
-    let gbuffer = add(&mut g, GBufferNode { samples });
+    let motion = mode.is_temporal();
+    let gbuffer = add(&mut g, GBufferNode { samples, motion });
     if samples == 1 {
         g.retain(gbuffer, gbuffer::NORMAL, Output::GBufferNormal);
         g.retain(gbuffer, gbuffer::DEPTH, Output::GBufferDepth);
+    }
+    if motion {
+        g.retain(gbuffer, gbuffer::MOTION, Output::Motion);
     }
     let sources = Sources { gbuffer, ports: gbuffer::ports(samples), shadow };
     let (m, stalled) = (mode.m, mode.stalled);
@@ -138,15 +143,26 @@ pub(crate) fn frame_graph(
             g.retain(pixels, "counts", Output::SampleCounts);
             pixels
         }
-        Technique::Deferred | Technique::Fxaa | Technique::Smaa | Technique::Reference => {
-            let shade = add(&mut g, ShadeNode { stalled, shadows: cubes });
+        Technique::Deferred | Technique::Fxaa | Technique::Smaa | Technique::Reference | Technique::Taa => {
+            let footprint = if mode.is_temporal() { taa::FOOTPRINT } else { 1.0 };
+            let shade = add(&mut g, ShadeNode { stalled, shadows: cubes, footprint });
             sources.feed(&mut g, shade);
-            if mode.technique != Technique::Reference {
-                shade
-            } else {
-                let resolve = add(&mut g, ResolveNode { m });
-                g.connect(shade, "color", resolve, "supersampled");
-                resolve
+            match mode.technique {
+                Technique::Reference => {
+                    let resolve = add(&mut g, ResolveNode { m });
+                    g.connect(shade, "color", resolve, "supersampled");
+                    resolve
+                }
+                Technique::Taa => {
+                    let taa = add(&mut g, TaaNode);
+                    g.connect(shade, "color", taa, "current");
+                    g.connect_all(gbuffer, taa, &[gbuffer::MOTION, gbuffer::DEPTH]);
+                    let keep = add(&mut g, KeepHistoryNode);
+                    g.connect(taa, "history_next", keep, "history_next");
+                    g.carry(keep, "history", taa, "history");
+                    taa
+                }
+                _ => shade,
             }
         }
         Technique::Adaptive(metrics, reconstruction) => {

@@ -30,6 +30,10 @@ pub use error::RenderError;
 pub use gpu::{Gpu, PlatformInfo};
 pub use mode::{Metrics, Mode, Technique};
 pub use passes::gbuffer::BACKGROUND_MATERIAL;
+/// TAA's constants and jitter (see `passes/taa.rs`).
+pub mod taa {
+    pub use crate::passes::taa::{JITTER_PHASES, MOVING_FRAMES, STILL_FRAMES, WARMUP_FRAMES, jitter};
+}
 pub use render::{
     DisplayImage, FrameImages, FrameTiming, GBufferImages, PassTime, PreparedMode, SceneRenderer,
     ShadowDepths, Truth,

@@ -1,4 +1,4 @@
-//! Render modes and their ids: `deferred-1x1`, `smaa`, `msaa-4x`, `reference-4x4-stalled`, `adaptive-3x3-geometry`,
+//! Render modes and their ids: `deferred-1x1`, `smaa`, `msaa-4x`, `taa`, `reference-4x4-stalled`, `adaptive-3x3-geometry`,
 //! `adaptive-3x3-area`, `adaptive-4x4-cells`, `adaptive-4x4-coverage`.
 
 use std::fmt;
@@ -29,6 +29,11 @@ pub enum Technique {
     /// samples as the 2×2 grid, at the rotated-grid positions), shaded per sample where they
     /// lie on more than one surface and once per pixel elsewhere.
     Msaa,
+    /// Temporal anti-aliasing: one jittered sample per pixel and frame, blended into a history
+    /// reprojected along per-pixel motion vectors (see `passes/taa.rs`). Its image depends on
+    /// the frames before: a still is the last of [`crate::taa::WARMUP_FRAMES`] frames rendered
+    /// from a reset at one camera.
+    Taa,
     /// All M² samples of an M·w × M·h G-buffer shaded, box-filtered.
     Reference,
     /// Holländer et al. 2013: the same G-buffer, samples shaded where the metrics ask, and the
@@ -50,8 +55,8 @@ impl Mode {
         Mode { technique, m, stalled }
     }
 
-    /// The fourteen modes that adaptive is measured against: deferred 1×1, FXAA, SMAA, 4×
-    /// MSAA and reference 2×2–4×4, each plain and stalled.
+    /// The sixteen modes that adaptive is measured against: deferred 1×1, FXAA, SMAA, 4×
+    /// MSAA, TAA and reference 2×2–4×4, each plain and stalled.
     pub fn baseline_modes() -> Vec<Mode> {
         let mut modes = Vec::new();
         for stalled in [false, true] {
@@ -59,6 +64,7 @@ impl Mode {
             modes.push(Mode::new(Technique::Fxaa, 1, stalled));
             modes.push(Mode::new(Technique::Smaa, 1, stalled));
             modes.push(Mode::new(Technique::Msaa, 2, stalled));
+            modes.push(Mode::new(Technique::Taa, 1, stalled));
             for m in 2..=4 {
                 modes.push(Mode::new(Technique::Reference, m, stalled));
             }
@@ -85,6 +91,11 @@ impl Mode {
             .into_iter()
             .flat_map(|reconstruction| Self::adaptive(Metrics::Both, reconstruction))
             .collect()
+    }
+
+    /// Whether the mode's image depends on the frames before it (TAA's history).
+    pub fn is_temporal(&self) -> bool {
+        self.technique == Technique::Taa
     }
 
     /// How an adaptive mode reconstructs its pixels (`Equal` for every other mode, whose
@@ -123,6 +134,7 @@ impl fmt::Display for Mode {
             Technique::Fxaa => return f.write_str(if self.stalled { "fxaa-stalled" } else { "fxaa" }),
             Technique::Smaa => return f.write_str(if self.stalled { "smaa-stalled" } else { "smaa" }),
             Technique::Msaa => return f.write_str(if self.stalled { "msaa-4x-stalled" } else { "msaa-4x" }),
+            Technique::Taa => return f.write_str(if self.stalled { "taa-stalled" } else { "taa" }),
             Technique::Reference => "reference",
             Technique::Adaptive(..) => "adaptive",
         };
@@ -150,7 +162,7 @@ impl fmt::Display for Mode {
 /// A mode id that does not parse, with the reason.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, smaa, msaa-4x, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry, adaptive-4x4-area, adaptive-4x4-cells, adaptive-4x4-coverage)"
+    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, smaa, msaa-4x, taa, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry, adaptive-4x4-area, adaptive-4x4-cells, adaptive-4x4-coverage)"
 )]
 pub struct ModeError {
     pub id: String,
@@ -178,6 +190,8 @@ impl FromStr for Mode {
             "smaa-stalled" => return Ok(Mode::new(Technique::Smaa, 1, true)),
             "msaa-4x" => return Ok(Mode::new(Technique::Msaa, 2, false)),
             "msaa-4x-stalled" => return Ok(Mode::new(Technique::Msaa, 2, true)),
+            "taa" => return Ok(Mode::new(Technique::Taa, 1, false)),
+            "taa-stalled" => return Ok(Mode::new(Technique::Taa, 1, true)),
             _ => {}
         }
         let mut parts = id.split('-');
@@ -213,10 +227,15 @@ impl FromStr for Mode {
             ("deferred" | "reference" | "adaptive", _) => return Err(fail("unexpected suffix")),
             ("fxaa", _) => return Err(fail("FXAA has no size: `fxaa` or `fxaa-stalled`")),
             ("smaa", _) => return Err(fail("SMAA has no size: `smaa` or `smaa-stalled`")),
-            _ => return Err(fail("the technique must be deferred, fxaa, smaa, msaa, reference or adaptive")),
+            ("taa", _) => return Err(fail("TAA has no size: `taa` or `taa-stalled`")),
+            _ => {
+                return Err(fail(
+                    "the technique must be deferred, fxaa, smaa, msaa, taa, reference or adaptive",
+                ));
+            }
         };
         let allowed = match technique {
-            Technique::Deferred | Technique::Fxaa | Technique::Smaa => 1..=1,
+            Technique::Deferred | Technique::Fxaa | Technique::Smaa | Technique::Taa => 1..=1,
             Technique::Msaa => 2..=2,
             // reference-1x1 exists to check that the supersampling path equals deferred-1x1.
             Technique::Reference => 1..=4,
@@ -246,10 +265,11 @@ mod tests {
         let all =
             [Mode::baseline_modes(), Mode::adaptive_modes(), Mode::ablation_modes(), Mode::variant_modes()]
                 .concat();
-        assert_eq!(all.len(), 14 + 6 + 12 + 18);
+        assert_eq!(all.len(), 16 + 6 + 12 + 18);
         assert!(all.iter().any(|m| m.to_string() == "fxaa-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "smaa-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "msaa-4x-stalled"));
+        assert!(all.iter().any(|m| m.to_string() == "taa-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-3x3-area-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-4x4-cells"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-2x2-coverage-stalled"));
@@ -274,6 +294,7 @@ mod tests {
         check("fxaa3", "missing the size");
         check("fxaa-2x2", "FXAA has no size");
         check("smaa-1x1", "SMAA has no size");
+        check("taa-2x2", "TAA has no size");
         check("msaa-8x", "4× MSAA only");
         check("msaa-2x2", "4× MSAA only");
         check("reference-2x2-geometry", "unexpected suffix");

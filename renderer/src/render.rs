@@ -1,13 +1,15 @@
 //! Building a mode's passes for one scene, running timed frames and reading back their images.
 
 use std::collections::{BTreeMap, HashMap};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use glam::DVec2;
 
 use crate::frame::{self, FrameGraph, GraphSummary, SceneNeeds, frame_graph};
 use crate::gpu::Gpu;
 use crate::graph::{Dims, Output, Physical, Plan, PortRef, Resolved, Usage};
 use crate::mode::{Mode, Technique};
-use crate::passes::{Allocated, BuildContext, Io, Pass};
+use crate::passes::{Allocated, BuildContext, Io, Pass, taa};
 use crate::pipelines::Pipelines;
 use crate::scene::{Camera, FrameUniforms, GpuScene, Lighting, Scene, Tile};
 use crate::{error::RenderError, settings::RenderSettings};
@@ -151,9 +153,61 @@ pub struct SceneRenderer {
     pool: Pool,
     /// Bytes the pool may hold in all; `prepare` refuses a mode that would pass it.
     memory_budget: Option<u64>,
-    /// Kept to rewrite the frame uniforms for ground-truth tiles.
+    /// Kept to rewrite the frame uniforms for ground-truth tiles, and shared with the temporal
+    /// modes, which make their own from it.
+    view: Arc<Mutex<View>>,
+}
+
+/// What the frame uniforms are made from.
+#[derive(Debug, Clone)]
+struct View {
     camera: Camera,
     lighting: Lighting,
+}
+
+/// What a temporal mode keeps between frames: frame uniforms of its own (jittered, with the
+/// previous frame's camera), the scene's view they are made from, and where its history stands.
+#[derive(Debug)]
+struct Temporal {
+    frame: wgpu::Buffer,
+    view: Arc<Mutex<View>>,
+    size: [u32; 2],
+    history: Mutex<History>,
+}
+
+/// Frames rendered since the history was last reset, and the camera of the last one.
+#[derive(Debug, Default)]
+struct History {
+    frames: u32,
+    camera: Option<Camera>,
+}
+
+impl Temporal {
+    /// Writes the uniforms of the next frame: jittered by the frame's Halton point, with the
+    /// camera of the frame before as the history's (this frame's own after a reset).
+    fn next_frame(&self, queue: &wgpu::Queue) {
+        let view = lock(&self.view);
+        let mut history = lock(&self.history);
+        let previous = history.camera.unwrap_or(view.camera);
+        let [x, y] = taa::jitter(history.frames);
+        let uniforms = FrameUniforms::temporal(
+            &view.camera,
+            &previous,
+            &view.lighting,
+            self.size,
+            DVec2::new(x, y),
+            history.frames > 0,
+        );
+        queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniforms));
+        history.frames += 1;
+        history.camera = Some(view.camera);
+    }
+}
+
+/// A lock that a panic elsewhere does not poison: what it guards is plain data, whole at every
+/// step.
+fn lock<T>(mutex: &Mutex<T>) -> MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 impl SceneRenderer {
@@ -178,8 +232,7 @@ impl SceneRenderer {
             settings,
             pool: Pool::default(),
             memory_budget: None,
-            camera: *camera,
-            lighting: lighting.clone(),
+            view: Arc::new(Mutex::new(View { camera: *camera, lighting: lighting.clone() })),
         })
     }
 
@@ -208,21 +261,39 @@ impl SceneRenderer {
     }
 
     /// Compiles the graph of `mode` and builds its passes. Pipelines and allocations are
-    /// created on first use and shared.
+    /// created on first use and shared; a temporal mode's history and frame uniforms are its
+    /// own.
     pub fn prepare(&mut self, mode: Mode) -> Result<PreparedMode, RenderError> {
         let graph = frame_graph(&self.needs, mode, &self.settings, &self.gpu.device.limits())?;
         let plan = graph.compile(frame::dims(&self.settings, mode))?;
         self.check_fits(mode, &plan)?;
-        let allocated = self.pool.acquire(&self.gpu.device, &plan)?;
-        let passes = self.build(&graph, &plan, &allocated)?;
+        let allocated = self.pool.acquire(&self.gpu.device, &plan, mode)?;
+        let temporal = mode.is_temporal().then(|| Temporal {
+            frame: self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("temporal frame uniforms"),
+                size: size_of::<FrameUniforms>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            view: Arc::clone(&self.view),
+            size: [self.settings.width, self.settings.height],
+            history: Mutex::default(),
+        });
+        let scene = match &temporal {
+            Some(temporal) => self.scene.with_frame(temporal.frame.clone()),
+            None => self.scene.clone(),
+        };
+        let passes = self.build(&scene, &graph, &plan, &allocated)?;
         self.gpu.check()?;
+        let camera = lock(&self.view).camera;
         Ok(PreparedMode {
             gpu: Arc::clone(&self.gpu),
             mode,
             passes,
             outputs: outputs(&plan, &allocated),
             graph: GraphSummary::of(&plan),
-            clip: (self.camera.near, self.camera.far),
+            clip: (camera.near, camera.far),
+            temporal,
         })
     }
 
@@ -287,7 +358,7 @@ impl SceneRenderer {
         let Some(budget) = self.memory_budget else {
             return Ok(());
         };
-        let (held, new) = (self.pool.bytes(), self.pool.missing_bytes(plan));
+        let (held, new) = (self.pool.bytes(), self.pool.missing_bytes(plan, mode));
         if held + new <= budget {
             return Ok(());
         }
@@ -305,12 +376,12 @@ impl SceneRenderer {
     /// Builds every pass of a compiled graph, in order, from its ports' allocations.
     fn build(
         &mut self,
+        scene: &GpuScene,
         graph: &FrameGraph,
         plan: &Plan,
         allocated: &[Allocated],
     ) -> Result<Vec<Box<dyn Pass>>, RenderError> {
-        let mut ctx =
-            BuildContext { scene: &self.scene, pipelines: &mut self.pipelines, settings: &self.settings };
+        let mut ctx = BuildContext { scene, pipelines: &mut self.pipelines, settings: &self.settings };
         plan.order
             .iter()
             .map(|&pass| {
@@ -381,13 +452,14 @@ impl SceneRenderer {
     /// prepared with (they read depth back through them); a camera path keeps them.
     pub fn set_camera(&mut self, camera: &Camera) -> Result<(), RenderError> {
         camera.validate().map_err(|e| RenderError::Camera(e.to_string()))?;
-        if (camera.near, camera.far) != (self.camera.near, self.camera.far) {
+        let current = lock(&self.view).camera;
+        if (camera.near, camera.far) != (current.near, current.far) {
             return Err(RenderError::Camera(format!(
                 "near and far planes {} and {} differ from the scene's {} and {}",
-                camera.near, camera.far, self.camera.near, self.camera.far
+                camera.near, camera.far, current.near, current.far
             )));
         }
-        self.camera = *camera;
+        lock(&self.view).camera = *camera;
         self.write_frame_uniforms(Tile::whole(self.settings.width, self.settings.height));
         Ok(())
     }
@@ -397,14 +469,14 @@ impl SceneRenderer {
     /// ([`crate::color::metered_exposure`]), clamped to `range`. Every frame rendered after,
     /// the truth's and each mode's, takes that exposure. On an error the exposure stays 1.
     pub fn meter_exposure(&mut self, key: f64, range: [f32; 2]) -> Result<f32, RenderError> {
-        self.lighting.exposure = 1.0;
+        lock(&self.view).lighting.exposure = 1.0;
         let (width, height) = (self.settings.width, self.settings.height);
         let metered = self
             .render_alone(Mode::new(Technique::Deferred, 1, false), Tile::whole(width, height), "metering")
             .and_then(|outputs| Ok(half_texels(&self.gpu.read_texture(&outputs[&Output::Hdr])?)))
             .map(|hdr| crate::color::metered_exposure(&hdr, key, range));
         if let Ok(exposure) = metered {
-            self.lighting.exposure = exposure;
+            lock(&self.view).lighting.exposure = exposure;
         }
         self.write_frame_uniforms(Tile::whole(width, height));
         metered
@@ -412,7 +484,7 @@ impl SceneRenderer {
 
     /// The exposure frames render at: the scene's, or the metered one.
     pub fn exposure(&self) -> f32 {
-        self.lighting.exposure
+        lock(&self.view).lighting.exposure
     }
 
     /// Renders `mode` once, the frame uniforms pointed at `tile`, into allocations of its own
@@ -426,8 +498,9 @@ impl SceneRenderer {
         self.write_frame_uniforms(tile);
         let graph = frame_graph(&self.needs, mode, &self.settings, &self.gpu.device.limits())?;
         let plan = graph.compile(Dims { width: tile.width, height: tile.height, m: mode.m })?;
-        let allocated = Pool::default().acquire(&self.gpu.device, &plan)?;
-        let passes = self.build(&graph, &plan, &allocated)?;
+        let allocated = Pool::default().acquire(&self.gpu.device, &plan, mode)?;
+        let scene = self.scene.clone();
+        let passes = self.build(&scene, &graph, &plan, &allocated)?;
         let mut encoder = self.gpu.encoder(label);
         for pass in &passes {
             pass.encode(&mut encoder);
@@ -455,7 +528,8 @@ impl SceneRenderer {
     /// Points the frame uniforms at `tile` of the output (the whole frame for every mode).
     fn write_frame_uniforms(&self, tile: Tile) {
         let (width, height) = (self.settings.width, self.settings.height);
-        let uniforms = FrameUniforms::for_tile(&self.camera, &self.lighting, width, height, tile);
+        let view = lock(&self.view);
+        let uniforms = FrameUniforms::for_tile(&view.camera, &view.lighting, width, height, tile);
         self.gpu.queue.write_buffer(&self.scene.frame, 0, bytemuck::bytes_of(&uniforms));
     }
 }
@@ -500,10 +574,18 @@ fn outputs(plan: &Plan, allocated: &[Allocated]) -> BTreeMap<Output, wgpu::Textu
 }
 
 /// Textures and buffers keyed by descriptor, usage and ordinal: what graphs that never run
-/// at the same time share.
+/// at the same time share. An allocation carried into the next frame (a history) is kept for
+/// its mode alone: its key names the mode, so a scene holds one prepared instance of a
+/// temporal mode at a time (two would share one history).
 #[derive(Debug, Default)]
 struct Pool {
-    entries: HashMap<(Resolved, Usage, usize), Allocated>,
+    entries: HashMap<PoolKey, Allocated>,
+}
+
+type PoolKey = (Resolved, Usage, usize, Option<Mode>);
+
+fn pool_key(physical: &Physical, mode: Mode) -> PoolKey {
+    (physical.desc, physical.usage, physical.ordinal, physical.carried.then_some(mode))
 }
 
 /// A target of a plan wider or taller than the device allows, named by its writing port.
@@ -540,7 +622,12 @@ impl Pool {
     /// order the frame first writes them: lavapipe's textures are plain memory, and where they
     /// land relative to each other decides how the loads of one texel from several targets
     /// share the CPU's caches.
-    fn acquire(&mut self, device: &wgpu::Device, plan: &Plan) -> Result<Vec<Allocated>, RenderError> {
+    fn acquire(
+        &mut self,
+        device: &wgpu::Device,
+        plan: &Plan,
+        mode: Mode,
+    ) -> Result<Vec<Allocated>, RenderError> {
         if let Some(oversized) = Oversized::find(plan, device.limits().max_texture_dimension_2d) {
             return Err(RenderError::Limit(oversized.to_string()));
         }
@@ -551,22 +638,22 @@ impl Pool {
         let mut allocated = vec![None; physical.len()];
         for p in creation {
             let physical = &physical[p];
-            let key = (physical.desc, physical.usage, physical.ordinal);
+            let key = pool_key(physical, mode);
             allocated[p] = Some(self.entries.entry(key).or_insert_with(|| create(device, physical)).clone());
         }
         Ok(allocated.into_iter().map(|a| a.expect("every allocation acquired")).collect())
     }
 
     fn bytes(&self) -> u64 {
-        self.entries.keys().map(|(desc, _, _)| desc.bytes()).sum()
+        self.entries.keys().map(|(desc, ..)| desc.bytes()).sum()
     }
 
-    /// Bytes that acquiring `plan` would newly allocate.
-    fn missing_bytes(&self, plan: &Plan) -> u64 {
+    /// Bytes that acquiring `plan` for `mode` would newly allocate.
+    fn missing_bytes(&self, plan: &Plan, mode: Mode) -> u64 {
         plan.allocation
             .physical
             .iter()
-            .filter(|p| !self.entries.contains_key(&(p.desc, p.usage, p.ordinal)))
+            .filter(|p| !self.entries.contains_key(&pool_key(p, mode)))
             .map(|p| p.desc.bytes())
             .sum()
     }
@@ -640,11 +727,17 @@ pub struct PreparedMode {
     outputs: BTreeMap<Output, wgpu::Texture>,
     graph: GraphSummary,
     clip: (f64, f64),
+    temporal: Option<Temporal>,
 }
 
 impl PreparedMode {
-    /// Renders one frame, one submit per pass, each timed from submit to completion.
+    /// Renders one frame, one submit per pass, each timed from submit to completion. A
+    /// temporal mode's frame is the next of its history: jittered, and blended with the frames
+    /// before.
     pub fn render(&self) -> Result<FrameTiming, RenderError> {
+        if let Some(temporal) = &self.temporal {
+            temporal.next_frame(&self.gpu.queue);
+        }
         let mut timing = FrameTiming { passes: Vec::with_capacity(self.passes.len()) };
         for pass in &self.passes {
             let mut encoder = self.gpu.encoder(pass.name());
@@ -653,6 +746,38 @@ impl PreparedMode {
             timing.passes.push(PassTime { name: pass.name(), seconds: elapsed.as_secs_f64() });
         }
         Ok(timing)
+    }
+
+    /// Whether the mode's frames depend on the frames before (TAA).
+    pub fn is_temporal(&self) -> bool {
+        self.temporal.is_some()
+    }
+
+    /// The jitter of the last frame in pixels, where the mode is temporal: its sample of pixel
+    /// (x, y) lay at (x + ½ + jitter.x, y + ½ + jitter.y).
+    pub fn last_jitter(&self) -> Option<[f64; 2]> {
+        let temporal = self.temporal.as_ref()?;
+        let frames = lock(&temporal.history).frames;
+        (frames > 0).then(|| taa::jitter(frames - 1))
+    }
+
+    /// Forgets the history: the next frame starts it again, unjittered by earlier frames.
+    pub fn reset_history(&self) {
+        if let Some(temporal) = &self.temporal {
+            *lock(&temporal.history) = History::default();
+        }
+    }
+
+    /// The mode's frame at the current camera as a still: for a temporal mode, the last of
+    /// [`taa::WARMUP_FRAMES`] frames rendered from a reset; for any other, one frame. Returns
+    /// the last frame's timing.
+    pub fn render_still(&self) -> Result<FrameTiming, RenderError> {
+        let frames = if self.temporal.is_some() { taa::WARMUP_FRAMES } else { 1 };
+        self.reset_history();
+        for _ in 1..frames {
+            self.render()?;
+        }
+        self.render()
     }
 
     /// Encodes a given linear HDR image (RGBA, stored as f16 like every HDR image) through this
@@ -729,6 +854,12 @@ impl PreparedMode {
             })
             .collect();
         Ok(GBufferImages { width: normal.width(), height: normal.height(), normal_material, depth })
+    }
+
+    /// Reads back the motion of the last frame (temporal modes): per pixel, the pixels its
+    /// point moved since the frame before (x right, y down) and its linear view depth then.
+    pub fn read_motion(&self) -> Result<Option<Vec<[f32; 4]>>, RenderError> {
+        self.outputs.get(&Output::Motion).map(|t| Ok(half_texels(&self.gpu.read_texture(t)?))).transpose()
     }
 
     /// Reads back S, the shade-first image of an adaptive mode (linear RGBA).

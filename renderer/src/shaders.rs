@@ -40,6 +40,7 @@ sources!(
     "smaa.wgsl",
     "adaptive.wgsl",
     "msaa.wgsl",
+    "taa.wgsl",
 );
 
 /// The pass shaders: every source that is not an include under `lib/`.

@@ -10,6 +10,7 @@
 //! simulate another shader's cost, so they are measured among the stalled modes only, and
 //! plain modes among the plain ones.
 
+use crate::metrics::Decibels;
 use crate::record::{Dominator, FrontPlace, ModeRecord, Status};
 
 /// PSNRs against the truth closer than this are a tie: the images are as near the truth as
@@ -73,14 +74,15 @@ pub fn place(modes: &mut [ModeRecord]) {
                         let dominator = Dominator {
                             mode: modes[j].mode.clone(),
                             time_ratio: other.median / own.median,
-                            psnr_gain_db: psnr_gain(other.psnr, own.psnr),
+                            psnr_gain_db: Decibels::from_f64(psnr_gain(other.psnr, own.psnr)),
                         };
                         (dominator, other.median)
                     })
                 })
                 .collect();
             dominated_by.sort_by(|(a, a_time), (b, b_time)| {
-                b.psnr_gain_db.total_cmp(&a.psnr_gain_db).then(a_time.total_cmp(b_time))
+                let gain = |d: &Dominator| d.psnr_gain_db.value();
+                gain(b).total_cmp(&gain(a)).then(a_time.total_cmp(b_time))
             });
             let dominated_by: Vec<Dominator> = dominated_by.into_iter().map(|(d, _)| d).collect();
             Some(FrontPlace { on_front: dominated_by.is_empty(), dominated_by })
@@ -118,6 +120,24 @@ mod tests {
         // Equal to the truth twice over is a tie, not a gain.
         assert!(!point(19.0, 2.0, f64::INFINITY).dominates(&point(20.0, 2.0, f64::INFINITY)));
         assert!(point(10.0, 1.0, f64::INFINITY).dominates(&point(20.0, 1.0, f64::INFINITY)));
+    }
+
+    /// An exact image (the `empty` scene's deferred-1x1) dominating an inexact one is an
+    /// infinite gain, which JSON writes as "inf" and reads back.
+    #[test]
+    fn an_infinite_gain_survives_the_record() {
+        let place = FrontPlace {
+            on_front: false,
+            dominated_by: vec![Dominator {
+                mode: "deferred-1x1".into(),
+                time_ratio: 0.4,
+                psnr_gain_db: Decibels::from_f64(psnr_gain(f64::INFINITY, 63.3)),
+            }],
+        };
+        let json = serde_json::to_string(&place).unwrap();
+        assert!(json.contains(r#""psnr_gain_db":"inf""#), "{json}");
+        assert_eq!(serde_json::from_str::<FrontPlace>(&json).unwrap(), place);
+        assert_eq!(place.describe(), "behind deferred-1x1 (+inf dB, 0.40× time)");
     }
 
     #[test]

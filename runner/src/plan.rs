@@ -449,11 +449,12 @@ mod tests {
     #[test]
     fn groups_and_ids_combine_without_duplicates() {
         let modes = parse_modes("baseline, deferred-1x1,adaptive-2x2-geometry").unwrap();
-        assert_eq!(modes.len(), 15);
+        assert_eq!(modes.len(), 17);
         assert_eq!(modes[1].to_string(), "fxaa");
         assert_eq!(modes[2].to_string(), "smaa");
         assert_eq!(modes[3].to_string(), "msaa-4x");
-        assert_eq!(modes[14].to_string(), "adaptive-2x2-geometry");
+        assert_eq!(modes[4].to_string(), "taa");
+        assert_eq!(modes[16].to_string(), "adaptive-2x2-geometry");
         assert!(parse_modes("reference-9x9").unwrap_err().contains("M must be"));
         assert!(parse_modes(" , ").is_err());
     }
@@ -477,8 +478,8 @@ mod tests {
     fn quick_leaves_out_the_ablations_and_nightly_adds_them() {
         let quick = Tier::Quick.default_modes();
         let nightly = Tier::Nightly.default_modes();
-        assert_eq!(quick.len(), 26);
-        assert_eq!(nightly.len(), 41);
+        assert_eq!(quick.len(), 28);
+        assert_eq!(nightly.len(), 43);
         assert!(quick.iter().all(|m| !m.to_string().contains("geometry")));
         let area: Vec<String> = quick.iter().map(Mode::to_string).filter(|id| id.contains("area")).collect();
         assert_eq!(area, ["adaptive-2x2-area", "adaptive-3x3-area", "adaptive-4x4-area"]);

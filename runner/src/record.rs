@@ -381,8 +381,8 @@ pub struct Dominator {
     /// Its median frame time over the dominated mode's: below 1 where it is faster.
     pub time_ratio: f64,
     /// Its PSNR against the truth less the dominated mode's, in dB (at least minus the front
-    /// module's PSNR tie).
-    pub psnr_gain_db: f64,
+    /// module's PSNR tie): infinite where the dominator is exact and the mode is not.
+    pub psnr_gain_db: Decibels,
 }
 
 impl FrontPlace {
@@ -396,7 +396,8 @@ impl FrontPlace {
                     1 => " and 1 more".into(),
                     n => format!(" and {n} more"),
                 };
-                format!("behind {} ({:+.2} dB, {:.2}× time){others}", d.mode, d.psnr_gain_db, d.time_ratio)
+                let gain = d.psnr_gain_db.value();
+                format!("behind {} ({gain:+.2} dB, {:.2}× time){others}", d.mode, d.time_ratio)
             }
         }
     }
@@ -442,6 +443,23 @@ pub struct ModeSequence {
     /// changes from one frame to the next, averaged over the frame pairs.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub count_changes: Option<f64>,
+    /// Temporal modes (taa): the error where the history cannot hold the surface, the pixels
+    /// that the previous frame did not see (`sequence.rs`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ghosting: Option<Ghosting>,
     /// FNV-1a 64 of each frame's display image and sample counts, as `output_hash`.
     pub hashes: Vec<String>,
+}
+
+/// A temporal mode's error on disoccluded pixels: those whose surface point lay off-screen or
+/// hidden behind another surface in the frame before, over the frame pairs of a sequence.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Ghosting {
+    /// The share of pixels disoccluded, averaged over the frame pairs.
+    pub disoccluded: f64,
+    /// The mode's MSE against the truth on those pixels (display code values in [0, 1]);
+    /// absent where no pixel was disoccluded.
+    pub mse: Option<f64>,
+    /// The same of the mode's image everywhere else, for scale.
+    pub mse_elsewhere: Option<f64>,
 }

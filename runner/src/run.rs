@@ -255,6 +255,7 @@ async fn run_scene(
         Err(error) => return fail(record, error),
     };
     timed_rounds(worker, plan, manifest, progress, &cancel, &mut runs).await;
+    temporal_stills(worker, plan, manifest, progress, &cancel, &mut runs).await;
     if let Some(motion) = manifest.motion.as_ref().filter(|_| plan.sequences)
         && !cancel.load(Ordering::SeqCst)
         && !worker.is_stuck()
@@ -439,7 +440,10 @@ async fn timed_rounds(
                 format!("warm-up {}/{}", round + 1, plan.warmup)
             };
             progress.status(&format!("[{}] {mode} {label}", manifest.name));
-            let result = render_frame(worker, plan, index, mode.m, timed, first_timed).await;
+            // A temporal mode's frames differ as its history fills: its image is its still's.
+            let images = first_timed && !mode.is_temporal();
+            let hashed = timed && !mode.is_temporal();
+            let result = render_frame(worker, plan, index, mode.m, hashed, images).await;
             let run = &mut runs[index];
             match result {
                 Ok(Ok(frame)) => {
@@ -465,6 +469,49 @@ async fn timed_rounds(
     }
 }
 
+/// The stills of temporal modes, after the timed rounds: each rendered twice from a reset
+/// through its warm-up frames ([`aabench_renderer::taa::WARMUP_FRAMES`]), read back and
+/// fingerprinted like a timed frame, so that both must agree.
+async fn temporal_stills(
+    worker: &mut Worker,
+    plan: &RunPlan,
+    manifest: &Manifest,
+    progress: &Progress,
+    cancel: &AtomicBool,
+    runs: &mut [ModeRun],
+) {
+    for (index, mode) in plan.modes.iter().enumerate().filter(|(_, mode)| mode.is_temporal()) {
+        for attempt in 0..2 {
+            if cancel.load(Ordering::SeqCst) || worker.is_stuck() {
+                return;
+            }
+            if runs[index].error.is_some() {
+                break;
+            }
+            progress.status(&format!("[{}] {mode} still {}/2", manifest.name, attempt + 1));
+            let m = mode.m;
+            let timeout = plan.frame_timeout.saturating_mul(aabench_renderer::taa::WARMUP_FRAMES);
+            let still = worker
+                .call(timeout, move |state| {
+                    let prepared = state.modes[index].as_ref().expect("prepared mode");
+                    let timing = prepared.render_still()?;
+                    read_frame(prepared, m, timing)
+                })
+                .await;
+            let run = &mut runs[index];
+            match still {
+                Ok(Ok(frame)) => {
+                    run.checks.add(frame.checks);
+                    run.hashes.extend(frame.hash);
+                    run.images = run.images.take().or(frame.images);
+                }
+                Ok(Err(error)) => run.error = Some(error.to_string()),
+                Err(error) => run.error = Some(format!("{mode}: {error}")),
+            }
+        }
+    }
+}
+
 /// What one rendered frame gave: its timing, its fingerprint (timed frames), the checks of its
 /// HDR values and sample counts, and its images (the first timed frame).
 struct Frame {
@@ -475,34 +522,43 @@ struct Frame {
 }
 
 /// Renders mode `index` once and reads back what the round needs, between frames, never
-/// during one. Every frame is checked; every timed frame's display image and sample counts
-/// are fingerprinted, and all must agree.
+/// during one. Every frame is checked; `hashed` frames' display images and sample counts are
+/// fingerprinted (every timed frame of a mode without history), and all must agree.
 async fn render_frame(
     worker: &mut Worker,
     plan: &RunPlan,
     index: usize,
     m: u32,
-    timed: bool,
-    first_timed: bool,
+    hashed: bool,
+    with_images: bool,
 ) -> Result<Result<Frame, aabench_renderer::RenderError>, crate::worker::WorkerError> {
     worker
         .call(plan.frame_timeout, move |state| {
             let prepared = state.modes[index].as_ref().expect("prepared mode");
             let timing = prepared.render()?;
-            if first_timed {
-                let images = prepared.read_images()?;
-                let counts = images.sample_counts.as_deref();
-                let hash = Some(fingerprint(&images.display, counts));
-                let checks = FrameChecks::of(&images.hdr, counts, m);
-                return Ok(Frame { timing, hash, checks, images: Some(images) });
+            if with_images {
+                return read_frame(prepared, m, timing);
             }
             let counts = prepared.read_sample_counts()?;
             let checks = FrameChecks::of(prepared.read_hdr()?.as_flattened(), counts.as_deref(), m);
             let hash =
-                if timed { Some(fingerprint(&prepared.read_display()?, counts.as_deref())) } else { None };
+                if hashed { Some(fingerprint(&prepared.read_display()?, counts.as_deref())) } else { None };
             Ok(Frame { timing, hash, checks, images: None })
         })
         .await
+}
+
+/// The last frame's images, their fingerprint and checks.
+fn read_frame(
+    prepared: &aabench_renderer::PreparedMode,
+    m: u32,
+    timing: FrameTiming,
+) -> Result<Frame, aabench_renderer::RenderError> {
+    let images = prepared.read_images()?;
+    let counts = images.sample_counts.as_deref();
+    let hash = Some(fingerprint(&images.display, counts));
+    let checks = FrameChecks::of(&images.hdr, counts, m);
+    Ok(Frame { timing, hash, checks, images: Some(images) })
 }
 
 /// Drops the scene's prepared modes and renderer, freeing its device memory.
@@ -755,11 +811,12 @@ fn fail_mode(record: &mut ModeRecord, error: String) {
 /// The image a mode is compared with, with the same stall if it ran, else the other (their
 /// images are identical): for adaptive modes the reference at the same M; for 4× MSAA the 2×2
 /// reference, which shades as many samples everywhere; for FXAA and SMAA the image they
-/// post-process, deferred-1x1, which is the 1×1 reference bit for bit.
+/// post-process, deferred-1x1, which is the 1×1 reference bit for bit; for TAA deferred-1x1,
+/// which it blends over frames.
 fn comparison_reference(modes: &[Mode], images: &[Option<FrameImages>], mode: Mode) -> Option<(usize, Mode)> {
     let technique = match mode.technique {
         Technique::Adaptive(..) | Technique::Msaa => Technique::Reference,
-        Technique::Fxaa | Technique::Smaa => Technique::Deferred,
+        Technique::Fxaa | Technique::Smaa | Technique::Taa => Technique::Deferred,
         Technique::Deferred | Technique::Reference => return None,
     };
     [mode.stalled, !mode.stalled].into_iter().find_map(|stalled| {

@@ -12,12 +12,19 @@
 //! per frame, so an error that travels with the geometry changes little between frames, and an
 //! exact reprojection of a display image does not exist (disocclusions, sub-pixel detail).
 //! `change_ratio` sets the mode's own mean squared frame-to-frame change against the truth's.
+//!
+//! A temporal mode (TAA) starts the path from a still: its warm-up frames at the first camera.
+//! Its **ghosting** is its error on the pixels that its history cannot hold: those whose point
+//! lay outside the previous frame, or behind the surfaces seen around where it lay (deeper
+//! than each of the four nearest pixels' depths by more than [`HIDDEN_DEPTH`]), found from the
+//! mode's own motion vectors and depths.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use aabench_renderer::scene::Camera;
+use aabench_renderer::taa::WARMUP_FRAMES;
 use aabench_renderer::{DisplayImage, Mode};
 
 use crate::manifest::Manifest;
@@ -25,7 +32,7 @@ use crate::metrics::{self, Decibels, FrameChecks};
 use crate::motion::MotionSpec;
 use crate::plan::RunPlan;
 use crate::progress::Progress;
-use crate::record::{ModeSequence, SequenceRecord, fingerprint};
+use crate::record::{Ghosting, ModeSequence, SequenceRecord, fingerprint};
 use crate::truth::{self, TRUTH_M};
 use crate::worker::Worker;
 
@@ -49,12 +56,27 @@ pub struct ModeOutcome {
     pub error: Option<String>,
 }
 
-/// A mode's frame: its display image, sample counts and checks.
+/// A mode's frame: its display image, sample counts and checks, and a temporal mode's geometry.
 struct ModeFrame {
     display: DisplayImage,
     counts: Option<Vec<u8>>,
     checks: FrameChecks,
+    geometry: Option<Geometry>,
 }
+
+/// Where a temporal mode's pixels were in the frame before, and how deep they are now.
+struct Geometry {
+    width: usize,
+    /// Per pixel: the pixels its point moved since the frame before, and its depth then.
+    motion: Vec<[f32; 4]>,
+    /// Per pixel, linear view depth at its sample, which lay `jitter` pixels off its centre.
+    depth: Vec<f64>,
+    jitter: [f64; 2],
+}
+
+/// How much deeper than every surface seen around its place in the frame before a point must
+/// have been, relatively, to count as hidden then.
+pub const HIDDEN_DEPTH: f64 = 0.01;
 
 /// What the sequence keeps of a mode between frames, and its sums so far.
 #[derive(Default)]
@@ -66,6 +88,10 @@ struct ModeState {
     error_change: u64,
     own_change: u64,
     count_changes: Vec<f64>,
+    /// Squared error in code steps and values, on disoccluded pixels and elsewhere; the share
+    /// of pixels disoccluded per frame pair.
+    ghosting: [(u64, u64); 2],
+    disoccluded: Vec<f64>,
     checks: FrameChecks,
     error: Option<String>,
 }
@@ -155,7 +181,7 @@ async fn render_frames(
                 continue;
             }
             status(&mode.to_string());
-            match render(worker, plan, index, mode.m).await {
+            match render(worker, plan, index, mode.m, frame == 0).await {
                 Ok(Ok(rendered)) => state.add(rendered, &truth, previous_truth.as_ref()),
                 Ok(Err(error)) => state.error = Some(error),
                 // The worker is gone or stuck: no later frame can render.
@@ -178,22 +204,38 @@ async fn render_frames(
     Ok(())
 }
 
-/// Renders prepared mode `index` once at the current camera and reads back its frame. The
-/// outer error is the worker's (it can render nothing more), the inner the mode's.
+/// Renders prepared mode `index` once at the current camera and reads back its frame; the
+/// `first` frame of the path as a still, so that a temporal mode starts the path with the
+/// history of its warm-up frames at the first camera. The outer error is the worker's (it can
+/// render nothing more), the inner the mode's.
 async fn render(
     worker: &mut Worker,
     plan: &RunPlan,
     index: usize,
     m: u32,
+    first: bool,
 ) -> Result<Result<ModeFrame, String>, String> {
+    let timeout = if first { plan.frame_timeout.saturating_mul(WARMUP_FRAMES) } else { plan.frame_timeout };
     let frame = worker
-        .call(plan.frame_timeout, move |state| {
+        .call(timeout, move |state| {
             let prepared = state.modes[index].as_ref().expect("prepared mode");
-            prepared.render()?;
+            if first {
+                prepared.render_still()?;
+            } else {
+                prepared.render()?;
+            }
             let display = prepared.read_display()?;
             let counts = prepared.read_sample_counts()?;
             let checks = FrameChecks::of(prepared.read_hdr()?.as_flattened(), counts.as_deref(), m);
-            Ok::<_, aabench_renderer::RenderError>(ModeFrame { display, counts, checks })
+            let geometry = match prepared.read_motion()? {
+                Some(motion) => {
+                    let gbuffer = prepared.read_gbuffer()?;
+                    let jitter = prepared.last_jitter().unwrap_or_default();
+                    Some(Geometry { width: gbuffer.width as usize, motion, depth: gbuffer.depth, jitter })
+                }
+                None => None,
+            };
+            Ok::<_, aabench_renderer::RenderError>(ModeFrame { display, counts, checks, geometry })
         })
         .await;
     match frame {
@@ -261,6 +303,18 @@ impl ModeState {
                 let changed = now.iter().zip(then).filter(|(a, b)| a != b).count();
                 self.count_changes.push(changed as f64 / now.len().max(1) as f64);
             }
+            if let (Some(now), Some(then)) = (&frame.geometry, &before.geometry) {
+                let hidden = now.disoccluded(then);
+                let share = hidden.iter().filter(|&&h| h).count() as f64 / hidden.len().max(1) as f64;
+                self.disoccluded.push(share);
+                let pixels = frame.display.rgba.chunks_exact(4).zip(truth.rgba.chunks_exact(4));
+                for ((p, t), &hidden) in pixels.zip(&hidden) {
+                    let squares: u64 =
+                        (0..3).map(|c| (i64::from(p[c]) - i64::from(t[c])).pow(2) as u64).sum();
+                    let sums = &mut self.ghosting[usize::from(!hidden)];
+                    *sums = (sums.0 + squares, sums.1 + 3);
+                }
+            }
         }
         self.previous = Some(frame);
     }
@@ -269,8 +323,18 @@ impl ModeState {
     /// failed, where fewer than two frames were rendered, or where it rendered a frame more
     /// than the others (the sequence stopped in the middle of a frame).
     fn conclude(self, frames: usize, truth_change: Option<f64>) -> ModeOutcome {
-        let ModeState { previous, mse, hashes, error_change, own_change, count_changes, checks, error } =
-            self;
+        let ModeState {
+            previous,
+            mse,
+            hashes,
+            error_change,
+            own_change,
+            count_changes,
+            ghosting,
+            disoccluded,
+            checks,
+            error,
+        } = self;
         let Some(last) = previous.filter(|_| error.is_none() && mse.len() == frames && frames > 1) else {
             return ModeOutcome { sequence: None, checks, error };
         };
@@ -285,11 +349,58 @@ impl ModeState {
             change_ratio: truth_change.filter(|&t| t > 0.0).map(|t| own / t),
             count_changes: (!count_changes.is_empty())
                 .then(|| count_changes.iter().sum::<f64>() / count_changes.len() as f64),
+            ghosting: (!disoccluded.is_empty()).then(|| {
+                let scale = f64::from(last.display.max_code()).powi(2);
+                let mse =
+                    |(sum, values): (u64, u64)| (values > 0).then(|| sum as f64 / scale / values as f64);
+                Ghosting {
+                    disoccluded: disoccluded.iter().sum::<f64>() / disoccluded.len() as f64,
+                    mse: mse(ghosting[0]),
+                    mse_elsewhere: mse(ghosting[1]),
+                }
+            }),
             hashes,
         };
         ModeOutcome { sequence: Some(sequence), checks, error: None }
     }
 }
+
+impl Geometry {
+    /// Per pixel, whether the frame before (`then`) could not have seen its point: it lay
+    /// outside that frame, or deeper than each of the four samples around where it lay by more
+    /// than [`HIDDEN_DEPTH`]. Pixels without geometry (depth 0 then) are never disoccluded.
+    fn disoccluded(&self, then: &Geometry) -> Vec<bool> {
+        let width = self.width as f64;
+        let height = (self.motion.len() / self.width.max(1)) as f64;
+        self.motion
+            .iter()
+            .enumerate()
+            .map(|(i, &[dx, dy, depth_then, _])| {
+                let depth_then = f64::from(depth_then);
+                if depth_then <= 0.0 {
+                    return false;
+                }
+                // The motion is the sample's, which lay `jitter` off the pixel's centre.
+                let [sx, sy] = self.jitter;
+                let x = (i % self.width) as f64 + 0.5 + sx - f64::from(dx);
+                let y = (i / self.width) as f64 + 0.5 + sy - f64::from(dy);
+                if !(0.0..width).contains(&x) || !(0.0..height).contains(&y) {
+                    return true;
+                }
+                // The four pixels whose samples surround the point, clamped to the frame.
+                let [jx, jy] = then.jitter;
+                let (x0, y0) = ((x - 0.5 - jx).floor(), (y - 0.5 - jy).floor());
+                let around = [(x0, y0), (x0 + 1.0, y0), (x0, y0 + 1.0), (x0 + 1.0, y0 + 1.0)];
+                around.iter().all(|&(ax, ay)| {
+                    let ax = ax.clamp(0.0, width - 1.0) as usize;
+                    let ay = ay.clamp(0.0, height - 1.0) as usize;
+                    depth_then > then.depth[ay * self.width + ax] * (1.0 + HIDDEN_DEPTH)
+                })
+            })
+            .collect()
+    }
+}
+
 /// Σ over pixels and colour channels of (a − b)², or of ((a − b) − (c − d))² with `minus` =
 /// (c, d), in squared code steps (exact in integers).
 fn squared_difference(

@@ -1,6 +1,7 @@
 //! Sequences along a manifest's camera path, through the `aabench` binary: a static path gives
 //! every mode its still frame bit for bit and no instability; a thin wire under a slow pan
-//! flickers in deferred-1x1 far more than in reference-4x4, and the metric ranks them so.
+//! flickers in deferred-1x1 far more than in reference-4x4, and the metric ranks them so; TAA
+//! flickers less than deferred-1x1 on the moving `thin` scene and reports its ghosting.
 
 use serde_json::{Value, json};
 
@@ -86,6 +87,44 @@ fn a_wire_under_a_slow_pan_flickers_at_one_sample_and_far_less_at_sixteen() {
     // And the frames move: no two of deferred-1x1's are alike.
     let hashes = sequence(scene, "deferred-1x1", 6)["hashes"].as_array().unwrap().clone();
     assert!(hashes.windows(2).all(|w| w[0] != w[1]), "{hashes:?}");
+}
+
+#[test]
+fn taa_flickers_less_than_deferred_on_a_moving_thin_scene_and_reports_its_ghosting() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("taa-thin");
+    ws.manifest("thin", "thin", |m| {
+        m["resolution"] = json!({"quick": [128, 96], "nightly": [128, 96]});
+        m["lights"] = json!([{ "position": [30.0, 50.0, 20.0], "intensity": 4500.0, "range": 250.0 }]);
+        m["ambient"] = json!([0.12, 0.13, 0.15]);
+        m["background"] = json!([0.55, 0.7, 0.95]);
+        // The suite's default path, an orbit of 2° a second, over eight frames.
+        m["motion"] = json!({"frames": {"quick": 8, "nightly": 8}});
+    });
+    let output = ws.run(&["run", "--modes", "deferred-1x1,taa", "--repetitions", "2"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let scene = &ws.record()["scenes"][0];
+    let (deferred, taa) = (sequence(scene, "deferred-1x1", 8), sequence(scene, "taa", 8));
+    let instability = |s: &Value| s["instability"].as_f64().unwrap();
+    assert!(
+        instability(taa) < instability(deferred),
+        "taa {:e}, deferred-1x1 {:e}",
+        instability(taa),
+        instability(deferred)
+    );
+    // Its path starts from its still, the last of its warm-up frames at the first camera.
+    assert_eq!(taa["hashes"][0], mode(scene, "taa")["output_hash"]);
+    // The still is rendered twice from a reset, and both agree.
+    assert_eq!(mode(scene, "taa")["deterministic"], true);
+    // Its ghosting: the error where the orbit uncovers what the frame before hid.
+    let ghosting = &taa["ghosting"];
+    let disoccluded = ghosting["disoccluded"].as_f64().unwrap();
+    assert!(disoccluded > 0.0 && disoccluded < 0.1, "{ghosting}");
+    assert!(
+        ghosting["mse"].as_f64().unwrap() > 0.0 && ghosting["mse_elsewhere"].as_f64().is_some(),
+        "{ghosting}"
+    );
+    assert!(deferred.get("ghosting").is_none(), "a mode without history has no ghosting: {deferred}");
 }
 
 /// The gate compares a sequence: against its own baseline nothing moves; a baseline doctored

@@ -18,6 +18,14 @@ struct Frame {
     // The rendered tile of the frame: its NDC maps to the frame's as ndc * tile.xy + tile.zw
     // ((1, 1, 0, 0) for the whole frame; the ground truth renders tile by tile).
     tile: vec4<f32>,
+    // From this target's clip space to the previous frame's, unjittered: (NDC, depth, 1) maps
+    // to where the point was, up to a factor of its clip w (temporal modes).
+    reprojection: mat4x4<f32>,
+    // xy: the sub-pixel jitter in pixels (a pixel's sample lies at its centre plus it, y down;
+    // 0 but in temporal modes); zw: the whole frame's width and height in pixels.
+    jitter: vec4<f32>,
+    // x: 1 where the history holds earlier frames, 0 after a reset (temporal modes).
+    history: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;

@@ -17,3 +17,9 @@ fn sanitize(x: f32) -> f32 {
 fn sanitize3(c: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(sanitize(c.r), sanitize(c.g), sanitize(c.b));
 }
+
+// Whether every channel is a finite number (neither NaN nor ±Inf), by the bits.
+fn is_finite3(c: vec3<f32>) -> bool {
+    let exponents = bitcast<vec3<u32>>(c) & vec3<u32>(0x7f800000u);
+    return all(exponents != vec3<u32>(0x7f800000u));
+}

@@ -1,9 +1,10 @@
 //! Sharing allocations between resources whose lifetimes do not overlap.
 //!
 //! A resource lives from the pass that writes it to the last pass that reads it, both
-//! inclusive: a pass never reads and writes one allocation. A retained output occupies its
-//! allocation for the whole frame, so it never shares with anything. Resources with equal descriptors share when their lifetimes are disjoint. This
-//! is colouring an interval graph, which the left-edge algorithm does optimally: take the
+//! inclusive: a pass never reads and writes one allocation. A retained output, and a resource
+//! carried into the next frame, occupies its allocation for the whole frame, so it never
+//! shares with anything. Resources with equal descriptors share when their lifetimes are
+//! disjoint. This is colouring an interval graph, which the left-edge algorithm does optimally: take the
 //! resources by start and give each the lowest-numbered allocation of its descriptor that is
 //! free by then. The number of allocations per descriptor then equals the most resources of
 //! that descriptor alive at once, the lower bound that [`lower_bound_bytes`] computes
@@ -25,6 +26,9 @@ pub struct Physical {
     /// share allocation `ordinal` of a descriptor and usage between graphs that never run at
     /// the same time.
     pub ordinal: usize,
+    /// It holds a resource carried into the next frame: a renderer keeps it for this graph
+    /// alone.
+    pub carried: bool,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -40,11 +44,13 @@ impl Allocation {
     }
 }
 
-/// The positions a resource keeps its allocation busy: its lifetime, or the whole frame.
+/// The positions a resource keeps its allocation busy: its lifetime, or the whole frame
+/// (retained and carried resources).
 fn span(resource: &Virtual) -> (usize, usize) {
-    match resource.retained {
-        Some(_) => (0, resource.last),
-        None => (resource.first, resource.last),
+    if resource.retained.is_some() || resource.carried {
+        (0, resource.last)
+    } else {
+        (resource.first, resource.last)
     }
 }
 
@@ -66,11 +72,13 @@ pub(super) fn allocate(resources: &[Virtual]) -> Allocation {
                 usage: resource.usage,
                 resources: Vec::new(),
                 ordinal,
+                carried: false,
             });
             busy_until.push(0);
             physical.len() - 1
         });
         physical[p].usage = physical[p].usage.union(resource.usage);
+        physical[p].carried |= resource.carried;
         physical[p].resources.push(r);
         busy_until[p] = end;
         assignment[r] = p;

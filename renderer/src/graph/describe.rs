@@ -57,6 +57,8 @@ impl<T> Graph<T> {
                             if readers.is_empty() { "-".into() } else { readers.join(", ") }
                         ),
                     )
+                } else if resource.carried {
+                    ("reads ", format!("← {} of the previous frame", label(resource.writer)))
                 } else {
                     ("reads ", format!("← {}", label(resource.writer)))
                 };
@@ -113,10 +115,12 @@ impl<T> Graph<T> {
         }
         for (index, resource) in plan.resources.iter().enumerate() {
             let physical = plan.allocation.assignment[index];
+            // A carried resource reaches its readers in the next frame: dashed.
+            let style = if resource.carried { ", style=dashed" } else { "" };
             for reader in &resource.readers {
                 let _ = writeln!(
                     out,
-                    "  p{} -> p{} [label=\"{} → {}\\n#{physical} {}\"];",
+                    "  p{} -> p{} [label=\"{} → {}\\n#{physical} {}\"{style}];",
                     resource.writer.pass, reader.pass, resource.writer.port, reader.port, resource.desc
                 );
             }

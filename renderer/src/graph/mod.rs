@@ -9,7 +9,9 @@
 //! order that a benchmark measures is the one the recipe wrote), usage flags derived from the
 //! accesses, lifetimes computed, and resources with equal descriptors and disjoint lifetimes
 //! sharing one allocation (§6; see [`allocate`]). Retained outputs, which are read back after
-//! the frame, live to its end and never share. Nothing is culled: a pass whose outputs nobody
+//! the frame, live to its end and never share. A *carried* connection reads in the next frame
+//! what a pass wrote in this one (a temporal mode's history): its resource spans every frame and
+//! never shares, and its writer runs after its reader. Nothing is culled: a pass whose outputs nobody
 //! reads still runs, since a benchmark must not drop timed work.
 
 mod allocate;
@@ -78,16 +80,20 @@ pub enum Access {
     Attachment,
     /// A depth attachment the pass renders into.
     Depth,
+    /// The source of a copy, which no shader binds.
+    CopySource,
+    /// The destination of a copy: the pass writes it without a shader.
+    CopyDestination,
 }
 
 impl Access {
     pub fn writes(self) -> bool {
-        matches!(self, Access::StorageWrite | Access::Attachment | Access::Depth)
+        matches!(self, Access::StorageWrite | Access::Attachment | Access::Depth | Access::CopyDestination)
     }
 
-    /// Whether the resource is bound to the shader (the rest are attachments).
+    /// Whether the resource is bound to the shader (the rest are attachments and copies).
     pub fn is_binding(self) -> bool {
-        !matches!(self, Access::Attachment | Access::Depth)
+        !matches!(self, Access::Attachment | Access::Depth | Access::CopySource | Access::CopyDestination)
     }
 }
 
@@ -135,6 +141,8 @@ pub enum Output {
     GBufferDepth,
     /// The depth cubes of shadow-casting lights.
     ShadowCubes,
+    /// Per-pixel motion in pixels since the previous frame (temporal modes).
+    Motion,
 }
 
 /// A port of a pass in a graph.
@@ -150,12 +158,14 @@ pub struct PortRef {
 pub struct Graph<T> {
     passes: Vec<(PassDecl, T)>,
     edges: Vec<(PortRef, PortRef)>,
+    /// Connections into the next frame: output → input.
+    carried: Vec<(PortRef, PortRef)>,
     retained: Vec<(PortRef, Output)>,
 }
 
 impl<T> Default for Graph<T> {
     fn default() -> Self {
-        Graph { passes: Vec::new(), edges: Vec::new(), retained: Vec::new() }
+        Graph { passes: Vec::new(), edges: Vec::new(), carried: Vec::new(), retained: Vec::new() }
     }
 }
 
@@ -236,8 +246,14 @@ impl Usage {
                 Access::Sampled | Access::Loaded => wgpu::TextureUsages::TEXTURE_BINDING,
                 Access::StorageRead | Access::StorageWrite => wgpu::TextureUsages::STORAGE_BINDING,
                 Access::Attachment | Access::Depth => wgpu::TextureUsages::RENDER_ATTACHMENT,
+                Access::CopySource => wgpu::TextureUsages::COPY_SRC,
+                Access::CopyDestination => wgpu::TextureUsages::COPY_DST,
             }),
-            Resolved::Buffer { .. } => Usage::Buffer(wgpu::BufferUsages::STORAGE),
+            Resolved::Buffer { .. } => Usage::Buffer(match access {
+                Access::CopySource => wgpu::BufferUsages::COPY_SRC,
+                Access::CopyDestination => wgpu::BufferUsages::COPY_DST,
+                _ => wgpu::BufferUsages::STORAGE,
+            }),
         }
     }
 
@@ -269,10 +285,12 @@ pub struct Virtual {
     pub desc: Resolved,
     pub usage: Usage,
     /// Positions in [`Plan::order`] of the first write and the last read; retained outputs
-    /// last until `order.len()`, after the frame.
+    /// and carried resources last until `order.len()`, after the frame.
     pub first: usize,
     pub last: usize,
     pub retained: Option<Output>,
+    /// Read in the next frame: it spans every frame.
+    pub carried: bool,
 }
 
 /// A compiled graph: the order to run passes in, the frame's resources and their allocation.
@@ -349,6 +367,8 @@ pub enum GraphError {
     Retained { port: String, output: Output },
     #[error("the passes {} wait on each other in a cycle", .0.join(", "))]
     Cycle(Vec<&'static str>),
+    #[error("{0} reads in the next frame what it writes: a pass cannot read and write one allocation")]
+    CarriedIntoItself(&'static str),
 }
 
 impl<T> Graph<T> {
@@ -371,6 +391,12 @@ impl<T> Graph<T> {
         for port in ports {
             self.connect(from, port, to, port);
         }
+    }
+
+    /// Connects an output port to an input port of the next frame: `to` reads what `from`
+    /// wrote in the frame before (a history). `from` runs after `to` within a frame.
+    pub fn carry(&mut self, from: PassId, from_port: &'static str, to: PassId, to_port: &'static str) {
+        self.carried.push((PortRef { pass: from, port: from_port }, PortRef { pass: to, port: to_port }));
     }
 
     /// Marks an output port as read back after the frame.
@@ -417,7 +443,12 @@ impl<T> Graph<T> {
                 return Err(GraphError::DuplicatePort { pass: name, port: port.1.name });
             }
         }
-        let refs = self.edges.iter().flat_map(|(a, b)| [a, b]).chain(self.retained.iter().map(|(p, _)| p));
+        let refs = self
+            .edges
+            .iter()
+            .chain(&self.carried)
+            .flat_map(|(a, b)| [a, b])
+            .chain(self.retained.iter().map(|(p, _)| p));
         if let Some(bad) = refs.map(|r| r.pass).find(|&pass| pass >= self.passes.len()) {
             return Err(GraphError::UnknownPass(bad, self.passes.len()));
         }
@@ -441,15 +472,17 @@ impl<T> Graph<T> {
                     first: position[&pass],
                     last: position[&pass],
                     retained: None,
+                    carried: false,
                 });
             }
         }
-        for (reader, writer) in &writer_of {
+        for (reader, writer, carried) in &writer_of {
             let index = ports[writer];
             let resource = &mut resources[index];
             resource.readers.push(*reader);
             resource.usage = resource.usage.union(Usage::of(resource.desc, self.port(*reader)?.access));
-            resource.last = resource.last.max(position[&reader.pass]);
+            resource.last = resource.last.max(if *carried { order.len() } else { position[&reader.pass] });
+            resource.carried |= carried;
             ports.insert(*reader, index);
         }
         for resource in &mut resources {
@@ -473,10 +506,15 @@ impl<T> Graph<T> {
         Ok(Plan { dims, order, names, resources, allocation, ports })
     }
 
-    /// Checks every connection and every input; returns each input's writer.
-    fn check_edges(&self, dims: Dims) -> Result<Vec<(PortRef, PortRef)>, GraphError> {
-        let mut writer_of: Vec<(PortRef, PortRef)> = Vec::new();
-        for &(from, to) in &self.edges {
+    /// Checks every connection and every input; returns each input's writer and whether it
+    /// reads the writer's previous frame.
+    fn check_edges(&self, dims: Dims) -> Result<Vec<(PortRef, PortRef, bool)>, GraphError> {
+        let mut writer_of: Vec<(PortRef, PortRef, bool)> = Vec::new();
+        let edges = self.edges.iter().map(|&e| (e, false));
+        for ((from, to), carried) in edges.chain(self.carried.iter().map(|&e| (e, true))) {
+            if carried && from.pass == to.pass {
+                return Err(GraphError::CarriedIntoItself(self.passes[from.pass].0.name));
+            }
             let (out, input) = (self.port(from)?, self.port(to)?);
             if !out.access.writes() {
                 return Err(GraphError::NotAnOutput { pass: self.passes[from.pass].0.name, port: from.port });
@@ -493,14 +531,14 @@ impl<T> Graph<T> {
                     to_desc: to_desc.to_string(),
                 });
             }
-            if writer_of.iter().any(|(reader, _)| *reader == to) {
+            if writer_of.iter().any(|(reader, _, _)| *reader == to) {
                 return Err(GraphError::TwoWriters { pass: self.passes[to.pass].0.name, port: to.port });
             }
-            writer_of.push((to, from));
+            writer_of.push((to, from, carried));
         }
         for (pass, (decl, _)) in self.passes.iter().enumerate() {
             for port in decl.ports.iter().filter(|p| !p.access.writes()) {
-                if !writer_of.iter().any(|(reader, _)| *reader == PortRef { pass, port: port.name }) {
+                if !writer_of.iter().any(|(reader, _, _)| *reader == PortRef { pass, port: port.name }) {
                     return Err(GraphError::Unwritten { pass: decl.name, port: port.name });
                 }
             }
@@ -513,7 +551,10 @@ impl<T> Graph<T> {
         let n = self.passes.len();
         let mut waiting = vec![0usize; n];
         let mut dependents = vec![Vec::new(); n];
-        for &(from, to) in &self.edges {
+        // A carried resource's writer waits for its reader: the reader must see the frame
+        // before's, not this frame's.
+        let carried = self.carried.iter().map(|&(from, to)| (to, from));
+        for (from, to) in self.edges.iter().copied().chain(carried) {
             if from.pass != to.pass {
                 waiting[to.pass] += 1;
                 dependents[from.pass].push(to.pass);

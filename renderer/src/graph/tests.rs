@@ -4,7 +4,8 @@
 //! outputs never share; usage flags follow the accesses. A read before any write, a format or
 //! extent mismatch, a cycle, a wrong direction, an unknown port or pass and a doubly written
 //! input are rejected with messages naming passes and ports. Passes run in dependency order,
-//! then insertion order, and nothing is culled.
+//! then insertion order, and nothing is culled. A resource carried into the next frame spans
+//! every frame, never shares, and puts its writer after its reader.
 
 use wgpu::TextureFormat::{Depth32Float, Rgba8Unorm, Rgba16Float};
 
@@ -220,4 +221,69 @@ fn the_description_names_every_pass_port_and_allocation() {
     }
     let dot = g.dot(&plan);
     assert!(dot.starts_with("digraph") && dot.contains("p1 -> p2") && dot.trim_end().ends_with('}'), "{dot}");
+}
+
+/// A history in miniature: `resolve` reads what `keep` wrote in the frame before and writes
+/// `next`, which `keep` copies into the history for the next frame.
+fn history_graph() -> (Graph<()>, PassId, PassId) {
+    use Access::{Attachment, CopyDestination, CopySource, Loaded};
+    let mut g = Graph::new();
+    let scene = g.add(pass("scene", vec![colour("color", Attachment)]), ());
+    // `keep` is added first: the carried connection, not insertion order, puts it last.
+    let keep = g.add(pass("keep", vec![colour("next", CopySource), colour("history", CopyDestination)]), ());
+    let resolve = g.add(
+        pass(
+            "resolve",
+            vec![
+                colour("current", Loaded),
+                colour("history", Loaded),
+                colour("color", Attachment),
+                colour("next", Attachment),
+            ],
+        ),
+        (),
+    );
+    g.connect(scene, "color", resolve, "current");
+    g.connect(resolve, "next", keep, "next");
+    g.carry(keep, "history", resolve, "history");
+    g.retain(resolve, "color", Output::Hdr);
+    (g, resolve, keep)
+}
+
+#[test]
+fn a_carried_resource_spans_the_frame_never_shares_and_its_writer_runs_after_its_reader() {
+    let (g, resolve, keep) = history_graph();
+    let plan = g.compile(DIMS).unwrap();
+    assert_eq!(plan.pass_names(), ["scene", "resolve", "keep"]);
+    let history = plan.resource_of(PortRef { pass: keep, port: "history" }).unwrap();
+    assert_eq!(plan.resource_of(PortRef { pass: resolve, port: "history" }), Some(history));
+    let resource = &plan.resources[history];
+    assert!(resource.carried);
+    assert_eq!(resource.last, plan.order.len(), "it lives past the frame");
+    let physical = &plan.allocation.physical[plan.allocation.assignment[history]];
+    assert!(physical.carried);
+    assert_eq!(physical.resources, [history], "the history shares its allocation with nothing");
+    assert_eq!(
+        physical.usage,
+        Usage::Texture(wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::TEXTURE_BINDING)
+    );
+    // The other resources share as ever: the bound is reached.
+    assert_eq!(plan.allocated_bytes(), plan.lower_bound_bytes());
+    let text = g.describe(&plan);
+    assert!(text.contains("← keep.history of the previous frame"), "{text}");
+    assert!(g.dot(&plan).contains("style=dashed"));
+}
+
+#[test]
+fn a_pass_cannot_carry_into_itself() {
+    use Access::{Attachment, Loaded};
+    let mut g: Graph<()> = Graph::new();
+    let feedback = g.add(pass("feedback", vec![colour("history", Loaded), colour("out", Attachment)]), ());
+    g.carry(feedback, "out", feedback, "history");
+    assert_eq!(g.compile(DIMS).unwrap_err(), GraphError::CarriedIntoItself("feedback"));
+    assert!(
+        GraphError::CarriedIntoItself("feedback")
+            .to_string()
+            .contains("cannot read and write one allocation")
+    );
 }

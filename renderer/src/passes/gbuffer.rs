@@ -15,6 +15,10 @@ pub(crate) const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba1
 pub(crate) const UV_GRAD_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// Reversed depth; shaders recover linear depth from it.
 pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Motion in pixels since the previous frame and the depth it had then (temporal modes). f16
+/// holds a motion of up to 32 pixels to 1/64 pixel; a reprojection is asked to land within
+/// 1/16.
+pub(crate) const MOTION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
 /// Material index written where no geometry covers a sample (`BACKGROUND` in WGSL).
 pub const BACKGROUND_MATERIAL: i32 = -1;
@@ -24,6 +28,7 @@ pub(crate) const UV: &str = "gb_uv";
 pub(crate) const NORMAL: &str = "gb_normal";
 pub(crate) const UV_GRAD: &str = "gb_uv_grad";
 pub(crate) const DEPTH: &str = "gb_depth";
+pub(crate) const MOTION: &str = "gb_motion";
 pub(crate) const PORTS: [&str; 4] = [UV, NORMAL, UV_GRAD, DEPTH];
 
 /// The same targets multisampled, under the names that `shaders/msaa.wgsl` binds them as.
@@ -55,11 +60,19 @@ pub(crate) struct GBufferNode {
     /// positions; the fragment shader runs once per pixel and triangle, so every sample a
     /// triangle covers holds its attributes at the pixel's centre).
     pub samples: u32,
+    /// Whether the pass also writes each sample's motion since the previous frame
+    /// ([`MOTION`]): only the graphs that read it have it.
+    pub motion: bool,
 }
 
 impl Node for GBufferNode {
     fn decl(&self) -> PassDecl {
-        PassDecl { name: "gbuffer", ports: outputs(self.samples).to_vec() }
+        let mut ports = outputs(self.samples).to_vec();
+        if self.motion {
+            let motion = Resource::texture(MOTION_FORMAT, Extent::GBuffer);
+            ports.push(Port::new(MOTION, motion, Access::Attachment));
+        }
+        PassDecl { name: "gbuffer", ports }
     }
 
     fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
@@ -67,7 +80,12 @@ impl Node for GBufferNode {
         // materials.
         let mut pipelines = Vec::new();
         for class in ctx.scene.draw_classes() {
-            let fragment = if class.masked { "gbuffer_masked" } else { "gbuffer_opaque" };
+            let fragment = match (class.masked, self.motion) {
+                (false, false) => "gbuffer_opaque",
+                (true, false) => "gbuffer_masked",
+                (false, true) => "gbuffer_opaque_motion",
+                (true, true) => "gbuffer_masked_motion",
+            };
             let program = Program {
                 shader: "gbuffer.wgsl",
                 vertex: "vertex",
@@ -75,8 +93,10 @@ impl Node for GBufferNode {
                 constants: Constants::new(),
             };
             let tangents = ctx.scene.has_tangents();
-            let create =
-                |device: &_, layout: &_, module: &_, key: &_| create(device, layout, module, key, tangents);
+            let motion = self.motion;
+            let create = |device: &_, layout: &_, module: &_, key: &_| {
+                create(device, layout, module, key, tangents, motion)
+            };
             let raster = Raster::GBuffer { class, samples: self.samples };
             let bundle = ctx.render_pipeline(io, &program, raster, &[], create)?;
             pipelines.push((class, bundle));
@@ -86,6 +106,7 @@ impl Node for GBufferNode {
             scene: ctx.scene.clone(),
             targets: ports(self.samples)[..3]
                 .iter()
+                .chain(self.motion.then_some(&MOTION))
                 .map(|port| io.texture(port))
                 .collect::<Result<_, _>>()?,
             depth: io.texture(ports(self.samples)[3])?,
@@ -119,9 +140,11 @@ fn create(
     module: &wgpu::ShaderModule,
     key: &RenderKey,
     tangents: bool,
+    motion: bool,
 ) -> wgpu::RenderPipeline {
     let Raster::GBuffer { class, samples } = key.raster else { unreachable!("a G-buffer key") };
-    let targets = [UV_FORMAT, NORMAL_FORMAT, UV_GRAD_FORMAT].map(|format| Some(format.into()));
+    let formats = [UV_FORMAT, NORMAL_FORMAT, UV_GRAD_FORMAT, MOTION_FORMAT];
+    let targets: Vec<_> = formats[..if motion { 4 } else { 3 }].iter().map(|&f| Some(f.into())).collect();
     // glTF front faces wind counter-clockwise. Double-sided surfaces keep their back faces
     // (the shader flips their normals towards the viewer); culling the others saves 11% of
     // the 4×4 atrium G-buffer (515 → 458 ms, measured in one process).
@@ -195,7 +218,8 @@ impl Pass for GBufferPass {
         let views: Vec<wgpu::TextureView> =
             self.targets.iter().map(|t| t.create_view(&Default::default())).collect();
         let background = wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: f64::from(BACKGROUND_MATERIAL) };
-        let clears = [wgpu::Color::TRANSPARENT, background, wgpu::Color::TRANSPARENT];
+        let clears =
+            [wgpu::Color::TRANSPARENT, background, wgpu::Color::TRANSPARENT, wgpu::Color::TRANSPARENT];
         let attachments: Vec<_> = views
             .iter()
             .zip(clears)

@@ -15,6 +15,7 @@ pub(crate) mod pixel_list;
 pub(crate) mod shade;
 pub(crate) mod shadow;
 pub(crate) mod smaa;
+pub(crate) mod taa;
 pub(crate) mod tonemap;
 
 use std::collections::{BTreeSet, HashMap};

@@ -11,6 +11,9 @@ use crate::pipelines::Constants;
 pub(crate) struct ShadeNode {
     pub stalled: bool,
     pub shadows: Option<Resource>,
+    /// A texture lookup's footprint relative to the G-buffer texel's: 1, or
+    /// [`super::taa::FOOTPRINT`].
+    pub footprint: f64,
 }
 
 impl Node for ShadeNode {
@@ -21,12 +24,16 @@ impl Node for ShadeNode {
     }
 
     fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
-        let program = Program {
+        let mut program = Program {
             shader: "shade.wgsl",
             vertex: FULLSCREEN.0,
             fragment: Some("shade_all"),
             constants: ctx.shading_constants(self.stalled),
         };
+        // Left at the shader's default where it is 1, so that those pipelines stay as they were.
+        if self.footprint != 1.0 {
+            program.constants = program.constants.with("FOOTPRINT", self.footprint);
+        }
         Ok(Box::new(ctx.screen(io, "shade", program, &["color"], FULLSCREEN.1, &[])?))
     }
 }

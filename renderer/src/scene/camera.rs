@@ -170,6 +170,16 @@ pub struct FrameUniforms {
     /// The rendered part of the frame: a tile's NDC maps to the whole frame's as
     /// `ndc · tile.xy + tile.zw` (1, 1, 0, 0 for the whole frame; see [`Tile`]).
     pub tile: [f32; 4],
+    /// From this target's clip space to the previous frame's, unjittered: a fragment's
+    /// (NDC, depth, 1) maps to where its point was, up to a factor of its clip w (temporal
+    /// modes; the camera's own frame otherwise).
+    pub reprojection: [[f32; 4]; 4],
+    /// x, y: the frame's sub-pixel jitter in pixels (a pixel's sample lies at its centre plus
+    /// the jitter, x right and y down; 0 but in temporal modes); z, w: the whole frame's width
+    /// and height in pixels.
+    pub jitter: [f32; 4],
+    /// x: 1 where the history holds earlier frames, 0 after a reset (temporal modes).
+    pub history: [f32; 4],
 }
 
 /// A rectangle of the output image in pixels, rendered on its own: the ground truth renders
@@ -191,12 +201,9 @@ impl Tile {
     /// (scale, offset) per axis that map the tile's NDC to the frame's: NDC x runs from −1 at
     /// the left edge, y from +1 at the top.
     fn ndc_window(&self, frame_width: u32, frame_height: u32) -> (DVec2, DVec2) {
-        let (w, h) = (f64::from(frame_width), f64::from(frame_height));
-        let (x0, x1) = (f64::from(self.x), f64::from(self.x + self.width));
-        let (y0, y1) = (f64::from(self.y), f64::from(self.y + self.height));
-        let scale = DVec2::new((x1 - x0) / w, (y1 - y0) / h);
-        let offset = DVec2::new((x0 + x1) / w - 1.0, 1.0 - (y0 + y1) / h);
-        (scale, offset)
+        let origin = DVec2::new(f64::from(self.x), f64::from(self.y));
+        let size = DVec2::new(f64::from(self.width), f64::from(self.height));
+        ndc_window(origin, size, frame_width, frame_height)
     }
 
     /// Clip space of the whole frame to the tile's: x' = (x − offset·w) / scale, same for y.
@@ -208,6 +215,16 @@ impl Tile {
             DVec4::new(-offset.x / scale.x, -offset.y / scale.y, 0.0, 1.0),
         )
     }
+}
+
+/// [`Tile::ndc_window`] of a window at `origin` of `size` pixels, either fractional: a whole
+/// frame jittered by a sub-pixel offset is the window at that offset.
+fn ndc_window(origin: DVec2, size: DVec2, frame_width: u32, frame_height: u32) -> (DVec2, DVec2) {
+    let (w, h) = (f64::from(frame_width), f64::from(frame_height));
+    let end = origin + size;
+    let scale = DVec2::new(size.x / w, size.y / h);
+    let offset = DVec2::new((origin.x + end.x) / w - 1.0, 1.0 - (origin.y + end.y) / h);
+    (scale, offset)
 }
 
 impl FrameUniforms {
@@ -226,12 +243,47 @@ impl FrameUniforms {
         height: u32,
         tile: Tile,
     ) -> FrameUniforms {
+        let (scale, offset) = tile.ndc_window(width, height);
+        let mut uniforms = Self::through(camera, camera, lighting, [width, height], (scale, offset));
+        uniforms.display[1..3].copy_from_slice(&[tile.x as f32, tile.y as f32]);
+        uniforms
+    }
+
+    /// The uniforms of a temporal mode's whole frame: its samples moved by `jitter` pixels
+    /// (each within ±½), `previous` the camera of the frame before (the history's), `history`
+    /// whether the history holds earlier frames. Without jitter and with `previous` the same
+    /// camera, the bits are those of [`Self::new`] but for `history`.
+    pub fn temporal(
+        camera: &Camera,
+        previous: &Camera,
+        lighting: &Lighting,
+        [width, height]: [u32; 2],
+        jitter: DVec2,
+        history: bool,
+    ) -> FrameUniforms {
+        let size = DVec2::new(f64::from(width), f64::from(height));
+        let window = ndc_window(jitter, size, width, height);
+        let mut uniforms = Self::through(camera, previous, lighting, [width, height], window);
+        uniforms.jitter[..2].copy_from_slice(&[jitter.x as f32, jitter.y as f32]);
+        uniforms.history[0] = if history { 1.0 } else { 0.0 };
+        uniforms
+    }
+
+    /// The uniforms through `camera` of the window whose NDC maps to the frame's as
+    /// `ndc · scale + offset`, `previous` the camera of the frame before; no jitter.
+    fn through(
+        camera: &Camera,
+        previous: &Camera,
+        lighting: &Lighting,
+        [width, height]: [u32; 2],
+        (scale, offset): (DVec2, DVec2),
+    ) -> FrameUniforms {
         let aspect = f64::from(width) / f64::from(height);
         let view = camera.view();
-        let (scale, offset) = tile.ndc_window(width, height);
         let view_proj = Tile::clip_to_tile(scale, offset) * camera.projection(aspect) * view;
         let tan_y = (camera.fov_y * 0.5).tan();
         let cast = |m: DMat4| m.as_mat4().to_cols_array_2d();
+        let reprojection = previous.projection(aspect) * previous.view() * view_proj.inverse();
         FrameUniforms {
             view_proj: cast(view_proj),
             view: cast(view),
@@ -240,8 +292,11 @@ impl FrameUniforms {
             projection: [(tan_y * aspect) as f32, tan_y as f32, camera.near as f32, camera.far as f32],
             ambient: lighting.ambient.extend(0.0).to_array(),
             background: lighting.background.extend(0.0).to_array(),
-            display: [lighting.exposure, tile.x as f32, tile.y as f32, 0.0],
+            display: [lighting.exposure, 0.0, 0.0, 0.0],
             tile: [scale.x as f32, scale.y as f32, offset.x as f32, offset.y as f32],
+            reprojection: cast(reprojection),
+            jitter: [0.0, 0.0, width as f32, height as f32],
+            history: [0.0; 4],
         }
     }
 }

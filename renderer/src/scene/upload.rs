@@ -211,6 +211,11 @@ impl GpuScene {
         }
     }
 
+    /// The same scene with its `Frame` uniforms in `frame`: a temporal mode's own.
+    pub(crate) fn with_frame(&self, frame: wgpu::Buffer) -> GpuScene {
+        GpuScene { frame, ..self.clone() }
+    }
+
     /// The scene resource that shaders bind under `name`, if the scene has it.
     pub(crate) fn binding(&self, name: &str) -> Option<Bound> {
         let buffer = |b: &wgpu::Buffer| Some(Bound::Buffer(b.clone()));

@@ -17,11 +17,12 @@ use crate::truth::TRUTH_ID;
 
 /// The modes of the overview table, where the run has them: the baselines, then M = 2 and
 /// M = 4 of the reference, the paper's adaptive mode and the variant nearest the truth.
-const OVERVIEW: [&str; 9] = [
+const OVERVIEW: [&str; 10] = [
     "deferred-1x1",
     "fxaa",
     "smaa",
     "msaa-4x",
+    "taa",
     "reference-2x2",
     "adaptive-2x2",
     "reference-4x4",
@@ -296,7 +297,7 @@ fn standalone(svg: &str) -> String {
 }
 
 /// The modes a strip shows after the truth, left to right, at the largest M of the scene's
-/// adaptive modes: deferred-1x1, fxaa, smaa, msaa-4x, the reference, the paper's adaptive mode (whose worst
+/// adaptive modes: deferred-1x1, fxaa, smaa, msaa-4x, taa, the reference, the paper's adaptive mode (whose worst
 /// window against the truth the strip shows) and the `-cells` variant, those the scene has.
 fn strip_modes(scene: &SceneRecord) -> Option<Vec<&ModeRecord>> {
     let m = (2..=4).rev().find(|m| scene.mode(&format!("adaptive-{m}x{m}")).is_some())?;
@@ -305,6 +306,7 @@ fn strip_modes(scene: &SceneRecord) -> Option<Vec<&ModeRecord>> {
         "fxaa".into(),
         "smaa".into(),
         "msaa-4x".into(),
+        "taa".into(),
         format!("reference-{m}x{m}"),
         format!("adaptive-{m}x{m}"),
         format!("adaptive-{m}x{m}-cells"),

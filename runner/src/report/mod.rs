@@ -374,6 +374,7 @@ pub fn error_points(scene: &SceneRecord, metric: ErrorMetric) -> Vec<Point> {
                 "deferred" => Kind::Deferred,
                 "fxaa" => Kind::Fxaa,
                 "smaa" => Kind::Smaa,
+                "taa" => Kind::Taa,
                 "msaa" => Kind::Msaa,
                 "reference" => Kind::Reference,
                 _ if mode.mode.split('-').any(|part| VARIANTS.contains(&part)) => Kind::Variant,
@@ -505,12 +506,12 @@ fn images(
     if let Some(image) = scene.truth.as_ref().and_then(|t| t.image.as_deref()) {
         figure(page, image, TRUTH_ID);
     }
-    for id in ["deferred-1x1", "fxaa", "smaa"] {
+    for id in ["deferred-1x1", "fxaa", "smaa", "taa"] {
         if let Some(image) = scene.mode(id).and_then(|m| m.images.display.as_deref()) {
             figure(page, image, id);
         }
     }
-    for (id, name) in [("fxaa", "FXAA"), ("smaa", "SMAA")] {
+    for (id, name) in [("fxaa", "FXAA"), ("smaa", "SMAA"), ("taa", "TAA")] {
         if let Some(image) = scene.mode(id).and_then(|m| m.images.difference.as_deref()) {
             figure(
                 page,
@@ -519,7 +520,7 @@ fn images(
             );
         }
     }
-    for id in ["deferred-1x1", "fxaa", "smaa"] {
+    for id in ["deferred-1x1", "fxaa", "smaa", "taa"] {
         flip_figure(page, scene.mode(id));
     }
     page.push_str("</div>\n");

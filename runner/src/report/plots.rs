@@ -11,6 +11,8 @@ pub enum Kind {
     Fxaa,
     /// SMAA: a hollow square beside deferred's filled one.
     Smaa,
+    /// TAA: a hollow square crossed, between SMAA's square and FXAA's cross.
+    Taa,
     Reference,
     /// 4× MSAA: a hollow triangle beside the reference's filled one (the 2×2 reference shades
     /// as many samples everywhere).
@@ -142,6 +144,7 @@ pub fn error_against_time(title: &str, y_desc: &str, points: &[Point]) -> Result
                 Kind::Deferred,
                 Kind::Fxaa,
                 Kind::Smaa,
+                Kind::Taa,
                 Kind::Reference,
                 Kind::Msaa,
                 Kind::Adaptive,
@@ -157,6 +160,10 @@ pub fn error_against_time(title: &str, y_desc: &str, points: &[Point]) -> Result
                             Kind::Smaa => {
                                 at + Rectangle::new([(-4, -4), (4, 4)], colour.stroke_width(2)).into_dyn()
                             }
+                            // Its cross is drawn below.
+                            Kind::Taa => {
+                                at + Rectangle::new([(-5, -5), (5, 5)], colour.stroke_width(1)).into_dyn()
+                            }
                             Kind::Reference => at + TriangleMarker::new((0, 0), 6, style).into_dyn(),
                             Kind::Msaa => {
                                 at + TriangleMarker::new((0, 0), 6, colour.stroke_width(2)).into_dyn()
@@ -167,6 +174,12 @@ pub fn error_against_time(title: &str, y_desc: &str, points: &[Point]) -> Result
                     }))
                     .map_err(fail)?;
             }
+            let taa = series.iter().filter(|p| p.kind == Kind::Taa);
+            chart
+                .draw_series(taa.map(|p| {
+                    EmptyElement::at((p.time, p.error)) + Cross::new((0, 0), 4, colour.stroke_width(1))
+                }))
+                .map_err(fail)?;
             let font = ("sans-serif", 11).into_font().color(&colour);
             chart
                 .draw_series(series.iter().map(|p| {

@@ -1,7 +1,8 @@
 //! Sequences along a manifest's camera path, through the `aabench` binary: a static path gives
 //! every mode its still frame bit for bit and no instability; a thin wire under a slow pan
 //! flickers in deferred-1x1 far more than in reference-4x4, and the metric ranks them so; TAA
-//! flickers less than deferred-1x1 on the moving `thin` scene and reports its ghosting.
+//! flickers less than deferred-1x1 on the moving `thin` scene and reports its ghosting, and the
+//! report shows every mode along the path.
 
 use serde_json::{Value, json};
 
@@ -125,6 +126,21 @@ fn taa_flickers_less_than_deferred_on_a_moving_thin_scene_and_reports_its_ghosti
         "{ghosting}"
     );
     assert!(deferred.get("ghosting").is_none(), "a mode without history has no ghosting: {deferred}");
+
+    // The report shows the path: a table of every mode along it, and instability against time.
+    let run_dir = ws.run_dir();
+    let run_dir = run_dir.to_str().unwrap();
+    let output = ws.run(&["report", "--markdown", run_dir, "--figures", "figures"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let markdown = String::from_utf8(output.stdout).unwrap();
+    assert!(markdown.contains("Along the camera path: orbit path, 8 of 8 frames"), "{markdown}");
+    let row = markdown.lines().find(|l| l.starts_with("| taa | ") && l.contains(" · ")).expect("taa's row");
+    assert!(row.contains(&format!("{:.3}", instability(taa) * 1e4)), "{row}");
+    let plot = std::fs::read_to_string(ws.dir.join("figures/thin-instability.svg")).unwrap();
+    assert!(plot.contains("instability against run time") && plot.contains("taa"), "{plot}");
+    assert_eq!(ws.run(&["report", run_dir]).status.code(), Some(0));
+    let page = std::fs::read_to_string(std::path::Path::new(run_dir).join("index.html")).unwrap();
+    assert!(page.contains("<h3>Along the camera path</h3>") && page.contains("instability against run time"));
 }
 
 /// The gate compares a sequence: against its own baseline nothing moves; a baseline doctored

@@ -1,6 +1,7 @@
 //! `aabench report --markdown`: a run's results as Markdown, so that documentation quotes a
 //! named run instead of numbers typed by hand. With `--figures DIR` it also writes, per scene,
-//! the error-against-run-time plot as SVG and a strip of crops (the truth and the main modes
+//! the error-against-run-time plots as SVG (MSE, FLIP, and instability where the scene has a
+//! camera path) and a strip of crops (the truth and the main modes
 //! at the window where adaptive-4x4 differs most from it) as PNG.
 
 use std::fmt::Write;
@@ -9,8 +10,8 @@ use std::path::Path;
 use image::RgbaImage;
 
 use super::{
-    ErrorMetric, MODE_COLUMNS, VARIANTS, decibels, error_points, fastest_by_level, mode_cells, open_rgba,
-    plots, technique_cell, worst_window,
+    ErrorMetric, MODE_COLUMNS, SEQUENCE_COLUMNS, VARIANTS, decibels, error_points, fastest_by_level,
+    mode_cells, open_rgba, plots, sequence_cells, sequence_summary, technique_cell, worst_window,
 };
 use crate::record::{ModeRecord, RunRecord, SceneRecord};
 use crate::truth::TRUTH_ID;
@@ -245,6 +246,15 @@ fn scene_table(out: &mut String, scene: &SceneRecord) {
         let cells: Vec<String> = mode_cells(mode).iter().map(|c| cell_text(c)).collect();
         let _ = writeln!(out, "| {} |", cells.join(" | "));
     }
+    if let Some(sequence) = &scene.sequence {
+        let _ = writeln!(out, "\nAlong the camera path: {}.\n", cell_text(&sequence_summary(sequence)));
+        let _ = writeln!(out, "| {} |", SEQUENCE_COLUMNS.join(" | "));
+        let _ = writeln!(out, "|---|{}", "---:|".repeat(SEQUENCE_COLUMNS.len() - 1));
+        for cells in scene.modes.iter().filter_map(sequence_cells) {
+            let cells: Vec<String> = cells.iter().map(|c| cell_text(c)).collect();
+            let _ = writeln!(out, "| {} |", cells.join(" | "));
+        }
+    }
 }
 
 /// Text that cannot break a table row: pipes escaped, line breaks as spaces.
@@ -258,7 +268,12 @@ pub fn figures(run_dir: &Path, run: &RunRecord, dir: &Path) -> Result<(Vec<Strin
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let (mut written, mut left_out) = (Vec::new(), Vec::new());
     for scene in &run.scenes {
-        for (metric, suffix) in [(ErrorMetric::Mse, "front"), (ErrorMetric::Flip, "front-flip")] {
+        for metric in ErrorMetric::of_scene(scene) {
+            let suffix = match metric {
+                ErrorMetric::Mse => "front",
+                ErrorMetric::Flip => "front-flip",
+                ErrorMetric::Instability => "instability",
+            };
             let points = error_points(scene, metric);
             if points.is_empty() {
                 left_out.push(format!("{}: no mode has a {} to plot", scene.name, metric.axis()));

@@ -140,7 +140,8 @@ fn scene_section(
     let checks: Vec<&Check> =
         verdict.map_or_else(Vec::new, |v| v.checks.iter().filter(|c| c.scene == scene.name).collect());
     mode_table(page, scene, &checks);
-    for metric in [ErrorMetric::Mse, ErrorMetric::Flip] {
+    sequence_table(page, scene);
+    for metric in ErrorMetric::of_scene(scene) {
         let points = error_points(scene, metric);
         if points.is_empty() {
             if metric == ErrorMetric::Mse {
@@ -258,6 +259,72 @@ pub fn mode_cells(mode: &ModeRecord) -> [String; 13] {
     ]
 }
 
+/// The columns of a scene's table along its camera path (`sequence_cells`).
+pub const SEQUENCE_COLUMNS: [&str; 6] = [
+    "mode",
+    "PSNR along the path",
+    "instability ×1e-4",
+    "change ratio",
+    "count changes %",
+    "ghosting: disoccluded % · MSE there / elsewhere ×1e-3",
+];
+
+/// A mode's row along the scene's camera path, where it has one.
+pub fn sequence_cells(mode: &ModeRecord) -> Option<[String; 6]> {
+    let sequence = mode.sequence.as_ref()?;
+    let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
+    let psnr = sequence.mean_psnr_db.value();
+    let ghosting = sequence.ghosting.as_ref().map(|g| {
+        let mse = |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.2}", v * 1e3));
+        format!("{:.2} · {} / {}", g.disoccluded * 100.0, mse(g.mse), mse(g.mse_elsewhere))
+    });
+    Some([
+        mode.mode.clone(),
+        if psnr.is_finite() { format!("{psnr:.2}") } else { "∞".into() },
+        format!("{:.3}", sequence.instability * 1e4),
+        cell(sequence.change_ratio.map(|r| format!("{r:.2}"))),
+        cell(sequence.count_changes.map(|c| format!("{:.2}", c * 100.0))),
+        cell(ghosting),
+    ])
+}
+
+/// The scene's modes along its camera path, where it has one.
+fn sequence_table(page: &mut String, scene: &SceneRecord) {
+    let Some(sequence) = &scene.sequence else { return };
+    let rows: Vec<[String; 6]> = scene.modes.iter().filter_map(sequence_cells).collect();
+    let summary = escape(&sequence_summary(sequence));
+    let _ = writeln!(page, "<h3>Along the camera path</h3>\n<p class=\"meta\">{summary}</p>");
+    if rows.is_empty() {
+        return;
+    }
+    page.push_str("<table><thead><tr>");
+    for column in SEQUENCE_COLUMNS {
+        let _ = write!(page, "<th>{}</th>", escape(column));
+    }
+    page.push_str("</tr></thead><tbody>\n");
+    for row in rows {
+        page.push_str("<tr>");
+        for cell in row {
+            let _ = write!(page, "<td>{}</td>", escape(&cell));
+        }
+        page.push_str("</tr>\n");
+    }
+    page.push_str("</tbody></table>\n");
+}
+
+/// One line on a scene's sequence: its path, frames and the truth's own change.
+pub fn sequence_summary(sequence: &crate::record::SequenceRecord) -> String {
+    let truth = sequence.truth_change.map_or("–".into(), |c| format!("{c:.3e}"));
+    let mut line = format!(
+        "{} path, {} of {} frames of {:.4} s; the truth's own mean squared change per frame {truth}",
+        sequence.path, sequence.frames_done, sequence.frames, sequence.time_step_s
+    );
+    if let Some(error) = &sequence.error {
+        let _ = write!(line, "; stopped: {error}");
+    }
+    line
+}
+
 /// A PSNR to two decimals, `∞` for identical images, `–` without a comparison.
 pub fn decibels(quality: Option<&crate::metrics::Quality>) -> String {
     quality.map_or("–".into(), |q| {
@@ -336,6 +403,9 @@ pub enum ErrorMetric {
     /// Mean FLIP against the truth; its front is drawn by medians: no faster mode of the same
     /// stall has less FLIP.
     Flip,
+    /// Temporal instability along the scene's camera path (`sequence.rs`); its front is drawn
+    /// by medians as FLIP's.
+    Instability,
 }
 
 impl ErrorMetric {
@@ -343,6 +413,7 @@ impl ErrorMetric {
         match self {
             ErrorMetric::Mse => "MSE against the truth ×1e-5 (log)",
             ErrorMetric::Flip => "mean FLIP against the truth (log)",
+            ErrorMetric::Instability => "temporal instability along the camera path (log)",
         }
     }
 
@@ -351,13 +422,22 @@ impl ErrorMetric {
         match self {
             ErrorMetric::Mse => "error against run time",
             ErrorMetric::Flip => "FLIP against run time",
+            ErrorMetric::Instability => "instability against run time",
         }
     }
 
-    fn of(self, quality: &crate::metrics::Quality) -> Option<f64> {
+    /// The plots a scene has: instability only where it has a camera path.
+    pub fn of_scene(scene: &SceneRecord) -> Vec<ErrorMetric> {
+        let mut metrics = vec![ErrorMetric::Mse, ErrorMetric::Flip];
+        metrics.extend(scene.sequence.as_ref().map(|_| ErrorMetric::Instability));
+        metrics
+    }
+
+    fn of(self, mode: &ModeRecord) -> Option<f64> {
         match self {
-            ErrorMetric::Mse => Some(quality.mse_e5),
-            ErrorMetric::Flip => quality.flip,
+            ErrorMetric::Mse => Some(mode.vs_ground_truth.as_ref()?.mse_e5),
+            ErrorMetric::Flip => mode.vs_ground_truth.as_ref()?.flip,
+            ErrorMetric::Instability => Some(mode.sequence.as_ref()?.instability),
         }
     }
 }
@@ -369,7 +449,7 @@ pub fn error_points(scene: &SceneRecord, metric: ErrorMetric) -> Vec<Point> {
         .iter()
         .filter_map(|mode| {
             let frame = mode.frame_ms.as_ref()?;
-            let error = metric.of(mode.vs_ground_truth.as_ref()?)?;
+            let error = metric.of(mode)?;
             let kind = match mode.mode.split('-').next()? {
                 "deferred" => Kind::Deferred,
                 "fxaa" => Kind::Fxaa,
@@ -392,7 +472,7 @@ pub fn error_points(scene: &SceneRecord, metric: ErrorMetric) -> Vec<Point> {
             })
         })
         .collect();
-    if metric == ErrorMetric::Flip {
+    if metric != ErrorMetric::Mse {
         let dominated: Vec<bool> = points
             .iter()
             .map(|p| points.iter().any(|q| q.stalled == p.stalled && q.time < p.time && q.error < p.error))

@@ -631,24 +631,18 @@ async fn ground_truth(
             progress.status(&format!("[{}] rendering the ground truth ({TRUTH_ID}, untimed)", manifest.name));
             let measured = truth::peak_memory::reset();
             let start = Instant::now();
-            let rendered = worker
-                .call(plan.frame_timeout.saturating_mul(16), move |state| {
-                    // A signal stops the truth between tiles, not after the last one.
-                    let stop = || cancel.load(Ordering::SeqCst);
-                    let renderer = state.renderer.as_mut().expect("an uploaded scene");
-                    renderer.render_truth_until(TRUTH_M, truth::TILE_BYTES, &stop)
-                })
-                .await;
-            let truth = match rendered {
-                Ok(Ok(truth)) => truth,
-                Ok(Err(error)) => return fail(record, error.to_string()),
-                Err(error) => return fail(record, error.to_string()),
-            };
+            // A signal stops the truth between tiles, not after the last one.
+            let timeout = plan.frame_timeout.saturating_mul(16);
+            let (truth, not_cached) =
+                match truth::render_and_store(worker, timeout, &cache, resolution, cancel).await {
+                    Ok(rendered) => rendered,
+                    Err(error) => return fail(record, error),
+                };
             record.render_s = Some(start.elapsed().as_secs_f64());
             record.tiles = Some(truth.tiles);
             record.peak_rss_bytes = if measured { truth::peak_memory::read() } else { None };
-            if let Err(error) = truth::store(&cache, resolution, &truth.images.display) {
-                progress.line(&format!("[{}] warning: ground truth not cached: {error:#}", manifest.name));
+            if let Some(error) = not_cached {
+                progress.line(&format!("[{}] warning: ground truth not cached: {error}", manifest.name));
             }
             truth.images.display
         }

@@ -33,7 +33,7 @@ use crate::motion::MotionSpec;
 use crate::plan::RunPlan;
 use crate::progress::Progress;
 use crate::record::{Ghosting, ModeSequence, SequenceRecord, fingerprint};
-use crate::truth::{self, TRUTH_M};
+use crate::truth;
 use crate::worker::Worker;
 
 /// What the sequence is measured along and against: the path and its cameras in this tier, and
@@ -269,21 +269,16 @@ async fn truth_frame(
         return Ok(display);
     }
     let start = Instant::now();
-    let cancel = Arc::clone(cancel);
-    let rendered = worker
-        .call(plan.frame_timeout.saturating_mul(16), move |state| {
-            let stop = || cancel.load(Ordering::SeqCst);
-            let renderer = state.renderer.as_mut().expect("an uploaded scene");
-            renderer.render_truth_until(TRUTH_M, truth::TILE_BYTES, &stop)
-        })
-        .await
-        .map_err(|e| e.to_string())?
-        .map_err(|e| format!("the truth of frame {frame}: {e}"))?;
+    let timeout = plan.frame_timeout.saturating_mul(16);
+    let (rendered, not_cached) =
+        truth::render_and_store(worker, timeout, &cache, resolution, Arc::clone(cancel))
+            .await
+            .map_err(|e| format!("the truth of frame {frame}: {e}"))?;
     record.truth_rendered += 1;
     record.truth_render_s += start.elapsed().as_secs_f64();
-    if let Err(error) = truth::store(&cache, resolution, &rendered.images.display) {
+    if let Some(error) = not_cached {
         progress
-            .line(&format!("[{}] warning: the truth of frame {frame} not cached: {error:#}", manifest.name));
+            .line(&format!("[{}] warning: the truth of frame {frame} not cached: {error}", manifest.name));
     }
     Ok(rendered.images.display)
 }
@@ -309,10 +304,8 @@ impl ModeState {
                 self.disoccluded.push(share);
                 let pixels = frame.display.rgba.chunks_exact(4).zip(truth.rgba.chunks_exact(4));
                 for ((p, t), &hidden) in pixels.zip(&hidden) {
-                    let squares: u64 =
-                        (0..3).map(|c| (i64::from(p[c]) - i64::from(t[c])).pow(2) as u64).sum();
                     let sums = &mut self.ghosting[usize::from(!hidden)];
-                    *sums = (sums.0 + squares, sums.1 + 3);
+                    *sums = (sums.0 + pixel_squares(p, t), sums.1 + 3);
                 }
             }
         }
@@ -417,8 +410,8 @@ fn squared_difference(
     let mut sum = 0u64;
     match minus {
         None => {
-            for (p, q) in colour(a).zip(colour(b)) {
-                sum += (0..3).map(|c| step(p[c], q[c]).pow(2) as u64).sum::<u64>();
+            for (p, q) in a.rgba.chunks_exact(4).zip(b.rgba.chunks_exact(4)) {
+                sum += pixel_squares(p, q);
             }
         }
         Some((c, d)) => {
@@ -428,6 +421,11 @@ fn squared_difference(
         }
     }
     sum
+}
+
+/// Σ over a pixel's colour channels (RGBA, alpha left out) of (p − q)², in squared code steps.
+fn pixel_squares(p: &[u16], q: &[u16]) -> u64 {
+    (0..3).map(|c| u64::from(p[c].abs_diff(q[c])).pow(2)).sum()
 }
 
 /// A sum of squared code steps over `frames` images like `image`, as a mean over values in

@@ -4,14 +4,18 @@
 //! determines it, so a nightly run pays for it once per change of scene.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 
 use aabench_renderer::scene::Camera;
-use aabench_renderer::{DisplayImage, PlatformInfo, shaders};
+use aabench_renderer::{DisplayImage, PlatformInfo, Truth, shaders};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use crate::images;
 use crate::inputs::{SceneInputs, hex};
+use crate::worker::Worker;
 
 /// Samples per pixel side of the truth.
 pub const TRUTH_M: u32 = 8;
@@ -104,6 +108,29 @@ pub fn load_cached(path: &Path, resolution: [u32; 2], bits: u32) -> Option<Displ
 }
 
 /// Writes the display image to the cache (atomically).
+/// Renders the truth at the worker's current camera, stopping between tiles once `cancel` is
+/// set, and caches its display image in `cache`. Returns the truth and, where the cache could
+/// not be written, why (a warning: the run goes on).
+pub async fn render_and_store(
+    worker: &mut Worker,
+    timeout: Duration,
+    cache: &Path,
+    resolution: [u32; 2],
+    cancel: Arc<AtomicBool>,
+) -> Result<(Truth, Option<String>), String> {
+    let truth = worker
+        .call(timeout, move |state| {
+            let stop = || cancel.load(Ordering::SeqCst);
+            let renderer = state.renderer.as_mut().expect("an uploaded scene");
+            renderer.render_truth_until(TRUTH_M, TILE_BYTES, &stop)
+        })
+        .await
+        .map_err(|e| e.to_string())?
+        .map_err(|e| e.to_string())?;
+    let not_cached = store(cache, resolution, &truth.images.display).err().map(|e| format!("{e:#}"));
+    Ok((truth, not_cached))
+}
+
 pub fn store(path: &Path, resolution: [u32; 2], image: &DisplayImage) -> anyhow::Result<()> {
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?;

@@ -116,6 +116,73 @@ impl Reconstruction {
     }
 }
 
+/// Where an adaptive mode's sample counts come from (a mode's `-stable` suffix picks `Stable`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Counts {
+    /// From this frame's metric alone, as the paper does.
+    PerFrame,
+    /// The paper's future work (after Herzog et al. 2010): this frame's metric and the count
+    /// the pixel's surface had in the frame before, reprojected along the camera's motion and
+    /// carried between frames. See [`StableCounts`] for the rule. At a still camera the counts
+    /// are the paper's, bit for bit.
+    Stable,
+}
+
+/// How a `-stable` mode combines the count `now` that this frame's metric asks for with the
+/// count `before` that the pixel's surface had in the frame before (both in samples, 1…M²): a
+/// count rises at once to what the metric asks; it falls only where the metric asks for more
+/// than [`Self::hold`] of the window fewer, and then to no less than 1 − [`Self::decay`] of
+/// itself a frame. A metric that wavers by a few samples as detail slides through the window
+/// leaves the count, and so the pixel's samples, as they were; a feature that leaves the pixel
+/// hands its samples back over a few frames, 16 → 8 → 4 → 2 → 1 at 4×4, through prefixes of
+/// the dither order that each spread evenly over the window. `shaders/adaptive.wgsl`
+/// (evaluate_stable) computes this; [`Self::next`] is its CPU twin. `docs/adaptive.md`
+/// measures the choices.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StableCounts {
+    /// The share of the window's M² samples that the metric may ask for fewer than the count
+    /// before without the count falling.
+    pub hold: f32,
+    /// The most a count falls in one frame, as a share of itself: 1 drops it to the metric's at
+    /// once, 0 never lets it fall.
+    pub decay: f32,
+}
+
+impl Default for StableCounts {
+    fn default() -> Self {
+        StableCounts { hold: STABLE_HOLD, decay: STABLE_DECAY }
+    }
+}
+
+/// [`StableCounts::hold`] of the shipped `-stable` modes: 6 samples at 4×4.
+pub const STABLE_HOLD: f32 = 0.375;
+/// [`StableCounts::decay`] of the shipped `-stable` modes: a count halves at most, each frame.
+pub const STABLE_DECAY: f32 = 0.5;
+
+/// How much deeper, relative to it, than the deepest sample of the pixel whose count it takes a
+/// `-stable` pixel's nearest point may have lain in the frame before: deeper, the point was
+/// hidden there (a disocclusion), and the metric's count is taken alone.
+pub const STABLE_DEPTH_TOLERANCE: f32 = 0.01;
+
+impl StableCounts {
+    /// The samples below the count before that the metric may ask for at `m`×`m` without the
+    /// count falling.
+    pub fn hold_samples(self, m: u32) -> f32 {
+        self.hold * (m * m) as f32
+    }
+
+    /// The count a `-stable` pixel of an `m`×`m` window takes (rounded up to whole samples where
+    /// the decay leaves it between two), from the metric's count `now` and the count its
+    /// surface had in the frame before, where the history holds it.
+    pub fn next(self, m: u32, now: f32, before: Option<f32>) -> f32 {
+        match before {
+            None => now,
+            Some(before) if now >= before - self.hold_samples(m) => now.max(before),
+            Some(before) => now.max(before * (1.0 - self.decay)),
+        }
+    }
+}
+
 /// One sample's cell in a prefix of the dither order: the part of the pixel nearer to it than
 /// to the prefix's other samples.
 #[repr(C)]
@@ -265,6 +332,8 @@ pub struct AdaptiveSettings {
     /// Test knob: every pixel gets all M² samples, whatever the metrics say.
     pub force_all_samples: bool,
     pub extra_samples: ExtraSamples,
+    /// How `-stable` modes carry counts from frame to frame.
+    pub stable: StableCounts,
 }
 
 impl Default for AdaptiveSettings {
@@ -279,6 +348,7 @@ impl Default for AdaptiveSettings {
             t_edge: 1.0 / 8.0,
             force_all_samples: false,
             extra_samples: ExtraSamples::Compact,
+            stable: StableCounts::default(),
         }
     }
 }

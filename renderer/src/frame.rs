@@ -2,21 +2,23 @@
 //! which outputs are read back. Built from what the scene needs, so a scene without
 //! shadow-casting lights has no shadow pass and no cube, and only adaptive modes evaluate.
 
-use crate::adaptive::{ExtraSamples, Reconstruction};
+use crate::adaptive::{Counts, ExtraSamples, Reconstruction};
 use crate::graph::{Dims, Graph, Output, PassId, Plan};
 use crate::mode::{Mode, Technique};
 use crate::passes::Node;
 use crate::passes::adaptive::{
-    CompactNode, EvaluateNode, Extra, GatherNode, List, ShadeExtraNode, ShadeFirstNode,
+    self as adaptive_passes, CompactNode, EvaluateNode, Extra, GatherNode, List, ShadeExtraNode,
+    ShadeFirstNode,
 };
 use crate::passes::display::DisplayNode;
 use crate::passes::fxaa::FxaaNode;
 use crate::passes::gbuffer::{self, GBufferNode, MSAA_SAMPLES};
+use crate::passes::keep::KeepNode;
 use crate::passes::msaa::{MsaaNode, MsaaStep};
 use crate::passes::shade::{ResolveNode, ShadeNode};
 use crate::passes::shadow::{self, ShadowNode};
 use crate::passes::smaa::{SmaaNode, SmaaStep};
-use crate::passes::taa::{self, KeepHistoryNode, TaaNode};
+use crate::passes::taa::{self, TaaNode};
 use crate::passes::tonemap::TonemapNode;
 use crate::scene::{Lighting, Scene, ShadowCubes};
 use crate::shaders::Features;
@@ -115,7 +117,7 @@ pub(crate) fn frame_graph(
         g.retain(shadow, shadow::CUBES, Output::ShadowCubes);
     }
     let samples = if mode.technique == Technique::Msaa { MSAA_SAMPLES } else { 1 };
-    let motion = mode.is_temporal();
+    let motion = mode.is_jittered();
     let gbuffer = add(&mut g, GBufferNode { samples, motion });
     if samples == 1 {
         g.retain(gbuffer, gbuffer::NORMAL, Output::GBufferNormal);
@@ -144,7 +146,7 @@ pub(crate) fn frame_graph(
             pixels
         }
         Technique::Deferred | Technique::Fxaa | Technique::Smaa | Technique::Reference | Technique::Taa => {
-            let footprint = if mode.is_temporal() { taa::FOOTPRINT } else { 1.0 };
+            let footprint = if mode.is_jittered() { taa::FOOTPRINT } else { 1.0 };
             let shade = add(&mut g, ShadeNode { stalled, shadows: cubes, footprint });
             sources.feed(&mut g, shade);
             match mode.technique {
@@ -157,7 +159,7 @@ pub(crate) fn frame_graph(
                     let taa = add(&mut g, TaaNode);
                     g.connect(shade, "color", taa, "current");
                     g.connect_all(gbuffer, taa, &[gbuffer::MOTION, gbuffer::DEPTH]);
-                    let keep = add(&mut g, KeepHistoryNode);
+                    let keep = add(&mut g, taa::keep_history());
                     g.connect(taa, "history_next", keep, "history_next");
                     g.carry(keep, "history", taa, "history");
                     taa
@@ -165,7 +167,7 @@ pub(crate) fn frame_graph(
                 _ => shade,
             }
         }
-        Technique::Adaptive(metrics, reconstruction) => {
+        Technique::Adaptive(metrics, reconstruction, counts) => {
             let coverage = reconstruction == Reconstruction::Coverage;
             let first = add(&mut g, ShadeFirstNode { m, stalled, reconstruction, shadows: cubes });
             sources.feed(&mut g, first);
@@ -178,12 +180,26 @@ pub(crate) fn frame_graph(
                 reconstruction,
                 settings: settings.adaptive,
                 tonemap: settings.color.tonemap,
+                counts,
             };
             let reads = evaluate_node.gbuffer_reads();
             let evaluate = add(&mut g, evaluate_node);
             g.connect_all(gbuffer, evaluate, reads);
             g.connect(first, "first", evaluate, "first");
             g.retain(evaluate, "counts", Output::SampleCounts);
+            if counts == Counts::Stable {
+                let keep = add(
+                    &mut g,
+                    KeepNode {
+                        name: "count_history",
+                        next: "count_history_next",
+                        kept: "count_history",
+                        resource: adaptive_passes::count_history(),
+                    },
+                );
+                g.connect(evaluate, "count_history_next", keep, "count_history_next");
+                g.carry(keep, "count_history", evaluate, "count_history");
+            }
             // `-coverage` reads its samples' slopes from the list, which the loop has no room for.
             let extra = match settings.adaptive.extra_samples {
                 ExtraSamples::Loop if !coverage => Extra::Loop { stalled, shadows: cubes },

@@ -24,7 +24,7 @@ mod settings;
 pub mod shaders;
 pub mod smaa;
 
-pub use adaptive::{AdaptiveSettings, ExtraSamples, Reconstruction};
+pub use adaptive::{AdaptiveSettings, Counts, ExtraSamples, Reconstruction, StableCounts};
 pub use color::ColorSettings;
 pub use error::RenderError;
 pub use gpu::{Gpu, PlatformInfo};

@@ -1,10 +1,10 @@
 //! Render modes and their ids: `deferred-1x1`, `smaa`, `msaa-4x`, `taa`, `reference-4x4-stalled`, `adaptive-3x3-geometry`,
-//! `adaptive-3x3-area`, `adaptive-4x4-cells`, `adaptive-4x4-coverage`.
+//! `adaptive-3x3-area`, `adaptive-4x4-cells`, `adaptive-4x4-coverage`, `adaptive-4x4-stable`.
 
 use std::fmt;
 use std::str::FromStr;
 
-use crate::adaptive::Reconstruction;
+use crate::adaptive::{Counts, Reconstruction};
 
 /// Which of the adaptive metrics decide the sample count (the paper's Fig. 8 ablation).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -36,9 +36,9 @@ pub enum Technique {
     Taa,
     /// All M² samples of an M·w × M·h G-buffer shaded, box-filtered.
     Reference,
-    /// Holländer et al. 2013: the same G-buffer, samples shaded where the metrics ask, and the
-    /// pixel reconstructed from them.
-    Adaptive(Metrics, Reconstruction),
+    /// Holländer et al. 2013: the same G-buffer, samples shaded where the metrics ask (in this
+    /// frame alone, or also in the frame before), and the pixel reconstructed from them.
+    Adaptive(Metrics, Reconstruction, Counts),
 }
 
 /// A technique at a supersampling factor, with or without the expensive (stalled) shader.
@@ -74,13 +74,13 @@ impl Mode {
 
     /// Adaptive 2×2–4×4 as the paper has it, plain and stalled.
     pub fn adaptive_modes() -> Vec<Mode> {
-        Self::adaptive(Metrics::Both, Reconstruction::Equal)
+        Self::adaptive(Metrics::Both, Reconstruction::Equal, Counts::PerFrame)
     }
 
     /// Adaptive 2×2–4×4 with one metric each: the ablation of the paper's Fig. 8.
     pub fn ablation_modes() -> Vec<Mode> {
-        let mut modes = Self::adaptive(Metrics::Geometry, Reconstruction::Equal);
-        modes.extend(Self::adaptive(Metrics::Shading, Reconstruction::Equal));
+        let mut modes = Self::adaptive(Metrics::Geometry, Reconstruction::Equal, Counts::PerFrame);
+        modes.extend(Self::adaptive(Metrics::Shading, Reconstruction::Equal, Counts::PerFrame));
         modes
     }
 
@@ -89,20 +89,58 @@ impl Mode {
     pub fn variant_modes() -> Vec<Mode> {
         [Reconstruction::Area, Reconstruction::Cells, Reconstruction::Coverage]
             .into_iter()
-            .flat_map(|reconstruction| Self::adaptive(Metrics::Both, reconstruction))
+            .flat_map(|reconstruction| Self::adaptive(Metrics::Both, reconstruction, Counts::PerFrame))
             .collect()
     }
 
-    /// Whether the mode's image depends on the frames before it (TAA's history).
-    pub fn is_temporal(&self) -> bool {
+    /// Adaptive 2×2–4×4 with counts that follow the frames before (the paper's future work),
+    /// beside the paper's reconstruction and `-cells`: `adaptive-MxM-stable`,
+    /// `adaptive-MxM-cells-stable`.
+    pub fn stable_modes() -> Vec<Mode> {
+        [Reconstruction::Equal, Reconstruction::Cells]
+            .into_iter()
+            .flat_map(|reconstruction| Self::adaptive(Metrics::Both, reconstruction, Counts::Stable))
+            .collect()
+    }
+
+    /// The named groups of modes that `--modes` takes and `aabench modes` lists.
+    pub fn groups() -> [(&'static str, Vec<Mode>); 5] {
+        [
+            ("baseline", Self::baseline_modes()),
+            ("adaptive", Self::adaptive_modes()),
+            ("ablation", Self::ablation_modes()),
+            ("variant", Self::variant_modes()),
+            ("stable", Self::stable_modes()),
+        ]
+    }
+
+    /// Whether the mode keeps state from one frame for the next (TAA's history, a `-stable`
+    /// mode's sample counts): it has frame uniforms of its own, with the previous frame's
+    /// camera, and resources the graph carries into the next frame.
+    pub fn carries_history(&self) -> bool {
+        self.is_jittered() || self.counts() == Counts::Stable
+    }
+
+    /// Whether the mode jitters its samples from frame to frame (TAA): its frames at one camera
+    /// differ, so its still is the last of a run of warm-up frames. A `-stable` mode's frames at
+    /// one camera are its first frame's, bit for bit.
+    pub fn is_jittered(&self) -> bool {
         self.technique == Technique::Taa
+    }
+
+    /// Where an adaptive mode's sample counts come from (`PerFrame` for every other mode).
+    pub fn counts(&self) -> Counts {
+        match self.technique {
+            Technique::Adaptive(_, _, counts) => counts,
+            _ => Counts::PerFrame,
+        }
     }
 
     /// How an adaptive mode reconstructs its pixels (`Equal` for every other mode, whose
     /// pixels are the plain average of their samples).
     pub fn reconstruction(&self) -> Reconstruction {
         match self.technique {
-            Technique::Adaptive(_, reconstruction) => reconstruction,
+            Technique::Adaptive(_, reconstruction, _) => reconstruction,
             _ => Reconstruction::Equal,
         }
     }
@@ -112,13 +150,13 @@ impl Mode {
     /// MSAA, whose pixels of four samples skip the shading at the centre.
     pub fn reshades_first(&self, n: u32) -> bool {
         match self.technique {
-            Technique::Adaptive(_, reconstruction) => reconstruction.reshades_first(self.m, n),
+            Technique::Adaptive(_, reconstruction, _) => reconstruction.reshades_first(self.m, n),
             _ => false,
         }
     }
 
-    fn adaptive(metrics: Metrics, reconstruction: Reconstruction) -> Vec<Mode> {
-        let technique = Technique::Adaptive(metrics, reconstruction);
+    fn adaptive(metrics: Metrics, reconstruction: Reconstruction, counts: Counts) -> Vec<Mode> {
+        let technique = Technique::Adaptive(metrics, reconstruction, counts);
         [false, true]
             .into_iter()
             .flat_map(|stalled| (2..=4).map(move |m| Mode::new(technique, m, stalled)))
@@ -139,7 +177,7 @@ impl fmt::Display for Mode {
             Technique::Adaptive(..) => "adaptive",
         };
         write!(f, "{name}-{m}x{m}", m = self.m)?;
-        if let Technique::Adaptive(metrics, reconstruction) = self.technique {
+        if let Technique::Adaptive(metrics, reconstruction, counts) = self.technique {
             match metrics {
                 Metrics::Both => {}
                 Metrics::Geometry => f.write_str("-geometry")?,
@@ -150,6 +188,9 @@ impl fmt::Display for Mode {
                 Reconstruction::Area => f.write_str("-area")?,
                 Reconstruction::Cells => f.write_str("-cells")?,
                 Reconstruction::Coverage => f.write_str("-coverage")?,
+            }
+            if counts == Counts::Stable {
+                f.write_str("-stable")?;
             }
         }
         if self.stalled {
@@ -162,7 +203,7 @@ impl fmt::Display for Mode {
 /// A mode id that does not parse, with the reason.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, smaa, msaa-4x, taa, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry, adaptive-4x4-area, adaptive-4x4-cells, adaptive-4x4-coverage)"
+    "unknown mode `{id}`: {reason} (modes look like deferred-1x1, fxaa, smaa, msaa-4x, taa, reference-4x4-stalled, adaptive-3x3, adaptive-2x2-geometry, adaptive-4x4-area, adaptive-4x4-cells, adaptive-4x4-coverage, adaptive-4x4-stable)"
 )]
 pub struct ModeError {
     pub id: String,
@@ -209,6 +250,12 @@ impl FromStr for Mode {
         if stalled {
             rest.pop();
         }
+        let counts = if technique == "adaptive" && rest.last() == Some(&"stable") {
+            rest.pop();
+            Counts::Stable
+        } else {
+            Counts::PerFrame
+        };
         let reconstruction = match (technique, rest.last()) {
             ("adaptive", Some(&"area")) => Reconstruction::Area,
             ("adaptive", Some(&"cells")) => Reconstruction::Cells,
@@ -221,9 +268,9 @@ impl FromStr for Mode {
         let technique = match (technique, rest.as_slice()) {
             ("deferred", []) => Technique::Deferred,
             ("reference", []) => Technique::Reference,
-            ("adaptive", []) => Technique::Adaptive(Metrics::Both, reconstruction),
-            ("adaptive", ["geometry"]) => Technique::Adaptive(Metrics::Geometry, reconstruction),
-            ("adaptive", ["shading"]) => Technique::Adaptive(Metrics::Shading, reconstruction),
+            ("adaptive", []) => Technique::Adaptive(Metrics::Both, reconstruction, counts),
+            ("adaptive", ["geometry"]) => Technique::Adaptive(Metrics::Geometry, reconstruction, counts),
+            ("adaptive", ["shading"]) => Technique::Adaptive(Metrics::Shading, reconstruction, counts),
             ("deferred" | "reference" | "adaptive", _) => return Err(fail("unexpected suffix")),
             ("fxaa", _) => return Err(fail("FXAA has no size: `fxaa` or `fxaa-stalled`")),
             ("smaa", _) => return Err(fail("SMAA has no size: `smaa` or `smaa-stalled`")),
@@ -234,6 +281,11 @@ impl FromStr for Mode {
                 ));
             }
         };
+        if counts == Counts::Stable && reconstruction == Reconstruction::Coverage {
+            return Err(fail(
+                "`-coverage` picks its samples per surface, not by count: it has no `-stable` variant",
+            ));
+        }
         let allowed = match technique {
             Technique::Deferred | Technique::Fxaa | Technique::Smaa | Technique::Taa => 1..=1,
             Technique::Msaa => 2..=2,
@@ -262,10 +314,15 @@ mod tests {
 
     #[test]
     fn every_listed_mode_round_trips_through_its_id() {
-        let all =
-            [Mode::baseline_modes(), Mode::adaptive_modes(), Mode::ablation_modes(), Mode::variant_modes()]
-                .concat();
-        assert_eq!(all.len(), 16 + 6 + 12 + 18);
+        let all = [
+            Mode::baseline_modes(),
+            Mode::adaptive_modes(),
+            Mode::ablation_modes(),
+            Mode::variant_modes(),
+            Mode::stable_modes(),
+        ]
+        .concat();
+        assert_eq!(all.len(), 16 + 6 + 12 + 18 + 12);
         assert!(all.iter().any(|m| m.to_string() == "fxaa-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "smaa-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "msaa-4x-stalled"));
@@ -273,12 +330,23 @@ mod tests {
         assert!(all.iter().any(|m| m.to_string() == "adaptive-3x3-area-stalled"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-4x4-cells"));
         assert!(all.iter().any(|m| m.to_string() == "adaptive-2x2-coverage-stalled"));
+        assert!(all.iter().any(|m| m.to_string() == "adaptive-4x4-stable"));
+        assert!(all.iter().any(|m| m.to_string() == "adaptive-3x3-cells-stable-stalled"));
         for mode in all {
             assert_eq!(mode.to_string().parse::<Mode>(), Ok(mode));
         }
         let combined = "adaptive-2x2-geometry-area".parse::<Mode>().unwrap();
-        assert_eq!(combined.technique, Technique::Adaptive(Metrics::Geometry, Reconstruction::Area));
+        assert_eq!(
+            combined.technique,
+            Technique::Adaptive(Metrics::Geometry, Reconstruction::Area, Counts::PerFrame)
+        );
         assert_eq!(combined.to_string(), "adaptive-2x2-geometry-area");
+        let stable = "adaptive-2x2-shading-area-stable".parse::<Mode>().unwrap();
+        assert_eq!(
+            stable.technique,
+            Technique::Adaptive(Metrics::Shading, Reconstruction::Area, Counts::Stable)
+        );
+        assert!(stable.carries_history() && !stable.is_jittered());
     }
 
     #[test]
@@ -302,6 +370,9 @@ mod tests {
         check("reference-2x2-cells", "unexpected suffix");
         check("adaptive-2x2-cells-area", "unexpected suffix");
         check("adaptive-2x2-area-geometry", "unexpected suffix");
+        check("adaptive-2x2-stable-cells", "unexpected suffix");
+        check("reference-2x2-stable", "unexpected suffix");
+        check("adaptive-4x4-coverage-stable", "no `-stable` variant");
         check("supersample-2x2", "technique must be");
     }
 }

@@ -165,13 +165,16 @@ struct View {
     lighting: Lighting,
 }
 
-/// What a temporal mode keeps between frames: frame uniforms of its own (jittered, with the
-/// previous frame's camera), the scene's view they are made from, and where its history stands.
+/// What a mode that carries a history keeps between frames: frame uniforms of its own (with
+/// the previous frame's camera, and jittered under TAA), the scene's view they are made from,
+/// and where its history stands.
 #[derive(Debug)]
 struct Temporal {
     frame: wgpu::Buffer,
     view: Arc<Mutex<View>>,
     size: [u32; 2],
+    /// Whether the frames are jittered (TAA); a `-stable` mode's are not.
+    jittered: bool,
     history: Mutex<History>,
 }
 
@@ -183,13 +186,13 @@ struct History {
 }
 
 impl Temporal {
-    /// Writes the uniforms of the next frame: jittered by the frame's Halton point, with the
-    /// camera of the frame before as the history's (this frame's own after a reset).
+    /// Writes the uniforms of the next frame: jittered by the frame's Halton point (TAA), with
+    /// the camera of the frame before as the history's (this frame's own after a reset).
     fn next_frame(&self, queue: &wgpu::Queue) {
         let view = lock(&self.view);
         let mut history = lock(&self.history);
         let previous = history.camera.unwrap_or(view.camera);
-        let [x, y] = taa::jitter(history.frames);
+        let [x, y] = self.jitter(history.frames).unwrap_or_default();
         let uniforms = FrameUniforms::temporal(
             &view.camera,
             &previous,
@@ -201,6 +204,11 @@ impl Temporal {
         queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&uniforms));
         history.frames += 1;
         history.camera = Some(view.camera);
+    }
+
+    /// The jitter of frame `index` after a reset, where the frames are jittered.
+    fn jitter(&self, index: u32) -> Option<[f64; 2]> {
+        self.jittered.then(|| taa::jitter(index))
     }
 }
 
@@ -261,14 +269,14 @@ impl SceneRenderer {
     }
 
     /// Compiles the graph of `mode` and builds its passes. Pipelines and allocations are
-    /// created on first use and shared; a temporal mode's history and frame uniforms are its
-    /// own.
+    /// created on first use and shared; the history and frame uniforms of a mode that carries
+    /// one are its own.
     pub fn prepare(&mut self, mode: Mode) -> Result<PreparedMode, RenderError> {
         let graph = frame_graph(&self.needs, mode, &self.settings, &self.gpu.device.limits())?;
         let plan = graph.compile(frame::dims(&self.settings, mode))?;
         self.check_fits(mode, &plan)?;
         let allocated = self.pool.acquire(&self.gpu.device, &plan, mode)?;
-        let temporal = mode.is_temporal().then(|| Temporal {
+        let temporal = mode.carries_history().then(|| Temporal {
             frame: self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("temporal frame uniforms"),
                 size: size_of::<FrameUniforms>() as u64,
@@ -277,6 +285,7 @@ impl SceneRenderer {
             }),
             view: Arc::clone(&self.view),
             size: [self.settings.width, self.settings.height],
+            jittered: mode.is_jittered(),
             history: Mutex::default(),
         });
         let scene = match &temporal {
@@ -731,9 +740,9 @@ pub struct PreparedMode {
 }
 
 impl PreparedMode {
-    /// Renders one frame, one submit per pass, each timed from submit to completion. A
-    /// temporal mode's frame is the next of its history: jittered, and blended with the frames
-    /// before.
+    /// Renders one frame, one submit per pass, each timed from submit to completion. The frame
+    /// of a mode that carries a history is the next of it: TAA's jittered and blended with the
+    /// frames before, a `-stable` mode's counts following the frame before's.
     pub fn render(&self) -> Result<FrameTiming, RenderError> {
         if let Some(temporal) = &self.temporal {
             temporal.next_frame(&self.gpu.queue);
@@ -748,17 +757,12 @@ impl PreparedMode {
         Ok(timing)
     }
 
-    /// Whether the mode's frames depend on the frames before (TAA).
-    pub fn is_temporal(&self) -> bool {
-        self.temporal.is_some()
-    }
-
-    /// The jitter of the last frame in pixels, where the mode is temporal: its sample of pixel
+    /// The jitter of the last frame in pixels, where the mode jitters: its sample of pixel
     /// (x, y) lay at (x + ½ + jitter.x, y + ½ + jitter.y).
     pub fn last_jitter(&self) -> Option<[f64; 2]> {
         let temporal = self.temporal.as_ref()?;
         let frames = lock(&temporal.history).frames;
-        (frames > 0).then(|| taa::jitter(frames - 1))
+        temporal.jitter(frames.checked_sub(1)?)
     }
 
     /// Forgets the history: the next frame starts it again, unjittered by earlier frames.
@@ -768,11 +772,12 @@ impl PreparedMode {
         }
     }
 
-    /// The mode's frame at the current camera as a still: for a temporal mode, the last of
-    /// [`taa::WARMUP_FRAMES`] frames rendered from a reset; for any other, one frame. Returns
-    /// the last frame's timing.
+    /// The mode's frame at the current camera as a still: for a jittered mode, the last of
+    /// [`taa::WARMUP_FRAMES`] frames rendered from a reset; for any other, one frame, from a
+    /// reset where the mode carries a history. Returns the last frame's timing.
     pub fn render_still(&self) -> Result<FrameTiming, RenderError> {
-        let frames = if self.temporal.is_some() { taa::WARMUP_FRAMES } else { 1 };
+        let jittered = self.temporal.as_ref().is_some_and(|temporal| temporal.jittered);
+        let frames = if jittered { taa::WARMUP_FRAMES } else { 1 };
         self.reset_history();
         for _ in 1..frames {
             self.render()?;

@@ -13,7 +13,7 @@ mod support;
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::{Light, LightKind, Lighting, Shadow};
 use aabench_renderer::{
-    AdaptiveSettings, ColorSettings, ExtraSamples, Metrics, Mode, Reconstruction, Technique,
+    AdaptiveSettings, ColorSettings, Counts, ExtraSamples, Metrics, Mode, Reconstruction, Technique,
 };
 use glam::Vec3;
 use support::*;
@@ -111,7 +111,11 @@ fn modes_share_their_allocations_through_the_pool() {
         each.push(prepared.graph().allocated_bytes);
     }
     let adaptive = renderer
-        .prepare(Mode::new(Technique::Adaptive(Metrics::Both, Reconstruction::Equal), 2, false))
+        .prepare(Mode::new(
+            Technique::Adaptive(Metrics::Both, Reconstruction::Equal, Counts::PerFrame),
+            2,
+            false,
+        ))
         .unwrap();
     assert_eq!(
         adaptive.graph().passes,

@@ -11,7 +11,7 @@ use aabench_renderer::scene::{Camera, Light, LightKind, Lighting, Scene, load_gl
 use aabench_renderer::{
     AdaptiveSettings, ColorSettings, FrameImages, Gpu, Mode, RenderSettings, SceneRenderer,
 };
-use glam::Vec3;
+use glam::{DVec2, DVec3, DVec4, Vec3};
 
 /// One device for the whole test binary, and a lock so that tests render one at a time:
 /// lavapipe already uses every core.
@@ -108,4 +108,29 @@ pub fn colours(image: &FrameImages) -> std::collections::BTreeSet<[u8; 3]> {
 /// Largest per-channel difference between two display images, in code steps.
 pub fn max_step(a: &FrameImages, b: &FrameImages) -> u16 {
     a.display.rgba.iter().zip(&b.display.rgba).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0)
+}
+
+/// Where a world point lands through `camera` in a `size` frame, in pixels (y down), and its
+/// linear view depth: the CPU twin of the shaders' projection, in f64.
+pub fn project(camera: &Camera, size: DVec2, point: DVec3) -> (DVec2, f64) {
+    let clip = camera.projection(size.x / size.y) * camera.view() * point.extend(1.0);
+    let ndc = DVec2::new(clip.x, clip.y) / clip.w;
+    (DVec2::new((ndc.x + 1.0) / 2.0 * size.x, (1.0 - ndc.y) / 2.0 * size.y), clip.w)
+}
+
+/// The world point seen at `pixel` (a frame position in pixels) at linear view depth `depth`.
+pub fn unproject(camera: &Camera, size: DVec2, pixel: DVec2, depth: f64) -> DVec3 {
+    let ndc = DVec2::new(pixel.x / size.x * 2.0 - 1.0, 1.0 - pixel.y / size.y * 2.0);
+    let tan_y = (camera.fov_y * 0.5).tan();
+    let ray = DVec3::new(ndc.x * tan_y * size.x / size.y, ndc.y * tan_y, -1.0);
+    (camera.view().inverse() * DVec4::from((ray * depth, 1.0))).truncate()
+}
+
+/// The `thin` scene under [`lit`] at `width` × `height`, with its camera.
+pub fn thin_renderer(width: u32, height: u32) -> (SceneRenderer, Camera, MutexGuard<'static, ()>) {
+    let (gpu, guard) = gpu();
+    let (scene, camera) = generated(Generator::Thin);
+    let renderer =
+        SceneRenderer::new(gpu, &scene, &camera, &lit(), settings(width, height)).expect("scene upload");
+    (renderer, camera, guard)
 }

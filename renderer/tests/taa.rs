@@ -4,34 +4,9 @@
 mod support;
 
 use aabench_renderer::scene::Camera;
-use aabench_renderer::scene::generate::Generator;
-use aabench_renderer::{DisplayImage, SceneRenderer, taa};
-use glam::{DVec2, DVec3, DVec4};
-use support::{generated, gpu, lit, settings};
-
-fn thin_renderer(width: u32, height: u32) -> (SceneRenderer, Camera, std::sync::MutexGuard<'static, ()>) {
-    let (gpu, guard) = gpu();
-    let (scene, camera) = generated(Generator::Thin);
-    let renderer =
-        SceneRenderer::new(gpu, &scene, &camera, &lit(), settings(width, height)).expect("scene upload");
-    (renderer, camera, guard)
-}
-
-/// Where a world point lands through `camera` in a `size` frame, in pixels (y down), and its
-/// linear view depth: the CPU twin of the shaders' projection, in f64.
-fn project(camera: &Camera, size: DVec2, point: DVec3) -> (DVec2, f64) {
-    let clip = camera.projection(size.x / size.y) * camera.view() * point.extend(1.0);
-    let ndc = DVec2::new(clip.x, clip.y) / clip.w;
-    (DVec2::new((ndc.x + 1.0) / 2.0 * size.x, (1.0 - ndc.y) / 2.0 * size.y), clip.w)
-}
-
-/// The world point seen at `pixel` (a frame position in pixels) at linear view depth `depth`.
-fn unproject(camera: &Camera, size: DVec2, pixel: DVec2, depth: f64) -> DVec3 {
-    let ndc = DVec2::new(pixel.x / size.x * 2.0 - 1.0, 1.0 - pixel.y / size.y * 2.0);
-    let tan_y = (camera.fov_y * 0.5).tan();
-    let ray = DVec3::new(ndc.x * tan_y * size.x / size.y, ndc.y * tan_y, -1.0);
-    (camera.view().inverse() * DVec4::from((ray * depth, 1.0))).truncate()
-}
+use aabench_renderer::{DisplayImage, taa};
+use glam::DVec2;
+use support::{project, thin_renderer, unproject};
 
 #[test]
 fn motion_vectors_reproject_each_pixel_to_where_its_point_was_within_a_sixteenth_of_a_pixel() {

@@ -4,7 +4,7 @@
 
 use aabench::metrics;
 use aabench_renderer::adaptive::{self, MetricSet, WindowSample};
-use aabench_renderer::{AdaptiveSettings, DisplayImage, Metrics, Mode, Reconstruction, Technique};
+use aabench_renderer::{AdaptiveSettings, Counts, DisplayImage, Metrics, Mode, Reconstruction, Technique};
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
@@ -24,7 +24,8 @@ fn image(seed: u8) -> DisplayImage {
 }
 
 /// adaptive-4x4, the paper's mode.
-const ADAPTIVE_4X4: Mode = Mode::new(Technique::Adaptive(Metrics::Both, Reconstruction::Equal), 4, false);
+const ADAPTIVE_4X4: Mode =
+    Mode::new(Technique::Adaptive(Metrics::Both, Reconstruction::Equal, Counts::PerFrame), 4, false);
 
 fn quality(c: &mut Criterion) {
     let (a, b) = (image(0), image(1));

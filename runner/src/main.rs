@@ -540,16 +540,12 @@ fn info() -> u8 {
 }
 
 fn list_modes() {
-    let group = |name: &str, modes: Vec<Mode>| {
+    for (name, modes) in Mode::groups() {
         say!("{name}:");
         for mode in modes {
             say!("  {mode}");
         }
-    };
-    group("baseline", Mode::baseline_modes());
-    group("adaptive", Mode::adaptive_modes());
-    group("ablation", Mode::ablation_modes());
-    group("variant", Mode::variant_modes());
+    }
     say!("also: reference-1x1 (equals deferred-1x1; a self-check)");
 }
 

@@ -5,7 +5,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use aabench_renderer::AdaptiveSettings;
-use aabench_renderer::adaptive::{DepthMetric, MAX_METRIC_CONSTANT};
+use aabench_renderer::adaptive::{DepthMetric, MAX_METRIC_CONSTANT, StableCounts};
 use aabench_renderer::color::{ColorSettings, Dither, Tonemap, Transfer};
 use aabench_renderer::scene::generate::{Generated, Generator, Placement};
 use aabench_renderer::scene::{Camera, MAX_LIGHTS, MAX_SHADOW_LIGHTS, Shadow, check_light};
@@ -282,6 +282,10 @@ pub struct AdaptiveSpec {
     pub c_shading: Option<f32>,
     pub t_min: Option<f32>,
     pub t_edge: Option<f32>,
+    /// `-stable` modes: the share of the window the metric may ask for fewer without the count
+    /// falling, and the most a count falls in a frame, as a share of itself.
+    pub stable_hold: Option<f32>,
+    pub stable_decay: Option<f32>,
 }
 
 impl AdaptiveSpec {
@@ -298,7 +302,13 @@ impl AdaptiveSpec {
                 return Err((name.into(), format!("{value} must be within [0, {MAX_METRIC_CONSTANT:e}]")));
             }
         }
-        for (name, value) in [("t_min", adaptive.t_min), ("t_edge", adaptive.t_edge)] {
+        let shares = [
+            ("t_min", adaptive.t_min),
+            ("t_edge", adaptive.t_edge),
+            ("stable_hold", adaptive.stable.hold),
+            ("stable_decay", adaptive.stable.decay),
+        ];
+        for (name, value) in shares {
             if !(0.0..=1.0).contains(&value) {
                 return Err((name.into(), format!("{value} must be in [0, 1]")));
             }
@@ -319,6 +329,10 @@ impl AdaptiveSpec {
             c_shading: self.c_shading.unwrap_or(d.c_shading),
             t_min: self.t_min.unwrap_or(d.t_min),
             t_edge: self.t_edge.unwrap_or(d.t_edge),
+            stable: StableCounts {
+                hold: self.stable_hold.unwrap_or(d.stable.hold),
+                decay: self.stable_decay.unwrap_or(d.stable.decay),
+            },
             ..d
         }
     }
@@ -856,6 +870,8 @@ mod tests {
             "within [1e-6, 1e9]",
         );
         check(|j| j["adaptive"] = json!({"t_edge": 2}), "adaptive.t_edge", "[0, 1]");
+        check(|j| j["adaptive"] = json!({"stable_hold": 1.5}), "adaptive.stable_hold", "[0, 1]");
+        check(|j| j["adaptive"] = json!({"stable_decay": -1}), "adaptive.stable_decay", "[0, 1]");
         check(|j| j["adaptive"] = json!({"c_depth": -1}), "adaptive.c_depth", "within [0, 1e12]");
         check(|j| j["adaptive"] = json!({"c_normal": 1e13}), "adaptive.c_normal", "within [0, 1e12]");
         check(

@@ -187,7 +187,7 @@ pub fn sample_stats(counts: &[u8], mode: Mode) -> Result<SampleStats, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use aabench_renderer::{Metrics, Reconstruction, Technique};
+    use aabench_renderer::{Counts, Metrics, Reconstruction, Technique};
     use proptest::prelude::*;
 
     /// MSE over a 4096² image equals an exact integer computation within a relative 10⁻¹², at 8
@@ -273,8 +273,9 @@ mod tests {
 
     #[test]
     fn sample_stats_count_and_reject_out_of_range() {
-        let adaptive =
-            |reconstruction| Mode::new(Technique::Adaptive(Metrics::Both, reconstruction), 2, false);
+        let adaptive = |reconstruction| {
+            Mode::new(Technique::Adaptive(Metrics::Both, reconstruction, Counts::PerFrame), 2, false)
+        };
         let stats = sample_stats(&[1, 1, 4, 2], adaptive(Reconstruction::Equal)).unwrap();
         assert_eq!(stats.histogram, vec![2, 1, 0, 1]);
         assert_eq!((stats.shaded, stats.total, stats.full_pixels), (8, 16, 1));

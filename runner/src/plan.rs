@@ -30,7 +30,7 @@ pub struct RunArgs {
     /// gate); nightly: 1024×768, 7 repetitions.
     #[arg(long, value_enum, default_value = "quick")]
     pub tier: Tier,
-    /// Comma-separated mode ids or groups: baseline, adaptive, ablation, variant [default: the tier's].
+    /// Comma-separated mode ids or groups: baseline, adaptive, ablation, variant, stable [default: the tier's].
     #[arg(long)]
     pub modes: Option<String>,
     /// Folder that receives the run's folder.
@@ -190,14 +190,15 @@ impl Tier {
         }
     }
 
-    /// The modes run when `--modes` is not given: baselines, adaptive and the unstalled `-area`
-    /// and `-cells` variants; the nightly tier adds the unstalled ablations, the stalled
+    /// The modes run when `--modes` is not given: baselines, adaptive, the unstalled `-area`
+    /// and `-cells` variants and `adaptive-4x4-stable` (whose stills are the paper's: the gate
+    /// guards its sequences); the nightly tier adds the unstalled ablations, the stalled
     /// `-cells` modes (which shade other samples than the paper's, so their stalled time is
-    /// their own, where `-area` differs from the paper only in `gather`) and `-coverage`,
-    /// plain and stalled (its fixed passes cost more than it saves at the quick tier's size,
-    /// so it is measured where it can pay).
+    /// their own, where `-area` differs from the paper only in `gather`), `-coverage`, plain
+    /// and stalled (its fixed passes cost more than it saves at the quick tier's size, so it is
+    /// measured where it can pay), and every unstalled `-stable` mode.
     pub fn default_modes(self) -> Vec<Mode> {
-        use aabench_renderer::Reconstruction::{Cells, Coverage};
+        use aabench_renderer::Reconstruction::{Cells, Coverage, Equal};
         let mut modes = Mode::baseline_modes();
         modes.extend(Mode::adaptive_modes());
         let nightly = self == Tier::Nightly;
@@ -209,21 +210,23 @@ impl Tier {
         if nightly {
             modes.extend(Mode::ablation_modes().into_iter().filter(|m| !m.stalled));
         }
+        modes.extend(
+            Mode::stable_modes()
+                .into_iter()
+                .filter(|m| !m.stalled && (nightly || (m.m == 4 && m.reconstruction() == Equal))),
+        );
         modes
     }
 }
 
 /// Parses `--modes`: comma-separated mode ids or the groups `baseline`, `adaptive`, `ablation`,
-/// `variant`.
+/// `variant`, `stable`.
 pub fn parse_modes(list: &str) -> Result<Vec<Mode>, String> {
     let mut modes: Vec<Mode> = Vec::new();
     for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-        let group = match item {
-            "baseline" => Mode::baseline_modes(),
-            "adaptive" => Mode::adaptive_modes(),
-            "ablation" => Mode::ablation_modes(),
-            "variant" => Mode::variant_modes(),
-            id => vec![id.parse::<Mode>().map_err(|e| e.to_string())?],
+        let group = match Mode::groups().into_iter().find(|(name, _)| *name == item) {
+            Some((_, modes)) => modes,
+            None => vec![item.parse::<Mode>().map_err(|e| e.to_string())?],
         };
         for mode in group {
             if !modes.contains(&mode) {
@@ -478,8 +481,8 @@ mod tests {
     fn quick_leaves_out_the_ablations_and_nightly_adds_them() {
         let quick = Tier::Quick.default_modes();
         let nightly = Tier::Nightly.default_modes();
-        assert_eq!(quick.len(), 28);
-        assert_eq!(nightly.len(), 43);
+        assert_eq!(quick.len(), 29);
+        assert_eq!(nightly.len(), 49);
         assert!(quick.iter().all(|m| !m.to_string().contains("geometry")));
         let area: Vec<String> = quick.iter().map(Mode::to_string).filter(|id| id.contains("area")).collect();
         assert_eq!(area, ["adaptive-2x2-area", "adaptive-3x3-area", "adaptive-4x4-area"]);
@@ -488,5 +491,8 @@ mod tests {
         assert_eq!((stalled_cells(&quick), stalled_cells(&nightly)), (0, 3));
         let coverage = |modes: &[Mode]| modes.iter().filter(|m| m.to_string().contains("coverage")).count();
         assert_eq!((coverage(&quick), coverage(&nightly)), (0, 6));
+        let stable = |modes: &[Mode]| modes.iter().filter(|m| m.to_string().contains("stable")).count();
+        assert_eq!((stable(&quick), stable(&nightly)), (1, 6));
+        assert!(quick.iter().any(|m| m.to_string() == "adaptive-4x4-stable"));
     }
 }

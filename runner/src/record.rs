@@ -443,6 +443,16 @@ pub struct ModeSequence {
     /// changes from one frame to the next, averaged over the frame pairs.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub count_changes: Option<f64>,
+    /// Modes with a sample-count map: the share of samples shaded (as the still's
+    /// `shaded_percent`), averaged over the frames: what the mode costs in motion.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shaded_percent: Option<f64>,
+    /// The time of every frame after the first (which renders as a still), in ms, each frame
+    /// rendered once with the modes in turn: single samples, noisier than the still's median,
+    /// but the only time taken in motion, where a `-stable` mode's counts differ from its
+    /// still's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame_ms: Option<Summary>,
     /// Temporal modes (taa): the error where the history cannot hold the surface, the pixels
     /// that the previous frame did not see (`sequence.rs`).
     #[serde(default, skip_serializing_if = "Option::is_none")]

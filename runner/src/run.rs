@@ -440,9 +440,10 @@ async fn timed_rounds(
                 format!("warm-up {}/{}", round + 1, plan.warmup)
             };
             progress.status(&format!("[{}] {mode} {label}", manifest.name));
-            // A temporal mode's frames differ as its history fills: its image is its still's.
-            let images = first_timed && !mode.is_temporal();
-            let hashed = timed && !mode.is_temporal();
+            // A jittered mode's frames differ as its history fills: its image is its still's. A
+            // `-stable` mode's frames at one camera are its first frame's, so they are hashed.
+            let images = first_timed && !mode.is_jittered();
+            let hashed = timed && !mode.is_jittered();
             let result = render_frame(worker, plan, index, mode.m, hashed, images).await;
             let run = &mut runs[index];
             match result {
@@ -469,7 +470,7 @@ async fn timed_rounds(
     }
 }
 
-/// The stills of temporal modes, after the timed rounds: each rendered twice from a reset
+/// The stills of jittered modes (TAA), after the timed rounds: each rendered twice from a reset
 /// through its warm-up frames ([`aabench_renderer::taa::WARMUP_FRAMES`]), read back and
 /// fingerprinted like a timed frame, so that both must agree.
 async fn temporal_stills(
@@ -480,7 +481,7 @@ async fn temporal_stills(
     cancel: &AtomicBool,
     runs: &mut [ModeRun],
 ) {
-    for (index, mode) in plan.modes.iter().enumerate().filter(|(_, mode)| mode.is_temporal()) {
+    for (index, mode) in plan.modes.iter().enumerate().filter(|(_, mode)| mode.is_jittered()) {
         for attempt in 0..2 {
             if cancel.load(Ordering::SeqCst) || worker.is_stuck() {
                 return;

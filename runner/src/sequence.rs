@@ -56,8 +56,10 @@ pub struct ModeOutcome {
     pub error: Option<String>,
 }
 
-/// A mode's frame: its display image, sample counts and checks, and a temporal mode's geometry.
+/// A mode's frame: its time, display image, sample counts and checks, and a temporal mode's
+/// geometry.
 struct ModeFrame {
+    seconds: f64,
     display: DisplayImage,
     counts: Option<Vec<u8>>,
     checks: FrameChecks,
@@ -88,6 +90,10 @@ struct ModeState {
     error_change: u64,
     own_change: u64,
     count_changes: Vec<f64>,
+    /// Per frame, the share of samples shaded (modes with a sample-count map), and the frame's
+    /// time (every frame but the first, which is rendered as a still).
+    shaded_percent: Vec<f64>,
+    frame_seconds: Vec<f64>,
     /// Squared error in code steps and values, on disoccluded pixels and elsewhere; the share
     /// of pixels disoccluded per frame pair.
     ghosting: [(u64, u64); 2],
@@ -182,7 +188,7 @@ async fn render_frames(
             }
             status(&mode.to_string());
             match render(worker, plan, index, mode.m, frame == 0).await {
-                Ok(Ok(rendered)) => state.add(rendered, &truth, previous_truth.as_ref()),
+                Ok(Ok(rendered)) => state.add(*mode, rendered, &truth, previous_truth.as_ref()),
                 Ok(Err(error)) => state.error = Some(error),
                 // The worker is gone or stuck: no later frame can render.
                 Err(error) => {
@@ -219,11 +225,7 @@ async fn render(
     let frame = worker
         .call(timeout, move |state| {
             let prepared = state.modes[index].as_ref().expect("prepared mode");
-            if first {
-                prepared.render_still()?;
-            } else {
-                prepared.render()?;
-            }
+            let timing = if first { prepared.render_still()? } else { prepared.render()? };
             let display = prepared.read_display()?;
             let counts = prepared.read_sample_counts()?;
             let checks = FrameChecks::of(prepared.read_hdr()?.as_flattened(), counts.as_deref(), m);
@@ -235,7 +237,8 @@ async fn render(
                 }
                 None => None,
             };
-            Ok::<_, aabench_renderer::RenderError>(ModeFrame { display, counts, checks, geometry })
+            let seconds = timing.seconds();
+            Ok::<_, aabench_renderer::RenderError>(ModeFrame { seconds, display, counts, checks, geometry })
         })
         .await;
     match frame {
@@ -286,8 +289,23 @@ async fn truth_frame(
 impl ModeState {
     /// Adds a frame: its error against the truth's frame and, from the frame before, the change
     /// of its error, of its image and of its sample counts.
-    fn add(&mut self, frame: ModeFrame, truth: &DisplayImage, previous_truth: Option<&DisplayImage>) {
+    fn add(
+        &mut self,
+        mode: Mode,
+        frame: ModeFrame,
+        truth: &DisplayImage,
+        previous_truth: Option<&DisplayImage>,
+    ) {
         self.checks.add(frame.checks);
+        // Counts outside the window are reported by the frame's checks.
+        if let Some(stats) =
+            frame.counts.as_deref().and_then(|counts| metrics::sample_stats(counts, mode).ok())
+        {
+            self.shaded_percent.push(stats.shaded_percent);
+        }
+        if self.previous.is_some() {
+            self.frame_seconds.push(frame.seconds);
+        }
         self.hashes.push(fingerprint(&frame.display, frame.counts.as_deref()));
         self.mse.push(metrics::quality(&frame.display, truth, "truth").mse);
         if let (Some(before), Some(truth_before)) = (&self.previous, previous_truth) {
@@ -323,6 +341,8 @@ impl ModeState {
             error_change,
             own_change,
             count_changes,
+            shaded_percent,
+            frame_seconds,
             ghosting,
             disoccluded,
             checks,
@@ -340,8 +360,9 @@ impl ModeState {
             mse,
             instability: per_value(error_change, &last.display, pairs),
             change_ratio: truth_change.filter(|&t| t > 0.0).map(|t| own / t),
-            count_changes: (!count_changes.is_empty())
-                .then(|| count_changes.iter().sum::<f64>() / count_changes.len() as f64),
+            count_changes: mean(&count_changes),
+            shaded_percent: mean(&shaded_percent),
+            frame_ms: crate::stats::Summary::new(frame_seconds.iter().map(|s| s * 1e3).collect()),
             ghosting: (!disoccluded.is_empty()).then(|| {
                 let scale = f64::from(last.display.max_code()).powi(2);
                 let mse =
@@ -392,6 +413,11 @@ impl Geometry {
             })
             .collect()
     }
+}
+
+/// The mean of `values`, where there are any.
+fn mean(values: &[f64]) -> Option<f64> {
+    (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
 }
 
 /// Σ over pixels and colour channels of (a − b)², or of ((a − b) − (c − d))² with `minus` =

@@ -140,7 +140,7 @@ fn graph_prints_a_modes_passes_ports_and_allocations() {
         " 2. gbuffer",
         "reads  shadow_cubes",
         "Depth32Float 64×64×6",
-        "writes color          Attachment",
+        "writes color              Attachment",
         "Rgba16Float 128×96",
         "[retained: Display]",
         "lower bound",

@@ -64,7 +64,7 @@ impl<T> Graph<T> {
                 };
                 let _ = writeln!(
                     out,
-                    "      {verb} {:<14} {:<12} #{physical:<3} {:<26} live {lifetime:<8} {link}",
+                    "      {verb} {:<18} {:<15} #{physical:<3} {:<26} live {lifetime:<8} {link}",
                     port.name,
                     format!("{:?}", port.access),
                     resource.desc.to_string()

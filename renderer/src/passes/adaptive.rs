@@ -5,8 +5,8 @@ use super::{
     BuildContext, Compute, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, gbuffer, shading_inputs,
 };
 use crate::adaptive::{
-    DepthMetric, LIST_TEXEL_BITS, Reconstruction, SURFACE_COS, SURFACE_GAP, packed_dither_matrix,
-    packed_sample_order,
+    Counts, DepthMetric, LIST_TEXEL_BITS, Reconstruction, STABLE_DEPTH_TOLERANCE, SURFACE_COS, SURFACE_GAP,
+    packed_dither_matrix, packed_sample_order,
 };
 use crate::bindings::Bound;
 use crate::color::Tonemap;
@@ -29,6 +29,12 @@ fn first() -> Resource {
 
 fn counts() -> Resource {
     Resource::texture(COUNT_FORMAT, Extent::Output)
+}
+
+/// A `-stable` mode's counts kept for the next frame: each pixel's count and the depth of its
+/// window's deepest sample (`shaders/adaptive.wgsl`: count_history).
+pub(crate) fn count_history() -> Resource {
+    Resource::texture(wgpu::TextureFormat::Rg32Float, Extent::Output)
 }
 
 /// The `-coverage` variant's map of each pixel's shaded samples and the cells they stand for
@@ -164,6 +170,8 @@ pub(crate) struct EvaluateNode {
     /// The scene's tonemap, through which the light-aware term reads highlights as the display
     /// will show them (None: exposed and clamped to [0, 1]).
     pub tonemap: Option<Tonemap>,
+    /// Under `Stable`, the pass also reads the frame before's counts and writes this frame's.
+    pub counts: Counts,
 }
 
 impl EvaluateNode {
@@ -197,6 +205,12 @@ impl Node for EvaluateNode {
         if self.reconstruction == Reconstruction::Coverage {
             ports.push(Port::new("groups", groups(), Access::Attachment));
         }
+        if self.counts == Counts::Stable {
+            ports.extend([
+                Port::new("count_history", count_history(), Access::Loaded),
+                Port::new("count_history_next", count_history(), Access::Attachment),
+            ]);
+        }
         PassDecl { name: "evaluate", ports }
     }
 
@@ -222,15 +236,23 @@ impl Node for EvaluateNode {
             .flag("LIGHT_DETAIL", self.light_detail())
             .with("SURFACE_COS", SURFACE_COS)
             .with("SURFACE_GAP", SURFACE_GAP);
+        let constants = match self.counts {
+            Counts::PerFrame => constants,
+            Counts::Stable => constants
+                .with("STABLE_HOLD", s.stable.hold_samples(self.m))
+                .with("STABLE_DECAY", s.stable.decay)
+                .with("STABLE_DEPTH_TOLERANCE", STABLE_DEPTH_TOLERANCE),
+        };
         // The light-aware term loops over the lights and maps highlights through the tonemap.
         let constants = match &self.tonemap {
             _ if !self.light_detail() => constants,
             Some(tonemap) => curve_constants(constants.extend(&ctx.shading_constants(false)), tonemap)?,
             None => constants.extend(&ctx.shading_constants(false)),
         };
-        let (fragment, targets): (_, &[&str]) = match self.reconstruction {
-            Reconstruction::Coverage => ("evaluate_coverage", &["counts", "groups"]),
-            _ => ("evaluate", &["counts"]),
+        let (fragment, targets): (_, &[&str]) = match (self.reconstruction, self.counts) {
+            (Reconstruction::Coverage, _) => ("evaluate_coverage", &["counts", "groups"]),
+            (_, Counts::Stable) => ("evaluate_stable", &["counts", "count_history_next"]),
+            (_, Counts::PerFrame) => ("evaluate", &["counts"]),
         };
         let program = Program { shader: SHADER, vertex: FULLSCREEN.0, fragment: Some(fragment), constants };
         let owned =

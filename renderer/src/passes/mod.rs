@@ -10,6 +10,7 @@ pub(crate) mod adaptive;
 pub(crate) mod display;
 pub(crate) mod fxaa;
 pub(crate) mod gbuffer;
+pub(crate) mod keep;
 pub(crate) mod msaa;
 pub(crate) mod pixel_list;
 pub(crate) mod shade;

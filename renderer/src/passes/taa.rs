@@ -4,11 +4,10 @@
 //!
 //! The resolve pass reads the history of the previous frame and writes the next one, so the two
 //! cannot be one texture: the resolve writes `history_next`, and `taa_history` copies it into
-//! `history`, which the graph carries into the next frame. (A pair of textures swapped every
-//! frame would save the copy, under 1 ms at 1024×768 on lavapipe, at the price of two bind groups
-//! for every pass that reads either.)
+//! `history`, which the graph carries into the next frame (`keep.rs`).
 
 use super::gbuffer::{DEPTH, DEPTH_FORMAT, MOTION, MOTION_FORMAT};
+use super::keep::KeepNode;
 use super::{BuildContext, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program};
 use crate::error::RenderError;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
@@ -86,46 +85,9 @@ impl Node for TaaNode {
 }
 
 /// Copies `history_next` into `history`, which the next frame's resolve reads.
-#[derive(Debug)]
-pub(crate) struct KeepHistoryNode;
-
-impl Node for KeepHistoryNode {
-    fn decl(&self) -> PassDecl {
-        let history = Resource::texture(HISTORY_FORMAT, Extent::Output);
-        PassDecl {
-            name: "taa_history",
-            ports: vec![
-                Port::new("history_next", history, Access::CopySource),
-                Port::new("history", history, Access::CopyDestination),
-            ],
-        }
-    }
-
-    fn build(&self, _: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
-        Ok(Box::new(Copy {
-            name: "taa_history",
-            from: io.texture("history_next")?,
-            to: io.texture("history")?,
-        }))
-    }
-}
-
-/// A whole-texture copy.
-#[derive(Debug)]
-struct Copy {
-    name: &'static str,
-    from: wgpu::Texture,
-    to: wgpu::Texture,
-}
-
-impl Pass for Copy {
-    fn name(&self) -> &'static str {
-        self.name
-    }
-
-    fn encode(&self, encoder: &mut wgpu::CommandEncoder) {
-        encoder.copy_texture_to_texture(self.from.as_image_copy(), self.to.as_image_copy(), self.from.size());
-    }
+pub(crate) fn keep_history() -> KeepNode {
+    let history = Resource::texture(HISTORY_FORMAT, Extent::Output);
+    KeepNode { name: "taa_history", next: "history_next", kept: "history", resource: history }
 }
 
 #[cfg(test)]

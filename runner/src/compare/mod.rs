@@ -133,7 +133,8 @@ pub struct Check {
     pub scene: String,
     pub mode: String,
     /// `status`, `psnr_vs_truth`, `mse_vs_truth`, `flip_vs_truth`, `ssim_vs_truth`,
-    /// `psnr_vs_reference`, `mse_vs_reference`, `shaded_percent`, `sample_histogram`, `output_hash`, `relative_time`,
+    /// `psnr_vs_reference`, `mse_vs_reference`, `shaded_percent`, `sample_histogram`, `output_hash`,
+    /// `sequence_psnr_vs_truth`, `instability`, `sequence_shaded_percent`, `relative_time`,
     /// `time_vs_reference`, `frame_time`; `run` for the run as a whole.
     pub metric: String,
     /// What the check compares with: the committed baseline or the base build's processes.
@@ -692,23 +693,12 @@ impl ModeContext<'_> {
             ));
         }
         if let (Some(now), Some(then)) = (&self.mode.samples, &self.old.samples) {
-            let change = now.shaded_percent - then.shaded_percent;
-            let outcome = beyond(change, tolerance.shaded_percent, false);
-            checks.push(Check {
-                baseline: Some(then.shaded_percent),
-                current: Some(now.shaded_percent),
-                change: Some(change),
-                threshold: Some(tolerance.shaded_percent),
-                ..self.check(
-                    "shaded_percent",
-                    outcome,
-                    "percentage points",
-                    format!(
-                        "samples {:.2}% → {:.2}% ({change:+.2} points; tolerance ±{})",
-                        then.shaded_percent, now.shaded_percent, tolerance.shaded_percent
-                    ),
-                )
-            });
+            checks.push(self.shaded_check(
+                "shaded_percent",
+                now.shaded_percent,
+                then.shaded_percent,
+                tolerance,
+            ));
             let distance = total_variation(&now.histogram, &then.histogram);
             let outcome =
                 if distance > tolerance.histogram { Outcome::Regressed } else { Outcome::Unchanged };
@@ -828,7 +818,40 @@ impl ModeContext<'_> {
                 ),
             )
         };
-        vec![psnr, instability]
+        let mut checks = vec![psnr, instability];
+        match (now.shaded_percent, then.shaded_percent) {
+            (Some(now), Some(then)) => {
+                checks.push(self.shaded_check("sequence_shaded_percent", now, then, tolerance));
+            }
+            (None, Some(_)) => checks.push(self.check(
+                "sequence_shaded_percent",
+                Outcome::Failed,
+                "percentage points",
+                "the baseline has the samples shaded along the path, the run has none".into(),
+            )),
+            _ => {}
+        }
+        checks
+    }
+
+    /// The share of samples shaded, `now` against `then`, in percentage points.
+    fn shaded_check(&self, metric: &str, now: f64, then: f64, tolerance: QualityTolerances) -> Check {
+        let change = now - then;
+        Check {
+            baseline: Some(then),
+            current: Some(now),
+            change: Some(change),
+            threshold: Some(tolerance.shaded_percent),
+            ..self.check(
+                metric,
+                beyond(change, tolerance.shaded_percent, false),
+                "percentage points",
+                format!(
+                    "samples {then:.2}% → {now:.2}% ({change:+.2} points; tolerance ±{})",
+                    tolerance.shaded_percent
+                ),
+            )
+        }
     }
 
     fn mse_check(&self, against: &str, now: &Quality, then: &Quality, tolerance: QualityTolerances) -> Check {

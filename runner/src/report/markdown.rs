@@ -280,7 +280,7 @@ pub fn figures(run_dir: &Path, run: &RunRecord, dir: &Path) -> Result<(Vec<Strin
                 continue;
             }
             let title = format!("{}: {}", scene.name, metric.title());
-            let svg = plots::error_against_time(&title, metric.axis(), &points)?;
+            let svg = plots::error_against_time(&title, [metric.time_axis(), metric.axis()], &points)?;
             let path = dir.join(format!("{}-{suffix}.svg", scene.name));
             crate::fs::write(&path, standalone(&svg).as_bytes())?;
             written.push(path.display().to_string());

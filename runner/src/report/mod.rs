@@ -150,7 +150,7 @@ fn scene_section(
             continue;
         }
         let title = format!("{}: {}", scene.name, metric.title());
-        let plot = plots::error_against_time(&title, metric.axis(), &points)?;
+        let plot = plots::error_against_time(&title, [metric.time_axis(), metric.axis()], &points)?;
         let _ = writeln!(page, "<figure class=\"plot\">{plot}</figure>");
     }
     verdict_table(page, &checks);
@@ -260,8 +260,10 @@ pub fn mode_cells(mode: &ModeRecord) -> [String; 13] {
 }
 
 /// The columns of a scene's table along its camera path (`sequence_cells`).
-pub const SEQUENCE_COLUMNS: [&str; 6] = [
+pub const SEQUENCE_COLUMNS: [&str; 8] = [
     "mode",
+    "ms per frame along the path",
+    "samples %",
     "PSNR along the path",
     "instability ×1e-4",
     "change ratio",
@@ -270,7 +272,7 @@ pub const SEQUENCE_COLUMNS: [&str; 6] = [
 ];
 
 /// A mode's row along the scene's camera path, where it has one.
-pub fn sequence_cells(mode: &ModeRecord) -> Option<[String; 6]> {
+pub fn sequence_cells(mode: &ModeRecord) -> Option<[String; 8]> {
     let sequence = mode.sequence.as_ref()?;
     let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
     let psnr = sequence.mean_psnr_db.value();
@@ -280,6 +282,8 @@ pub fn sequence_cells(mode: &ModeRecord) -> Option<[String; 6]> {
     });
     Some([
         mode.mode.clone(),
+        cell(sequence.frame_ms.as_ref().map(|f| format!("{:.1}", f.median))),
+        cell(sequence.shaded_percent.map(|p| format!("{p:.1}"))),
         if psnr.is_finite() { format!("{psnr:.2}") } else { "∞".into() },
         format!("{:.3}", sequence.instability * 1e4),
         cell(sequence.change_ratio.map(|r| format!("{r:.2}"))),
@@ -291,7 +295,7 @@ pub fn sequence_cells(mode: &ModeRecord) -> Option<[String; 6]> {
 /// The scene's modes along its camera path, where it has one.
 fn sequence_table(page: &mut String, scene: &SceneRecord) {
     let Some(sequence) = &scene.sequence else { return };
-    let rows: Vec<[String; 6]> = scene.modes.iter().filter_map(sequence_cells).collect();
+    let rows: Vec<[String; 8]> = scene.modes.iter().filter_map(sequence_cells).collect();
     let summary = escape(&sequence_summary(sequence));
     let _ = writeln!(page, "<h3>Along the camera path</h3>\n<p class=\"meta\">{summary}</p>");
     if rows.is_empty() {
@@ -426,6 +430,26 @@ impl ErrorMetric {
         }
     }
 
+    /// The x axis: the still's frame time, or for instability the frame time along the path,
+    /// where the mode's cost may differ from its still's (a `-stable` mode's counts).
+    pub fn time_axis(self) -> &'static str {
+        match self {
+            ErrorMetric::Instability => "frame time along the path, ms (median and interval; log)",
+            ErrorMetric::Mse | ErrorMetric::Flip => "frame time, ms (median and interval; log)",
+        }
+    }
+
+    /// The frame time a mode is drawn at (see [`Self::time_axis`]); the still's where a run
+    /// recorded no times along the path.
+    fn time(self, mode: &ModeRecord) -> Option<&crate::stats::Summary> {
+        match self {
+            ErrorMetric::Instability => {
+                mode.sequence.as_ref().and_then(|s| s.frame_ms.as_ref()).or(mode.frame_ms.as_ref())
+            }
+            ErrorMetric::Mse | ErrorMetric::Flip => mode.frame_ms.as_ref(),
+        }
+    }
+
     /// The plots a scene has: instability only where it has a camera path.
     pub fn of_scene(scene: &SceneRecord) -> Vec<ErrorMetric> {
         let mut metrics = vec![ErrorMetric::Mse, ErrorMetric::Flip];
@@ -448,7 +472,7 @@ pub fn error_points(scene: &SceneRecord, metric: ErrorMetric) -> Vec<Point> {
         .modes
         .iter()
         .filter_map(|mode| {
-            let frame = mode.frame_ms.as_ref()?;
+            let frame = metric.time(mode)?;
             let error = metric.of(mode)?;
             let kind = match mode.mode.split('-').next()? {
                 "deferred" => Kind::Deferred,
@@ -457,7 +481,9 @@ pub fn error_points(scene: &SceneRecord, metric: ErrorMetric) -> Vec<Point> {
                 "taa" => Kind::Taa,
                 "msaa" => Kind::Msaa,
                 "reference" => Kind::Reference,
-                _ if mode.mode.split('-').any(|part| VARIANTS.contains(&part)) => Kind::Variant,
+                _ if mode.mode.split('-').any(|part| VARIANTS.contains(&part) || part == "stable") => {
+                    Kind::Variant
+                }
                 _ => Kind::Adaptive,
             };
             (error > 0.0).then(|| Point {

@@ -18,8 +18,8 @@ pub enum Kind {
     /// as many samples everywhere).
     Msaa,
     Adaptive,
-    /// An adaptive variant beyond the paper (`-area`, `-cells`, `-coverage`): a hollow
-    /// circle beside adaptive's disc.
+    /// An adaptive variant beyond the paper (`-area`, `-cells`, `-coverage`, `-stable`): a
+    /// hollow circle beside adaptive's disc.
     Variant,
 }
 
@@ -86,8 +86,11 @@ fn short_number(v: f64) -> String {
         1
     } else if v.abs() >= 1.0 {
         2
-    } else {
+    } else if v.abs() >= 0.01 || v == 0.0 {
         3
+    } else {
+        // Instability and FLIP run to 10⁻⁵: three decimals would print them all as 0.000.
+        return format!("{v:.1e}");
     };
     format!("{v:.digits$}")
 }
@@ -96,8 +99,10 @@ const UNSTALLED: RGBColor = RGBColor(31, 119, 180);
 const STALLED: RGBColor = RGBColor(214, 96, 39);
 
 /// Error against the truth over frame time, log-log: one point per mode with its time
-/// interval, stalled and unstalled as two series, each with its Pareto front dashed.
-pub fn error_against_time(title: &str, y_desc: &str, points: &[Point]) -> Result<String, String> {
+/// interval, stalled and unstalled as two series, each with its Pareto front dashed. `axes`
+/// names x and y.
+pub fn error_against_time(title: &str, axes: [&str; 2], points: &[Point]) -> Result<String, String> {
+    let [x_desc, y_desc] = axes;
     svg((820, 520), |root| {
         let x = log_range(points.iter().flat_map(|p| [p.time_low, p.time_high]));
         let y = log_range(points.iter().map(|p| p.error));
@@ -110,7 +115,7 @@ pub fn error_against_time(title: &str, y_desc: &str, points: &[Point]) -> Result
             .map_err(fail)?;
         chart
             .configure_mesh()
-            .x_desc("frame time, ms (median and interval; log)")
+            .x_desc(x_desc)
             .y_desc(y_desc)
             .x_label_formatter(&|v| short_number(*v))
             .y_label_formatter(&|v| short_number(*v))
@@ -285,9 +290,17 @@ mod tests {
     }
 
     #[test]
+    fn small_numbers_keep_their_digits() {
+        assert_eq!(short_number(250.4), "250");
+        assert_eq!(short_number(0.0312), "0.031");
+        assert_eq!(short_number(0.0), "0.000");
+        assert_eq!(short_number(0.000_097_3), "9.7e-5");
+    }
+
+    #[test]
     fn plots_are_svg_with_their_labels_and_no_namespace_url() {
         let points = [point("adaptive 2×2", 40.0, 2.0), point("reference 2×2", 60.0, 1.5)];
-        let text = error_against_time("thin", "MSE", &points).unwrap();
+        let text = error_against_time("thin", ["ms", "MSE"], &points).unwrap();
         assert!(text.starts_with("<svg"), "{}", &text[..40]);
         assert!(text.contains("adaptive 2×2") && text.contains("reference 2×2"));
         assert!(!text.contains("http"));

@@ -14,8 +14,8 @@
 # decides time with the process as the unit. The scenes whose time regressed are measured again
 # in as many fresh processes a side, and a time regression stands only where those find it
 # again (`compare --confirm-runs`). When the code is the base's (only baselines or
-# docs changed), time cannot have changed through the change: one run is compared with the
-# baselines and its time is reported, not gated. Without a usable base (no git history), one
+# docs changed), time cannot have changed through the change: one run of 5 rounds is compared
+# with the baselines and its time is reported, not gated. Without a usable base (no git history), one
 # run is compared with the baselines and time is gated only on the machine that blessed them.
 #
 # Writes summary.md, junit.xml, verdict.json and the HTML report into the first head run's
@@ -110,8 +110,14 @@ else
 fi
 
 if [ "$strategy" != ab ]; then
-    [ "$strategy" = unchanged ] && [ "$fail_on" = auto ] && fail_on=quality
-    "$head_bin" run --tier quick --out "$gate_dir/head" "${run_args[@]}"
+    # Where the code is the base's, its time cannot have changed and is only reported: the run
+    # times 5 rounds, the fewest whose time checks compare (gate::MIN_FRAMES), not the tier's 25.
+    single_args=()
+    if [ "$strategy" = unchanged ]; then
+        [ "$fail_on" = auto ] && fail_on=quality
+        single_args=(--repetitions 5)
+    fi
+    "$head_bin" run --tier quick "${single_args[@]}" --out "$gate_dir/head" "${run_args[@]}"
     run_code=$?
     head_runs=("$gate_dir"/head/*/)
     base_args=()

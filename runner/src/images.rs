@@ -1,5 +1,6 @@
-//! Image files of a run: display PNGs, linear HDR EXRs and heatmaps (sample counts, absolute
-//! differences). Every write goes to a temporary file first and is renamed into place.
+//! Image files of a run: display PNGs, linear HDR EXRs, heatmaps (sample counts, absolute
+//! differences) and animated PNGs of a sequence's region. Every write goes to a temporary file
+//! first and is renamed into place.
 
 use std::path::{Path, PathBuf};
 
@@ -38,6 +39,61 @@ pub fn write_display_png(path: &Path, width: u32, height: u32, image: &DisplayIm
     encode_png(path, width, height, &samples, image::ExtendedColorType::Rgba16)
 }
 
+/// A display image as RGBA8: 10-bit code values rounded to 8 bits.
+pub fn display_rgba8(image: &DisplayImage) -> Vec<u8> {
+    if image.bits <= 8 {
+        return image.bytes();
+    }
+    let max = u32::from(image.max_code());
+    image.rgba.iter().map(|&v| ((u32::from(v) * 255 + max / 2) / max) as u8).collect()
+}
+
+/// Writes RGBA8 frames of one size as an animated PNG (APNG) that loops forever, each frame
+/// shown for `delay_s` seconds (at least 20 ms: browsers slow shorter delays down to 100 ms).
+/// A viewer without APNG shows the first frame. Frames are stored whole and losslessly, so
+/// that a pixel that flickers in the animation flickered in the frames.
+pub fn write_apng(
+    path: &Path,
+    width: u32,
+    height: u32,
+    frames: &[Vec<u8>],
+    delay_s: f64,
+) -> anyhow::Result<()> {
+    anyhow::ensure!(!frames.is_empty(), "{}: an animation needs a frame", path.display());
+    let mut bytes = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut bytes, width, height);
+        encoder.set_color(png::ColorType::Rgba);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_animated(frames.len() as u32, 0)?;
+        // In 1/6000 s, which holds 1/60, 1/30 and 1/24 exactly.
+        let ticks = (delay_s * 6000.0).round().clamp(120.0, f64::from(u16::MAX)) as u16;
+        encoder.set_frame_delay(ticks, 6000)?;
+        let mut writer =
+            encoder.write_header().with_context(|| format!("{}: APNG header", path.display()))?;
+        for frame in frames {
+            writer.write_image_data(frame).with_context(|| format!("{}: APNG frame", path.display()))?;
+        }
+        writer.finish().with_context(|| format!("{}: APNG encoding", path.display()))?;
+    }
+    crate::fs::write(path, &bytes).map_err(anyhow::Error::msg)
+}
+
+/// The frames of an animated PNG as RGBA8 images (a still PNG: its one image).
+pub fn read_apng(path: &Path) -> anyhow::Result<Vec<image::RgbaImage>> {
+    use image::AnimationDecoder;
+    let file =
+        std::io::BufReader::new(std::fs::File::open(path).with_context(|| format!("{}", path.display()))?);
+    let decoder = image::codecs::png::PngDecoder::new(file).with_context(|| format!("{}", path.display()))?;
+    let frames = if decoder.is_apng().with_context(|| format!("{}", path.display()))? {
+        let frames = decoder.apng().with_context(|| format!("{}", path.display()))?.into_frames();
+        frames.map(|frame| frame.map(image::Frame::into_buffer)).collect::<Result<Vec<_>, _>>()
+    } else {
+        image::DynamicImage::from_decoder(decoder).map(|image| vec![image.to_rgba8()])
+    };
+    frames.with_context(|| format!("{}: PNG decoding", path.display()))
+}
+
 /// Reads a display image that [`write_display_png`] wrote with `bits` per channel.
 pub fn read_display_png(path: &Path, bits: u32) -> Option<(u32, u32, DisplayImage)> {
     let decoded = image::open(path).ok()?;
@@ -72,6 +128,35 @@ fn temporary_beside(path: &Path) -> PathBuf {
     let mut name = path.as_os_str().to_owned();
     name.push(format!(".tmp-{}.exr", std::process::id()));
     PathBuf::from(name)
+}
+
+/// The top-left corner of the `side`×`side` window with the largest sum of `values`, a
+/// `width` × `height` map row by row (a summed-area table makes every window O(1); the first
+/// in reading order where several tie).
+pub fn largest_window(values: &[f64], width: u32, height: u32, side: u32) -> (u32, u32) {
+    let (w, h, side) = (width as usize, height as usize, side as usize);
+    let mut sums = vec![0f64; (w + 1) * (h + 1)];
+    for y in 0..h {
+        for x in 0..w {
+            sums[(y + 1) * (w + 1) + x + 1] =
+                values[y * w + x] + sums[y * (w + 1) + x + 1] + sums[(y + 1) * (w + 1) + x]
+                    - sums[y * (w + 1) + x];
+        }
+    }
+    let window = |x: usize, y: usize| {
+        let at = |x: usize, y: usize| sums[y * (w + 1) + x];
+        at(x + side, y + side) - at(x, y + side) - at(x + side, y) + at(x, y)
+    };
+    let mut best = (0, 0, f64::NEG_INFINITY);
+    for y in 0..=h - side {
+        for x in 0..=w - side {
+            let sum = window(x, y);
+            if sum > best.2 {
+                best = (x, y, sum);
+            }
+        }
+    }
+    (best.0 as u32, best.1 as u32)
 }
 
 /// A perceptually ordered colour map (Google's Turbo, polynomial fit) for t in [0, 1].
@@ -139,8 +224,16 @@ mod tests {
         write_display_png(&png16, 2, 1, &ten).unwrap();
         let sixteen = image::open(&png16).unwrap().to_rgba16();
         assert_eq!(sixteen.as_raw()[3], 65535, "1023 is full scale");
-        assert_eq!(read_display_png(&png16, 10), Some((2, 1, ten)));
+        assert_eq!(read_display_png(&png16, 10), Some((2, 1, ten.clone())));
         assert_eq!(read_display_png(&png16, 8), None, "a 16-bit file is no 8-bit image");
+
+        // An animation reads back frame for frame, and 10-bit code values round to 8 bits.
+        let apng = dir.join("moving.png");
+        let frames = vec![vec![255, 0, 0, 255, 0, 0, 0, 255], vec![0, 255, 0, 255, 9, 9, 9, 255]];
+        write_apng(&apng, 2, 1, &frames, 1.0 / 60.0).unwrap();
+        let read: Vec<Vec<u8>> = read_apng(&apng).unwrap().into_iter().map(|f| f.into_raw()).collect();
+        assert_eq!(read, frames);
+        assert_eq!(display_rgba8(&ten), vec![0, 0, 128, 255, 255, 174, 1, 255]);
 
         let exr_path = dir.join("a.exr");
         write_exr(&exr_path, 2, 1, &[1.5, 2.0, 3.0, 0.0, 0.25, 0.5, 100.0, 0.0]).unwrap();

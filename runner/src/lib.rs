@@ -3,6 +3,7 @@
 
 pub mod baseline;
 pub mod compare;
+pub mod flicker;
 pub mod front;
 pub mod fs;
 pub mod gate;
@@ -23,6 +24,7 @@ pub mod report;
 pub mod run;
 pub mod scenes;
 pub mod sequence;
+pub mod spool;
 pub mod stats;
 pub mod truth;
 pub mod worker;

@@ -39,20 +39,17 @@ impl FlipMap {
     }
 }
 
-/// The image's colour channels as 8-bit values, alpha dropped.
-fn rgb8(image: &DisplayImage) -> Vec<u8> {
-    let max = f64::from(image.max_code());
-    image
-        .rgba
-        .chunks_exact(4)
-        .flat_map(|p| p[..3].iter().map(move |&v| (f64::from(v) * 255.0 / max).round() as u8))
-        .collect()
-}
-
 /// FLIP of `image` against `truth`, both `width` × `height`.
 pub fn flip(image: &DisplayImage, truth: &DisplayImage, width: u32, height: u32) -> FlipMap {
-    let reference = nv_flip::FlipImageRgb8::with_data(width, height, &rgb8(truth));
-    let test = nv_flip::FlipImageRgb8::with_data(width, height, &rgb8(image));
+    let rgba8 = crate::images::display_rgba8;
+    flip_rgba8(&rgba8(image), &rgba8(truth), width, height)
+}
+
+/// FLIP of an RGBA8 display image (alpha ignored) against the truth's, both `width` × `height`.
+pub fn flip_rgba8(image: &[u8], truth: &[u8], width: u32, height: u32) -> FlipMap {
+    let rgb = |rgba: &[u8]| -> Vec<u8> { rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect() };
+    let reference = nv_flip::FlipImageRgb8::with_data(width, height, &rgb(truth));
+    let test = nv_flip::FlipImageRgb8::with_data(width, height, &rgb(image));
     let errors = nv_flip::flip(reference, test, FLIP_PIXELS_PER_DEGREE).to_vec();
     FlipMap { width, height, errors }
 }

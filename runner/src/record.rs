@@ -1,6 +1,8 @@
 //! The run record, `reports/<run-id>/run.json`: everything a run measured, schema versioned.
 //! It is rewritten atomically after every scene, so a killed run leaves what finished.
 
+use std::collections::BTreeMap;
+
 use aabench_renderer::{DisplayImage, PlatformInfo};
 use serde::{Deserialize, Serialize};
 
@@ -423,6 +425,33 @@ pub struct SequenceRecord {
     /// Wall seconds of the whole sequence.
     pub seconds: f64,
     pub error: Option<String>,
+    /// Of those, the seconds spent on FLIP against the truth's frames (every mode's) and on
+    /// cutting and writing the animations of the region (absent in runs from before).
+    #[serde(default)]
+    pub flip_s: f64,
+    #[serde(default)]
+    pub region_s: f64,
+    /// Where the modes flicker most, with its animations; absent where fewer than two frames
+    /// were rendered or the frames could not be spooled (`region_error` says why).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub region: Option<FlickerRegion>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub region_error: Option<String>,
+}
+
+/// The square of the frame where the modes' error changes most from frame to frame
+/// (`flicker.rs`), and its animated PNGs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FlickerRegion {
+    pub x: u32,
+    pub y: u32,
+    pub side: u32,
+    /// The consecutive frames within which it flickers most: the report's strips.
+    pub strip_first: u32,
+    pub strip_frames: u32,
+    /// Per stream (`truth` and the animated modes' ids), its animation of the region relative to
+    /// the run folder: every frame forwards, then back, at the path's time step.
+    pub animations: BTreeMap<String, String>,
 }
 
 /// One mode's sequence against the truth's.
@@ -433,6 +462,12 @@ pub struct ModeSequence {
     pub psnr_db: Vec<Decibels>,
     /// The PSNR of the frames' mean MSE.
     pub mean_psnr_db: Decibels,
+    /// Per frame, mean FLIP against the truth's frame, and its mean over the frames (absent in
+    /// runs from before).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub flip: Vec<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean_flip: Option<f64>,
     /// Mean squared frame-to-frame change of the error image (module docs); 0 where the mode
     /// changes exactly as the truth does.
     pub instability: f64,

@@ -13,6 +13,11 @@
 //! exact reprojection of a display image does not exist (disocclusions, sub-pixel detail).
 //! `change_ratio` sets the mode's own mean squared frame-to-frame change against the truth's.
 //!
+//! Every frame is spooled to disk as it renders (`spool.rs`). Once the last is done, every frame
+//! is compared with the truth's by FLIP (`perceptual.rs`), on every core and without disturbing
+//! a render's time, and the square where the modes flicker most is cut from them as animations
+//! (`flicker.rs`).
+//!
 //! A temporal mode (TAA) starts the path from a still: its warm-up frames at the first camera.
 //! Its **ghosting** is its error on the pixels that its history cannot hold: those whose point
 //! lay outside the previous frame, or behind the surfaces seen around where it lay (deeper
@@ -27,12 +32,14 @@ use aabench_renderer::scene::Camera;
 use aabench_renderer::taa::WARMUP_FRAMES;
 use aabench_renderer::{DisplayImage, Mode};
 
+use crate::flicker::{self, TRUTH_STREAM, pixel_changes_of_error};
 use crate::manifest::Manifest;
 use crate::metrics::{self, Decibels, FrameChecks};
 use crate::motion::MotionSpec;
 use crate::plan::RunPlan;
 use crate::progress::Progress;
 use crate::record::{Ghosting, ModeSequence, SequenceRecord, fingerprint};
+use crate::spool::Spool;
 use crate::truth;
 use crate::worker::Worker;
 
@@ -85,6 +92,8 @@ pub const HIDDEN_DEPTH: f64 = 0.01;
 struct ModeState {
     previous: Option<ModeFrame>,
     mse: Vec<f64>,
+    /// Per frame, FLIP against the truth's: filled in once the path is rendered.
+    flip: Vec<f64>,
     hashes: Vec<String>,
     /// Σ (ΔA − ΔT)² and Σ ΔA², in squared code steps.
     error_change: u64,
@@ -125,18 +134,78 @@ pub async fn run(
         truth_change: None,
         seconds: 0.0,
         error: None,
+        flip_s: 0.0,
+        region_s: 0.0,
+        region: None,
+        region_error: None,
     };
     let mut states: Vec<ModeState> = modes.iter().map(|_| ModeState::default()).collect();
-    let rendered =
-        render_frames(worker, plan, manifest, &along, modes, progress, cancel, &mut record, &mut states);
+    // Every mode's frames are spooled, to stream `index + 1`; the truth's to stream 0.
+    let out_dir = plan.run_dir.join(&manifest.name).join("path");
+    let size = plan.tier.resolution(manifest);
+    let names =
+        std::iter::once(TRUTH_STREAM.to_string()).chain(modes.iter().map(|(mode, _)| mode.to_string()));
+    let mut spool = Spool::create(out_dir.join(".spool"), size, names.collect());
+    let mut flicker = vec![0u64; size[0] as usize * size[1] as usize];
+    let rendered = render_frames(
+        worker,
+        plan,
+        manifest,
+        &along,
+        modes,
+        progress,
+        cancel,
+        &mut record,
+        &mut states,
+        (&mut spool, &mut flicker),
+    );
     if let Err(error) = rendered.await {
         progress.line(&format!("[{}] warning: the sequence stopped: {error}", manifest.name));
         record.error = Some(error);
     }
-    record.seconds = start.elapsed().as_secs_f64();
     let done = record.frames_done as usize;
+    progress.status(&format!("[{}] sequence: FLIP and the worst-flickering region", manifest.name));
+    let animated_streams: Vec<usize> =
+        (0..modes.len()).filter(|&i| animated(modes[i].0, modes)).map(|i| i + 1).collect();
+    let (delay_s, run_dir) = (along.motion.time_step_s, plan.run_dir.clone());
+    let after = tokio::task::spawn_blocking(move || {
+        let spool = spool?;
+        let start = Instant::now();
+        let flips = flip_along(&spool, done)?;
+        let flip_s = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let region =
+            flicker::region(&spool, &flicker, &animated_streams, done, delay_s, [&run_dir, &out_dir]);
+        Ok::<_, String>((flips, flip_s, region, start.elapsed().as_secs_f64()))
+    });
+    match after.await.map_err(|panic| format!("panicked: {panic}")).and_then(|after| after) {
+        Ok((flips, flip_s, region, region_s)) => {
+            for (state, flip) in states.iter_mut().zip(flips.into_iter().skip(1)) {
+                state.flip = flip;
+            }
+            (record.flip_s, record.region_s) = (flip_s, region_s);
+            match region {
+                Ok(region) => record.region = Some(region),
+                Err(error) => record.region_error = Some(error),
+            }
+        }
+        Err(error) => {
+            progress.line(&format!(
+                "[{}] warning: no FLIP along the path and no flicker region: {error}",
+                manifest.name
+            ));
+            record.region_error = Some(error);
+        }
+    }
+    record.seconds = start.elapsed().as_secs_f64();
     let outcomes = states.into_iter().map(|state| state.conclude(done, record.truth_change)).collect();
     (record, outcomes)
+}
+
+/// Whether the sequence animates `mode`'s region: every mode but a stalled one whose unstalled
+/// twin runs too (stalling changes the time, not the image).
+fn animated(mode: Mode, modes: &[(Mode, bool)]) -> bool {
+    !mode.stalled || !modes.iter().any(|(other, _)| *other == Mode { stalled: false, ..mode })
 }
 
 /// Renders frame after frame: the truth, then every mode. `record.frames_done` counts the
@@ -152,8 +221,18 @@ async fn render_frames(
     cancel: &Arc<AtomicBool>,
     record: &mut SequenceRecord,
     states: &mut [ModeState],
+    (spool, flicker): (&mut Result<Spool, String>, &mut [u64]),
 ) -> Result<(), String> {
     let frames = along.cameras.len();
+    // A frame that cannot be spooled (a full disk) ends the spooling: the sequence goes on
+    // without FLIP and animations, and says why.
+    let mut keep = |stream: usize, image: &DisplayImage| {
+        if let Ok(kept) = spool
+            && let Err(error) = kept.append(stream, image)
+        {
+            *spool = Err(error);
+        }
+    };
     let mut previous_truth: Option<DisplayImage> = None;
     let mut truth_change = 0u64;
     for (frame, &camera) in along.cameras.iter().enumerate() {
@@ -181,6 +260,7 @@ async fn render_frames(
                     .await?
             }
         };
+        keep(0, &truth);
         for (index, (mode, prepared)) in modes.iter().enumerate() {
             let state = &mut states[index];
             if !prepared || state.error.is_some() {
@@ -188,7 +268,10 @@ async fn render_frames(
             }
             status(&mode.to_string());
             match render(worker, plan, index, mode.m, frame == 0).await {
-                Ok(Ok(rendered)) => state.add(*mode, rendered, &truth, previous_truth.as_ref()),
+                Ok(Ok(rendered)) => {
+                    keep(index + 1, &rendered.display);
+                    state.add(*mode, rendered, &truth, previous_truth.as_ref(), flicker);
+                }
                 Ok(Err(error)) => state.error = Some(error),
                 // The worker is gone or stuck: no later frame can render.
                 Err(error) => {
@@ -198,7 +281,7 @@ async fn render_frames(
             }
         }
         if let Some(previous) = &previous_truth {
-            truth_change += squared_difference(&truth, previous, None);
+            truth_change += squared_difference(&truth, previous);
         }
         previous_truth = Some(truth);
         record.frames_done = frame as u32 + 1;
@@ -288,13 +371,14 @@ async fn truth_frame(
 
 impl ModeState {
     /// Adds a frame: its error against the truth's frame and, from the frame before, the change
-    /// of its error, of its image and of its sample counts.
+    /// of its error (also added per pixel to `flicker`), of its image and of its sample counts.
     fn add(
         &mut self,
         mode: Mode,
         frame: ModeFrame,
         truth: &DisplayImage,
         previous_truth: Option<&DisplayImage>,
+        flicker: &mut [u64],
     ) {
         self.checks.add(frame.checks);
         // Counts outside the window are reported by the frame's checks.
@@ -310,8 +394,8 @@ impl ModeState {
         self.mse.push(metrics::quality(&frame.display, truth, "truth").mse);
         if let (Some(before), Some(truth_before)) = (&self.previous, previous_truth) {
             self.error_change +=
-                squared_difference(&frame.display, &before.display, Some((truth, truth_before)));
-            self.own_change += squared_difference(&frame.display, &before.display, None);
+                change_of_error(&frame.display, &before.display, truth, truth_before, flicker);
+            self.own_change += squared_difference(&frame.display, &before.display);
             if let (Some(now), Some(then)) = (&frame.counts, &before.counts) {
                 let changed = now.iter().zip(then).filter(|(a, b)| a != b).count();
                 self.count_changes.push(changed as f64 / now.len().max(1) as f64);
@@ -337,6 +421,7 @@ impl ModeState {
         let ModeState {
             previous,
             mse,
+            flip,
             hashes,
             error_change,
             own_change,
@@ -358,6 +443,8 @@ impl ModeState {
             psnr_db: mse.iter().map(|&e| Decibels::from_f64(-10.0 * e.log10())).collect(),
             mean_psnr_db: Decibels::from_f64(-10.0 * mean_mse.log10()),
             mse,
+            mean_flip: (flip.len() == frames).then(|| flip.iter().sum::<f64>() / frames as f64),
+            flip,
             instability: per_value(error_change, &last.display, pairs),
             change_ratio: truth_change.filter(|&t| t > 0.0).map(|t| own / t),
             count_changes: mean(&count_changes),
@@ -415,36 +502,66 @@ impl Geometry {
     }
 }
 
+/// Per stream of the spool, each of its first `frames` frames' mean FLIP against the truth's
+/// frame (stream 0's); empty for the truth's and for a stream that holds fewer frames (its mode
+/// failed on the way). Frames identical to another (a stalled mode's and its twin's) are
+/// compared once; the comparisons of a frame run on every core.
+fn flip_along(spool: &Spool, frames: usize) -> Result<Vec<Vec<f64>>, String> {
+    let [width, height] = spool.size();
+    let complete: Vec<usize> = (1..spool.streams()).filter(|&s| spool.frames(s) >= frames).collect();
+    let mut flips = vec![Vec::with_capacity(frames); spool.streams()];
+    let threads = std::thread::available_parallelism().map_or(1, usize::from);
+    for frame in 0..frames {
+        let truth = spool.frame(0, frame)?;
+        let images = complete.iter().map(|&s| spool.frame(s, frame)).collect::<Result<Vec<_>, _>>()?;
+        let mut seen = std::collections::HashSet::new();
+        let distinct: Vec<&[u8]> =
+            images.iter().map(Vec::as_slice).filter(|image| seen.insert(*image)).collect();
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let compare = || {
+            let mut done = Vec::new();
+            loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some(image) = distinct.get(i) else { return done };
+                done.push((*image, crate::perceptual::flip_rgba8(image, &truth, width, height).mean()));
+            }
+        };
+        let values: std::collections::HashMap<&[u8], f64> = std::thread::scope(|scope| {
+            let workers: Vec<_> = (0..threads).map(|_| scope.spawn(compare)).collect();
+            workers.into_iter().flat_map(|w| w.join().expect("a FLIP thread panicked")).collect()
+        });
+        for (&stream, image) in complete.iter().zip(&images) {
+            flips[stream].push(values[image.as_slice()]);
+        }
+    }
+    Ok(flips)
+}
+
 /// The mean of `values`, where there are any.
 fn mean(values: &[f64]) -> Option<f64> {
     (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
 }
 
-/// Σ over pixels and colour channels of (a − b)², or of ((a − b) − (c − d))² with `minus` =
-/// (c, d), in squared code steps (exact in integers).
-fn squared_difference(
+/// Σ over pixels and colour channels of (a − b)², in squared code steps (exact in integers).
+fn squared_difference(a: &DisplayImage, b: &DisplayImage) -> u64 {
+    assert_eq!(a.rgba.len(), b.rgba.len(), "images of different sizes");
+    a.rgba.chunks_exact(4).zip(b.rgba.chunks_exact(4)).map(|(p, q)| pixel_squares(p, q)).sum()
+}
+
+/// Σ over pixels and colour channels of ((a − b) − (t − u))², the squared change of the error
+/// image from (b, u) to (a, t), in squared code steps; each pixel's share is also added to
+/// `per_pixel`.
+fn change_of_error(
     a: &DisplayImage,
     b: &DisplayImage,
-    minus: Option<(&DisplayImage, &DisplayImage)>,
+    t: &DisplayImage,
+    u: &DisplayImage,
+    per_pixel: &mut [u64],
 ) -> u64 {
-    assert_eq!(a.rgba.len(), b.rgba.len(), "images of different sizes");
-    // The colour channels of each pixel: alpha is left out.
-    fn colour(image: &DisplayImage) -> impl Iterator<Item = [u16; 3]> + '_ {
-        image.rgba.chunks_exact(4).map(|p| [p[0], p[1], p[2]])
-    }
-    let step = |x: u16, y: u16| i64::from(x) - i64::from(y);
-    let mut sum = 0u64;
-    match minus {
-        None => {
-            for (p, q) in a.rgba.chunks_exact(4).zip(b.rgba.chunks_exact(4)) {
-                sum += pixel_squares(p, q);
-            }
-        }
-        Some((c, d)) => {
-            for ((p, q), (r, s)) in colour(a).zip(colour(b)).zip(colour(c).zip(colour(d))) {
-                sum += (0..3).map(|i| (step(p[i], q[i]) - step(r[i], s[i])).pow(2) as u64).sum::<u64>();
-            }
-        }
+    let mut sum = 0;
+    for (change, out) in pixel_changes_of_error(&a.rgba, &b.rgba, &t.rgba, &u.rgba).zip(per_pixel) {
+        *out += change;
+        sum += change;
     }
     sum
 }

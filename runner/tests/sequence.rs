@@ -2,8 +2,8 @@
 //! every mode its still frame bit for bit and no instability; a thin wire under a slow pan
 //! flickers in deferred-1x1 far more than in reference-4x4, and the metric ranks them so; TAA
 //! flickers less than deferred-1x1 on the moving `thin` scene and reports its ghosting, and the
-//! report shows every mode along the path; stable counts flicker less than the paper's there,
-//! for the samples they add.
+//! report shows every mode along the path and where it flickers most; stable counts flicker less
+//! than the paper's there, for the samples they add.
 
 use serde_json::{Value, json};
 
@@ -48,6 +48,12 @@ fn a_static_path_repeats_the_still_frame_in_every_mode_without_instability() {
         assert!(own["change_ratio"].is_null(), "{id}: the truth does not change");
         let still_mse = mode(scene, id)["vs_ground_truth"]["mse"].as_f64().unwrap();
         assert!(own["mse"].as_array().unwrap().iter().all(|e| e.as_f64() == Some(still_mse)), "{id}");
+        // FLIP's reference code can differ in the last bit of its mean between calls on the
+        // same images; the images themselves are equal bit for bit (the hashes above).
+        let still_flip = mode(scene, id)["vs_ground_truth"]["flip"].as_f64().unwrap();
+        let near = |e: &Value| (e.as_f64().unwrap() - still_flip).abs() <= 1e-12 * still_flip;
+        assert!(own["flip"].as_array().unwrap().iter().all(near), "{id}: {} vs {still_flip}", own["flip"]);
+        assert!(near(&own["mean_flip"]), "{id}");
         // One warm-up, one timed frame and three sequence frames, each checked.
         assert_eq!(mode(scene, id)["checks"]["frames"], 5, "{id}");
     }
@@ -56,6 +62,12 @@ fn a_static_path_repeats_the_still_frame_in_every_mode_without_instability() {
     }
     // A stable mode's still is the paper's.
     assert_eq!(mode(scene, "adaptive-2x2-stable")["output_hash"], mode(scene, "adaptive-2x2")["output_hash"]);
+    // Nothing flickers: the region is the first square, and the strip the first frames.
+    let region = &record["region"];
+    assert_eq!(
+        (region["x"].as_u64(), region["y"].as_u64(), region["strip_first"].as_u64()),
+        (Some(0), Some(0), Some(0))
+    );
     // Every frame's camera is the still's: its truth is the still truth, rendered once.
     assert_eq!(record["truth_rendered"], 0);
     let cached = std::fs::read_dir(ws.dir.join("scenes/cache/truth")).unwrap().count();
@@ -94,6 +106,51 @@ fn a_wire_under_a_slow_pan_flickers_at_one_sample_and_far_less_at_sixteen() {
     // And the frames move: no two of deferred-1x1's are alike.
     let hashes = sequence(scene, "deferred-1x1", 6)["hashes"].as_array().unwrap().clone();
     assert!(hashes.windows(2).all(|w| w[0] != w[1]), "{hashes:?}");
+    // FLIP, frame by frame, ranks them as the MSE does.
+    let flip = |id: &str| sequence(scene, id, 6)["mean_flip"].as_f64().unwrap();
+    assert!(flip("deferred-1x1") > flip("reference-4x4") && flip("reference-4x4") > 0.0);
+    assert_eq!(sequence(scene, "deferred-1x1", 6)["flip"].as_array().map(Vec::len), Some(6));
+
+    // The worst-flickering region, animated: the truth's first frame is the still truth's crop
+    // there, and deferred-1x1 flickers in it more than across the frame and more than
+    // reference-4x4 does.
+    let region = &scene["sequence"]["region"];
+    let (x, y, side) = (region["x"].as_u64().unwrap() as u32, region["y"].as_u64().unwrap() as u32, 64);
+    assert_eq!(region["side"], side);
+    let animation = |id: &str| {
+        let file =
+            ws.run_dir().join(region["animations"][id].as_str().unwrap_or_else(|| panic!("{id}: {region}")));
+        let frames = aabench::images::read_apng(&file).unwrap();
+        // Forwards, then back without the ends.
+        assert_eq!(frames.len(), 10, "{id}");
+        assert!(frames.iter().all(|f| f.dimensions() == (side, side)), "{id}");
+        frames
+    };
+    let truth = animation("truth");
+    let still = image::open(ws.run_dir().join(scene["truth"]["image"].as_str().unwrap())).unwrap().to_rgba8();
+    assert_eq!(truth[0], image::imageops::crop_imm(&still, x, y, side, side).to_image());
+    let back: Vec<image::RgbaImage> = truth[1..5].iter().rev().cloned().collect();
+    assert_eq!(truth[6..], back[..], "frames 4 to 1 after 5");
+    let flicker = |id: &str| {
+        let frames = animation(id);
+        let mut sum = 0.0;
+        for f in 1..6 {
+            for (((a, b), t), u) in
+                frames[f].iter().zip(frames[f - 1].iter()).zip(truth[f].iter()).zip(truth[f - 1].iter())
+            {
+                sum += ((f64::from(*a) - f64::from(*b) - f64::from(*t) + f64::from(*u)) / 255.0).powi(2);
+            }
+        }
+        // Per colour value and frame pair, as `instability` (alpha never changes).
+        sum / (f64::from(side * side) * 3.0 * 5.0)
+    };
+    eprintln!(
+        "region flicker {:e} {:e}, frame {deferred:e} {reference:e}",
+        flicker("deferred-1x1"),
+        flicker("reference-4x4")
+    );
+    assert!(flicker("deferred-1x1") > 2.0 * deferred, "{} vs {deferred:e}", flicker("deferred-1x1"));
+    assert!(flicker("deferred-1x1") > 4.0 * flicker("reference-4x4"));
 }
 
 /// A workspace with the `thin` scene at `size`, lit by the suite's sun, on the suite's default
@@ -150,9 +207,20 @@ fn taa_flickers_less_than_deferred_on_a_moving_thin_scene_and_reports_its_ghosti
     assert!(row.contains(&format!("{:.3}", instability(taa) * 1e4)), "{row}");
     let plot = std::fs::read_to_string(ws.dir.join("figures/thin-instability.svg")).unwrap();
     assert!(plot.contains("instability against run time") && plot.contains("taa"), "{plot}");
+    // The truth, deferred-1x1 and taa side by side at ×2, every frame forwards and back.
+    let animation = aabench::images::read_apng(&ws.dir.join("figures/thin-flicker.png")).unwrap();
+    assert_eq!(animation.len(), 14);
+    assert_eq!(animation[0].dimensions(), (3 * 128 + 2 * 6, 128));
     assert_eq!(ws.run(&["report", run_dir]).status.code(), Some(0));
     let page = std::fs::read_to_string(std::path::Path::new(run_dir).join("index.html")).unwrap();
     assert!(page.contains("<h3>Along the camera path</h3>") && page.contains("instability against run time"));
+    // Where it flickers most: the modes' animations and a strip of eight frames each.
+    assert!(page.contains("<h3>Where it flickers most</h3>") && page.contains("thin/path/taa.png"), "{page}");
+    for id in ["truth-8x8", "deferred-1x1", "taa"] {
+        let strip =
+            image::open(std::path::Path::new(run_dir).join(format!("report/thin/strip-{id}.png"))).unwrap();
+        assert_eq!((strip.width(), strip.height()), (8 * 65 - 1, 64), "{id}");
+    }
 }
 
 #[test]
@@ -230,6 +298,7 @@ fn the_gate_compares_sequences_and_a_run_without_them_compared_less() {
     for mode in ["deferred-1x1", "adaptive-2x2"] {
         assert_eq!(outcome(&verdict, mode, "instability")["outcome"], "unchanged");
         assert_eq!(outcome(&verdict, mode, "sequence_psnr_vs_truth")["outcome"], "unchanged");
+        assert_eq!(outcome(&verdict, mode, "sequence_flip_vs_truth")["outcome"], "unchanged");
     }
     assert_eq!(outcome(&verdict, "adaptive-2x2", "sequence_shaded_percent")["outcome"], "unchanged");
 
@@ -243,6 +312,10 @@ fn the_gate_compares_sequences_and_a_run_without_them_compared_less() {
             let shaded = &mut m["sequence"]["shaded_percent"];
             *shaded = json!(shaded.as_f64().unwrap() - 1.0);
         }
+        if m["mode"] == "deferred-1x1" {
+            let flip = &mut m["sequence"]["mean_flip"];
+            *flip = json!(flip.as_f64().unwrap() * 0.9);
+        }
     }
     let original = std::fs::read(&file).unwrap();
     write_json(&file, &doctored);
@@ -251,6 +324,7 @@ fn the_gate_compares_sequences_and_a_run_without_them_compared_less() {
     assert_eq!(outcome(&verdict, "adaptive-2x2", "instability")["outcome"], "regressed");
     assert_eq!(outcome(&verdict, "adaptive-2x2", "sequence_shaded_percent")["outcome"], "regressed");
     assert_eq!(outcome(&verdict, "deferred-1x1", "instability")["outcome"], "unchanged");
+    assert_eq!(outcome(&verdict, "deferred-1x1", "sequence_flip_vs_truth")["outcome"], "regressed");
     std::fs::write(&file, original).unwrap();
 
     let stills = run("stills", &["--sequences", "off"]);

@@ -134,8 +134,8 @@ pub struct Check {
     pub mode: String,
     /// `status`, `psnr_vs_truth`, `mse_vs_truth`, `flip_vs_truth`, `ssim_vs_truth`,
     /// `psnr_vs_reference`, `mse_vs_reference`, `shaded_percent`, `sample_histogram`, `output_hash`,
-    /// `sequence_psnr_vs_truth`, `instability`, `sequence_shaded_percent`, `relative_time`,
-    /// `time_vs_reference`, `frame_time`; `run` for the run as a whole.
+    /// `sequence_psnr_vs_truth`, `sequence_flip_vs_truth`, `instability`, `sequence_shaded_percent`,
+    /// `relative_time`, `time_vs_reference`, `frame_time`; `run` for the run as a whole.
     pub metric: String,
     /// What the check compares with: the committed baseline or the base build's processes.
     #[serde(default)]
@@ -779,8 +779,8 @@ impl ModeContext<'_> {
         }
     }
 
-    /// The mode's sequence against the baseline's: its mean PSNR against the truth's frames
-    /// (the PSNR tolerance) and its instability (an error of squared code values, so the MSE
+    /// The mode's sequence against the baseline's: its mean PSNR and mean FLIP against the
+    /// truth's frames (the PSNR and FLIP tolerances), its samples shaded and its instability (an error of squared code values, so the MSE
     /// tolerance, relative). A run that rendered no sequence of the scene is one missing check
     /// of the scene (`compare_scene`); a mode that has none in a run that did fails.
     fn sequence_checks(&self, tolerance: QualityTolerances) -> Vec<Check> {
@@ -819,6 +819,14 @@ impl ModeContext<'_> {
             )
         };
         let mut checks = vec![psnr, instability];
+        checks.extend(self.error_check(
+            "sequence_flip_vs_truth",
+            "mean FLIP against the truth's frames",
+            now.mean_flip,
+            then.mean_flip,
+            tolerance.flip_relative,
+            0.0,
+        ));
         match (now.shaded_percent, then.shaded_percent) {
             (Some(now), Some(then)) => {
                 checks.push(self.shaded_check("sequence_shaded_percent", now, then, tolerance));
@@ -891,37 +899,51 @@ impl ModeContext<'_> {
             ("flip", "FLIP", now.flip, then.flip, tolerance.flip_relative, 0.0),
             ("ssim", "SSIM", now.ssim, then.ssim, tolerance.ssim_relative, 1.0),
         ];
-        let mut checks = Vec::new();
-        for (metric, label, now, then, threshold, perfect) in metrics {
-            let name = format!("{metric}_vs_{against}");
-            let (now, then) = match (now, then) {
-                (Some(now), Some(then)) => (now, then),
-                (None, Some(_)) => {
-                    let detail = format!("the baseline has {label} against the {against}, the run has none");
-                    checks.push(self.check(&name, Outcome::Failed, "relative", detail));
-                    continue;
-                }
-                _ => continue,
-            };
-            let change = relative_change((now - perfect).abs(), (then - perfect).abs());
-            checks.push(Check {
-                baseline: Some(then),
-                current: Some(now),
-                change: Some(change).filter(|v| v.is_finite()),
-                threshold: Some(threshold),
-                ..self.check(
-                    &name,
-                    beyond(change, threshold, false),
-                    "relative",
-                    format!(
-                        "{label} against the {against} {then:.5} → {now:.5} ({} of its error; tolerance ±{:.1}%)",
-                        show_percent(change),
-                        threshold * 100.0
-                    ),
-                )
-            });
-        }
-        checks
+        metrics
+            .into_iter()
+            .filter_map(|(metric, label, now, then, threshold, perfect)| {
+                let label = format!("{label} against the {against}");
+                self.error_check(&format!("{metric}_vs_{against}"), &label, now, then, threshold, perfect)
+            })
+            .collect()
+    }
+
+    /// An error metric where the baseline has it: its relative change in the distance from
+    /// `perfect` (the value of identical images) against `threshold`. A run without it fails.
+    fn error_check(
+        &self,
+        name: &str,
+        label: &str,
+        now: Option<f64>,
+        then: Option<f64>,
+        threshold: f64,
+        perfect: f64,
+    ) -> Option<Check> {
+        let (now, then) = match (now, then) {
+            (Some(now), Some(then)) => (now, then),
+            (None, Some(_)) => {
+                let detail = format!("the baseline has {label}, the run has none");
+                return Some(self.check(name, Outcome::Failed, "relative", detail));
+            }
+            _ => return None,
+        };
+        let change = relative_change((now - perfect).abs(), (then - perfect).abs());
+        Some(Check {
+            baseline: Some(then),
+            current: Some(now),
+            change: Some(change).filter(|v| v.is_finite()),
+            threshold: Some(threshold),
+            ..self.check(
+                name,
+                beyond(change, threshold, false),
+                "relative",
+                format!(
+                    "{label} {then:.5} → {now:.5} ({} of its error; tolerance ±{:.1}%)",
+                    show_percent(change),
+                    threshold * 100.0
+                ),
+            )
+        })
     }
 
     fn time_checks(&self) -> Vec<Check> {

@@ -1,8 +1,9 @@
 //! `aabench report --markdown`: a run's results as Markdown, so that documentation quotes a
 //! named run instead of numbers typed by hand. With `--figures DIR` it also writes, per scene,
 //! the error-against-run-time plots as SVG (MSE, FLIP, and instability where the scene has a
-//! camera path) and a strip of crops (the truth and the main modes
-//! at the window where adaptive-4x4 differs most from it) as PNG.
+//! camera path), a strip of crops (the truth and the main modes at the window where adaptive-4x4
+//! differs most from it) as PNG, and where the scene has a camera path, the truth and the main
+//! modes side by side at the square where they flicker most as an animated PNG.
 
 use std::fmt::Write;
 use std::path::Path;
@@ -11,7 +12,8 @@ use image::RgbaImage;
 
 use super::{
     ErrorMetric, MODE_COLUMNS, SEQUENCE_COLUMNS, VARIANTS, decibels, error_points, fastest_by_level,
-    mode_cells, open_rgba, plots, sequence_cells, sequence_summary, technique_cell, worst_window,
+    mode_cells, open_rgba, plots, sequence_cells, sequence_summary, side_by_side, technique_cell,
+    worst_window,
 };
 use crate::record::{ModeRecord, RunRecord, SceneRecord};
 use crate::truth::TRUTH_ID;
@@ -36,6 +38,22 @@ const STRIP_CROP: u32 = 48;
 const STRIP_ZOOM: u32 = 4;
 /// White between panels, in enlarged pixels.
 const STRIP_GAP: u32 = 6;
+
+/// The modes of the flicker animation after the truth, left to right, where the run animated
+/// them: the 1×1 techniques, then 16 samples a pixel from the reference, the paper's adaptive
+/// mode and its stable variant.
+const FLICKER_MODES: [&str; 8] = [
+    "deferred-1x1",
+    "fxaa",
+    "smaa",
+    "msaa-4x",
+    "taa",
+    "reference-4x4",
+    "adaptive-4x4",
+    "adaptive-4x4-stable",
+];
+/// How much the flicker animation enlarges the square.
+const FLICKER_ZOOM: u32 = 2;
 
 /// The whole document: where the run came from, the overview, then one table per scene.
 pub fn document(run: &RunRecord) -> String {
@@ -262,8 +280,9 @@ fn cell_text(text: &str) -> String {
     text.replace('|', "\\|").replace(['\n', '\r'], " ")
 }
 
-/// Writes `<scene>-front.svg` and `<scene>-strip.png` for each scene into `dir`; returns the
-/// files written and what had to be left out, one line each.
+/// Writes `<scene>-front.svg` and `<scene>-strip.png` for each scene, and `<scene>-flicker.png`
+/// for each with a camera path, into `dir`; returns the files written and what had to be left
+/// out, one line each.
 pub fn figures(run_dir: &Path, run: &RunRecord, dir: &Path) -> Result<(Vec<String>, Vec<String>), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let (mut written, mut left_out) = (Vec::new(), Vec::new());
@@ -297,8 +316,56 @@ pub fn figures(run_dir: &Path, run: &RunRecord, dir: &Path) -> Result<(Vec<Strin
             }
             Err(reason) => left_out.push(format!("{}: no strip: {reason}", scene.name)),
         }
+        if scene.sequence.is_some() {
+            let path = dir.join(format!("{}-flicker.png", scene.name));
+            match flicker_animation(run_dir, scene, &path) {
+                Ok(shows) => written.push(format!("{} ({shows})", path.display())),
+                Err(reason) => left_out.push(format!("{}: no flicker animation: {reason}", scene.name)),
+            }
+        }
     }
     Ok((written, left_out))
+}
+
+/// Writes to `path` the truth's and the [`FLICKER_MODES`]' animations of the sequence's
+/// worst-flickering square side by side, frame for frame, enlarged: what it shows, or why the
+/// scene has none.
+fn flicker_animation(run_dir: &Path, scene: &SceneRecord, path: &Path) -> Result<String, String> {
+    let sequence = scene.sequence.as_ref().ok_or("no sequence")?;
+    let Some(region) = &sequence.region else {
+        return Err(sequence.region_error.clone().unwrap_or_else(|| "no flicker region".into()));
+    };
+    let streams: Vec<(&str, &String)> = std::iter::once("truth")
+        .chain(FLICKER_MODES)
+        .filter_map(|id| Some((id, region.animations.get(id)?)))
+        .collect();
+    let mut animations = Vec::new();
+    for (_, file) in &streams {
+        let frames = crate::images::read_apng(&run_dir.join(file)).map_err(|e| format!("{e:#}"))?;
+        if animations.first().is_some_and(|first: &Vec<RgbaImage>| first.len() != frames.len()) {
+            return Err(format!("{file} has {} frames, the truth's {}", frames.len(), animations[0].len()));
+        }
+        animations.push(frames);
+    }
+    let frames: Vec<Vec<u8>> = (0..animations.first().map_or(0, Vec::len))
+        .map(|f| {
+            let panels: Vec<RgbaImage> = animations.iter().map(|frames| frames[f].clone()).collect();
+            side_by_side(&panels, FLICKER_ZOOM, STRIP_GAP).into_raw()
+        })
+        .collect();
+    let panel = region.side * FLICKER_ZOOM;
+    let width = streams.len() as u32 * (panel + STRIP_GAP) - STRIP_GAP;
+    crate::images::write_apng(path, width, panel, &frames, sequence.time_step_s)
+        .map_err(|e| format!("{e:#}"))?;
+    let names: Vec<&str> = streams.iter().map(|(id, _)| *id).collect();
+    Ok(format!(
+        "{0}×{0} at ({1}, {2}), ×{FLICKER_ZOOM}, {3} frames: {4}",
+        region.side,
+        region.x,
+        region.y,
+        frames.len(),
+        names.join(", ")
+    ))
 }
 
 /// An SVG drawn for inline HTML, as a file of its own: a browser shows a standalone SVG only
@@ -353,14 +420,9 @@ fn strip(run_dir: &Path, scene: &SceneRecord) -> Result<(RgbaImage, String), Str
     }
     let side = STRIP_CROP.min(images[0].width()).min(images[0].height());
     let (x, y) = worst_window(&images[0], &open_rgba(run_dir, worst)?, side);
-    let panel = side * STRIP_ZOOM;
-    let width = images.len() as u32 * (panel + STRIP_GAP) - STRIP_GAP;
-    let mut out = RgbaImage::from_pixel(width, panel, image::Rgba([255, 255, 255, 255]));
-    for (i, image) in images.iter().enumerate() {
-        let crop = image::imageops::crop_imm(image, x, y, side, side).to_image();
-        let big = image::imageops::resize(&crop, panel, panel, image::imageops::FilterType::Nearest);
-        image::imageops::replace(&mut out, &big, i64::from(i as u32 * (panel + STRIP_GAP)), 0);
-    }
+    let crops: Vec<RgbaImage> =
+        images.iter().map(|image| image::imageops::crop_imm(image, x, y, side, side).to_image()).collect();
+    let out = side_by_side(&crops, STRIP_ZOOM, STRIP_GAP);
     let names: Vec<&str> = std::iter::once(TRUTH_ID).chain(panels.iter().map(|(id, _)| *id)).collect();
     Ok((out, format!("{side}×{side} at ({x}, {y}), ×{STRIP_ZOOM}: {}", names.join(", "))))
 }

@@ -155,6 +155,7 @@ fn scene_section(
     }
     verdict_table(page, &checks);
     images(page, run_dir, scene, left_out)?;
+    flicker_region(page, run_dir, scene, left_out)?;
     history_plots(page, scene, history)?;
     page.push_str("</section>\n");
     Ok(())
@@ -260,11 +261,12 @@ pub fn mode_cells(mode: &ModeRecord) -> [String; 13] {
 }
 
 /// The columns of a scene's table along its camera path (`sequence_cells`).
-pub const SEQUENCE_COLUMNS: [&str; 8] = [
+pub const SEQUENCE_COLUMNS: [&str; 9] = [
     "mode",
     "ms per frame along the path",
     "samples %",
     "PSNR along the path",
+    "FLIP along the path",
     "instability ×1e-4",
     "change ratio",
     "count changes %",
@@ -272,7 +274,7 @@ pub const SEQUENCE_COLUMNS: [&str; 8] = [
 ];
 
 /// A mode's row along the scene's camera path, where it has one.
-pub fn sequence_cells(mode: &ModeRecord) -> Option<[String; 8]> {
+pub fn sequence_cells(mode: &ModeRecord) -> Option<[String; 9]> {
     let sequence = mode.sequence.as_ref()?;
     let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
     let psnr = sequence.mean_psnr_db.value();
@@ -285,6 +287,7 @@ pub fn sequence_cells(mode: &ModeRecord) -> Option<[String; 8]> {
         cell(sequence.frame_ms.as_ref().map(|f| format!("{:.1}", f.median))),
         cell(sequence.shaded_percent.map(|p| format!("{p:.1}"))),
         if psnr.is_finite() { format!("{psnr:.2}") } else { "∞".into() },
+        cell(sequence.mean_flip.map(|f| format!("{f:.4}"))),
         format!("{:.3}", sequence.instability * 1e4),
         cell(sequence.change_ratio.map(|r| format!("{r:.2}"))),
         cell(sequence.count_changes.map(|c| format!("{:.2}", c * 100.0))),
@@ -295,7 +298,7 @@ pub fn sequence_cells(mode: &ModeRecord) -> Option<[String; 8]> {
 /// The scene's modes along its camera path, where it has one.
 fn sequence_table(page: &mut String, scene: &SceneRecord) {
     let Some(sequence) = &scene.sequence else { return };
-    let rows: Vec<[String; 8]> = scene.modes.iter().filter_map(sequence_cells).collect();
+    let rows: Vec<[String; 9]> = scene.modes.iter().filter_map(sequence_cells).collect();
     let summary = escape(&sequence_summary(sequence));
     let _ = writeln!(page, "<h3>Along the camera path</h3>\n<p class=\"meta\">{summary}</p>");
     if rows.is_empty() {
@@ -756,6 +759,105 @@ fn crops(
     Ok(())
 }
 
+/// The sequence's worst-flickering region: every animated mode's animation beside the truth's,
+/// then a strip of its consecutive frames per mode (written under `report/<scene>/`).
+fn flicker_region(
+    page: &mut String,
+    run_dir: &Path,
+    scene: &SceneRecord,
+    left_out: &mut Vec<String>,
+) -> Result<(), String> {
+    let Some(sequence) = &scene.sequence else { return Ok(()) };
+    let Some(region) = &sequence.region else {
+        if let Some(error) = &sequence.region_error {
+            let _ = writeln!(page, "<p class=\"meta\">No flicker region: {}</p>", escape(error));
+        }
+        return Ok(());
+    };
+    let streams: Vec<(&str, &str)> = std::iter::once(TRUTH_ID)
+        .chain(scene.modes.iter().map(|m| m.mode.as_str()))
+        .filter_map(|id| {
+            let stream = if id == TRUTH_ID { "truth" } else { id };
+            Some((id, region.animations.get(stream)?.as_str()))
+        })
+        .collect();
+    let (side, first, count) = (region.side, region.strip_first, region.strip_frames);
+    let _ = write!(
+        page,
+        "<h3>Where it flickers most</h3>\n<p class=\"meta\">The {side}×{side} square at ({}, {}) where the \
+         modes' error changes most from frame to frame, ×{ZOOM}: every frame of the path, forwards then \
+         back, at its time step ({:.1} ms a frame). Below, frames {first}–{} side by side.</p>\n<div class=\"row crops\">",
+        region.x,
+        region.y,
+        sequence.time_step_s * 1e3,
+        first + count - 1
+    );
+    for (id, animation) in &streams {
+        let _ = write!(
+            page,
+            "<figure><img class=\"zoom\" src=\"{}\" width=\"{1}\" height=\"{1}\" alt=\"{2} animated\"><figcaption>{2}</figcaption></figure>",
+            escape(animation),
+            side * ZOOM,
+            escape(id)
+        );
+    }
+    page.push_str("</div>\n<table class=\"strips\"><tbody>\n");
+    let folder = Path::new("report").join(&scene.name);
+    std::fs::create_dir_all(run_dir.join(&folder))
+        .map_err(|e| format!("{}: {e}", run_dir.join(&folder).display()))?;
+    for (id, animation) in streams {
+        let frames = match crate::images::read_apng(&run_dir.join(animation)) {
+            Ok(frames) if frames.len() >= (first + count) as usize => frames,
+            Ok(frames) => {
+                let reason = format!(
+                    "{}: {animation} has {} frames, the strip needs {}",
+                    scene.name,
+                    frames.len(),
+                    first + count
+                );
+                left_out.push(reason.clone());
+                let _ = writeln!(page, "<tr><td>{}</td><td>{}</td></tr>", escape(id), escape(&reason));
+                continue;
+            }
+            Err(error) => {
+                let reason = format!("{}: {error:#}", scene.name);
+                left_out.push(reason.clone());
+                let _ = writeln!(page, "<tr><td>{}</td><td>{}</td></tr>", escape(id), escape(&reason));
+                continue;
+            }
+        };
+        let strip = side_by_side(&frames[first as usize..(first + count) as usize], 1, 1);
+        let relative = folder.join(format!("strip-{id}.png"));
+        crate::images::write_png(&run_dir.join(&relative), strip.width(), strip.height(), strip.as_raw())
+            .map_err(|e| format!("{e:#}"))?;
+        let _ = writeln!(
+            page,
+            "<tr><td>{}</td><td><img class=\"zoom\" src=\"{}\" width=\"{}\" height=\"{}\" alt=\"{0} frames {first}–{}\"></td></tr>",
+            escape(id),
+            escape(&relative.to_string_lossy().replace('\\', "/")),
+            strip.width() * 2,
+            strip.height() * 2,
+            first + count - 1
+        );
+    }
+    page.push_str("</tbody></table>\n");
+    Ok(())
+}
+
+/// Images of one size side by side, each enlarged `zoom` times (nearest neighbour), `gap`
+/// white pixels apart.
+pub fn side_by_side(panels: &[image::RgbaImage], zoom: u32, gap: u32) -> image::RgbaImage {
+    let (width, height) = panels[0].dimensions();
+    let (width, height) = (width * zoom, height * zoom);
+    let count = panels.len() as u32;
+    let mut out = image::RgbaImage::from_pixel(count * (width + gap) - gap, height, image::Rgba([255; 4]));
+    for (i, panel) in (0..).zip(panels) {
+        let big = image::imageops::resize(panel, width, height, image::imageops::FilterType::Nearest);
+        image::imageops::replace(&mut out, &big, i64::from(i * (width + gap)), 0);
+    }
+    out
+}
+
 /// Opens an image of a run by its path relative to the run's folder, as RGBA8.
 pub fn open_rgba(run_dir: &Path, relative: &str) -> Result<image::RgbaImage, String> {
     image::open(run_dir.join(relative))
@@ -764,33 +866,14 @@ pub fn open_rgba(run_dir: &Path, relative: &str) -> Result<image::RgbaImage, Str
 }
 
 /// The top-left corner of the `side`×`side` window with the largest squared difference
-/// between two images of one size (a summed-area table makes every window O(1)).
+/// between two images of one size.
 pub fn worst_window(a: &image::RgbaImage, b: &image::RgbaImage, side: u32) -> (u32, u32) {
-    let (w, h) = (a.width() as usize, a.height() as usize);
-    let side = side as usize;
-    let mut sums = vec![0f64; (w + 1) * (h + 1)];
-    for y in 0..h {
-        for x in 0..w {
-            let (p, q) = (a.get_pixel(x as u32, y as u32), b.get_pixel(x as u32, y as u32));
-            let error: f64 = (0..3).map(|c| (f64::from(p[c]) - f64::from(q[c])).powi(2)).sum();
-            sums[(y + 1) * (w + 1) + x + 1] =
-                error + sums[y * (w + 1) + x + 1] + sums[(y + 1) * (w + 1) + x] - sums[y * (w + 1) + x];
-        }
-    }
-    let window = |x: usize, y: usize| {
-        let at = |x: usize, y: usize| sums[y * (w + 1) + x];
-        at(x + side, y + side) - at(x, y + side) - at(x + side, y) + at(x, y)
-    };
-    let mut best = (0, 0, f64::NEG_INFINITY);
-    for y in 0..=h - side {
-        for x in 0..=w - side {
-            let error = window(x, y);
-            if error > best.2 {
-                best = (x, y, error);
-            }
-        }
-    }
-    (best.0 as u32, best.1 as u32)
+    let errors: Vec<f64> = a
+        .pixels()
+        .zip(b.pixels())
+        .map(|(p, q)| (0..3).map(|c| (f64::from(p[c]) - f64::from(q[c])).powi(2)).sum())
+        .collect();
+    crate::images::largest_window(&errors, a.width(), a.height(), side)
 }
 
 /// The history to plot: runs of the run's tier, oldest first, the run itself included once.

@@ -1,0 +1,175 @@
+//! A sequence's worst-flickering region: the square of the frame where the modes' error changes
+//! most from one frame to the next, kept as an animated PNG per mode for the report.
+//!
+//! Each pixel's flicker is its squared change of error, ((A_f − A_{f−1}) − (T_f − T_{f−1}))²
+//! summed over channels, frame pairs and modes: the per-pixel terms of every mode's
+//! `instability` (`sequence.rs`), so the region is where the instabilities come from. Modes
+//! flicker in the same places (edges, thin geometry, fine texture), and the sum is led by the
+//! modes that flicker most, which is where a reader should look. The region is known only at the
+//! last frame, so it is cut from the spooled frames (`spool.rs`).
+//!
+//! The animations play the path forwards and then backwards, at the path's own time step, so
+//! that the loop has no jump back to the first frame that would read as flicker.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use crate::images;
+use crate::record::FlickerRegion;
+use crate::spool::{Spool, Square};
+
+/// The side of the region, in pixels (smaller frames: their side).
+pub const SIDE: u32 = 64;
+
+/// How many consecutive frames the report's strips show: the ones within which the region
+/// flickers most.
+pub const STRIP_FRAMES: u32 = 8;
+
+/// The name of the truth's stream, and so of its animation.
+pub const TRUTH_STREAM: &str = "truth";
+
+/// Chooses the square with the most flicker in `map` (per pixel of the spool's frames) over the
+/// first `frames` frames, and writes the animation of it of the truth's stream (the spool's
+/// first) and of each of the `animated` streams that holds as many frames (a mode that failed on
+/// the way holds fewer) to `<out_dir>/<stream>.png`, paths in the record relative to `run_dir`.
+pub fn region(
+    spool: &Spool,
+    map: &[u64],
+    animated: &[usize],
+    frames: usize,
+    delay_s: f64,
+    [run_dir, out_dir]: [&Path; 2],
+) -> Result<FlickerRegion, String> {
+    if frames < 2 {
+        return Err("fewer than two frames: nothing flickers".into());
+    }
+    if spool.name(0) != TRUTH_STREAM || spool.frames(0) < frames {
+        return Err("the truth's frames are missing from the spool".into());
+    }
+    let [width, height] = spool.size();
+    let side = SIDE.min(width).min(height);
+    let errors: Vec<f64> = map.iter().map(|&v| v as f64).collect();
+    let (x, y) = images::largest_window(&errors, width, height, side);
+    let square = Square { x, y, side };
+    let crops =
+        |stream: usize| (0..frames).map(|f| spool.crop(stream, f, square)).collect::<Result<Vec<_>, _>>();
+    let truth = crops(0)?;
+    let mut modes = Vec::new();
+    for &stream in animated.iter().filter(|&&s| spool.frames(s) >= frames) {
+        modes.push((spool.name(stream), crops(stream)?));
+    }
+    let strip_frames = STRIP_FRAMES.min(frames as u32);
+    let strip_first = strip_start(&truth, modes.iter().map(|(_, crops)| crops.as_slice()), strip_frames);
+    std::fs::create_dir_all(out_dir).map_err(|e| format!("{}: {e}", out_dir.display()))?;
+    let mut animations = BTreeMap::new();
+    for (name, crops) in std::iter::once((TRUTH_STREAM, &truth)).chain(modes.iter().map(|(n, c)| (*n, c))) {
+        // Forwards, then backwards without repeating the ends: the loop has no jump.
+        let played: Vec<Vec<u8>> = crops.iter().chain(crops[1..frames - 1].iter().rev()).cloned().collect();
+        let path = out_dir.join(format!("{name}.png"));
+        images::write_apng(&path, side, side, &played, delay_s).map_err(|e| format!("{e:#}"))?;
+        let relative = path.strip_prefix(run_dir).unwrap_or(&path);
+        animations.insert(name.to_string(), relative.to_string_lossy().replace('\\', "/"));
+    }
+    Ok(FlickerRegion { x, y, side, strip_first, strip_frames, animations })
+}
+
+/// The first of the `length` consecutive frames within which the modes' crops flicker most
+/// against the truth's (the earliest where several tie).
+fn strip_start<'a>(truth: &[Vec<u8>], modes: impl Iterator<Item = &'a [Vec<u8>]>, length: u32) -> u32 {
+    // Per frame pair (f − 1, f), at index f: the crops' squared change of error.
+    let mut pairs = vec![0u64; truth.len()];
+    for crops in modes {
+        for f in 1..truth.len() {
+            pairs[f] += change_of_error(&crops[f], &crops[f - 1], &truth[f], &truth[f - 1]);
+        }
+    }
+    let length = length as usize;
+    let within = |first: usize| pairs[first + 1..first + length].iter().sum::<u64>();
+    let mut best = 0;
+    for first in 1..=truth.len() - length {
+        if within(first) > within(best) {
+            best = first;
+        }
+    }
+    best as u32
+}
+
+/// Σ over pixels and colour channels of ((a − b) − (t − u))² of RGBA8 images of one size.
+fn change_of_error(a: &[u8], b: &[u8], t: &[u8], u: &[u8]) -> u64 {
+    pixel_changes_of_error(a, b, t, u).sum()
+}
+
+/// Per pixel of four RGBA images of one size (code values of any width), Σ over its colour
+/// channels of ((a − b) − (t − u))², in squared code steps: how much the error image a − t
+/// changed at the pixel from the frame (b, u) before.
+pub fn pixel_changes_of_error<'x, T: Copy + Into<i64>>(
+    a: &'x [T],
+    b: &'x [T],
+    t: &'x [T],
+    u: &'x [T],
+) -> impl Iterator<Item = u64> + 'x {
+    assert!([b, t, u].iter().all(|i| i.len() == a.len()), "images of different sizes");
+    let step = |x: T, y: T| x.into() - y.into();
+    let pixels = a.chunks_exact(4).zip(b.chunks_exact(4)).zip(t.chunks_exact(4).zip(u.chunks_exact(4)));
+    pixels.map(move |((p, q), (r, s))| {
+        (0..3).map(|i| (step(p[i], q[i]) - step(r[i], s[i])).pow(2) as u64).sum()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 1-pixel RGBA8 frame of grey `v`.
+    fn grey(v: u8) -> Vec<u8> {
+        vec![v, v, v, 255]
+    }
+
+    #[test]
+    fn the_strip_starts_where_the_modes_flicker_most() {
+        // The truth is still; the mode's frame 6 alone differs: pairs (5, 6) and (6, 7) change.
+        let truth: Vec<Vec<u8>> = (0..12).map(|_| grey(100)).collect();
+        let mode: Vec<Vec<u8>> = (0..12).map(|f| grey(if f == 6 { 140 } else { 100 })).collect();
+        let start = strip_start(&truth, std::iter::once(mode.as_slice()), 3);
+        assert_eq!(start, 5, "frames 5–7 hold both changes");
+        assert_eq!(
+            strip_start(&truth, std::iter::once(truth.as_slice()), 4),
+            0,
+            "no flicker: the first frames"
+        );
+        assert_eq!(change_of_error(&grey(3), &grey(1), &grey(2), &grey(2)), 12, "alpha left out");
+    }
+
+    #[test]
+    fn animations_cut_the_region_where_the_map_is_largest() {
+        let dir = std::env::temp_dir().join(format!("aabench-flicker-{}", std::process::id()));
+        let (width, height) = (80u32, 70u32);
+        let frame = |f: u8| aabench_renderer::DisplayImage {
+            bits: 8,
+            rgba: (0..width * height).flat_map(|i| [(i % 256) as u16, u16::from(f), 0, 255]).collect(),
+        };
+        let names = [TRUTH_STREAM, "a", "b"].map(String::from).to_vec();
+        let mut spool = Spool::create(dir.join("spool"), [width, height], names).unwrap();
+        // The largest flicker sits at the bottom right corner.
+        let mut map = vec![0; (width * height) as usize];
+        map[(height * width - 1) as usize] = 5;
+        for f in 0..3 {
+            spool.append(0, &frame(f)).unwrap();
+            spool.append(1, &frame(f + 10)).unwrap();
+        }
+        spool.append(2, &frame(0)).unwrap();
+        let region = region(&spool, &map, &[1, 2], 3, 1.0 / 60.0, [&dir, &dir.join("path")]).unwrap();
+        assert_eq!((region.x, region.y, region.side), (width - SIDE, height - SIDE, SIDE));
+        assert_eq!((region.strip_first, region.strip_frames), (0, 3));
+        assert_eq!(region.animations.keys().collect::<Vec<_>>(), ["a", "truth"], "b has one frame of three");
+        assert_eq!(region.animations["a"], "path/a.png");
+        let played = images::read_apng(&dir.join("path/a.png")).unwrap();
+        let greens: Vec<u8> = played.iter().map(|f| f.get_pixel(0, 0)[1]).collect();
+        assert_eq!(greens, [10, 11, 12, 11], "forwards, then backwards without the ends");
+        let first_red = ((height - SIDE) * width + width - SIDE) % 256;
+        assert_eq!(u32::from(played[0].get_pixel(0, 0)[0]), first_red, "the crop's corner");
+        drop(spool);
+        assert!(!dir.join("spool").exists(), "the spool is removed");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,112 @@
+//! A sequence's frames on disk: every frame of the truth and of each mode, as the RGBA8 display
+//! image (`images::display_rgba8`), appended to one file per stream as it is rendered.
+//!
+//! What needs every frame at once waits for the last: FLIP along the path, computed once the
+//! renders are done so that it neither slows nor disturbs them (`sequence.rs`), and the
+//! worst-flickering square, known only at the end (`flicker.rs`). A 256×192 frame takes 192 KB,
+//! a 1024×768 one 3 MB, so a nightly scene's spool runs to a few GB, mostly read back from the
+//! page cache. The folder is removed when the spool is dropped.
+
+use std::fs::File;
+use std::io::Write;
+use std::os::unix::fs::FileExt;
+use std::path::PathBuf;
+
+use aabench_renderer::DisplayImage;
+
+use crate::images;
+
+/// One file of RGBA8 frames per stream, named, with how many frames each holds.
+#[derive(Debug)]
+pub struct Spool {
+    dir: PathBuf,
+    size: [u32; 2],
+    streams: Vec<(String, File, usize)>,
+}
+
+/// A square of a frame: its top-left corner and side, in pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Square {
+    pub x: u32,
+    pub y: u32,
+    pub side: u32,
+}
+
+impl Spool {
+    /// An empty spool of `size` frames for the named streams, in `dir` (created).
+    pub fn create(dir: PathBuf, size: [u32; 2], names: Vec<String>) -> Result<Self, String> {
+        std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let mut streams = Vec::with_capacity(names.len());
+        for (index, name) in names.into_iter().enumerate() {
+            let path = dir.join(format!("{index}.rgba"));
+            let file = File::options()
+                .create(true)
+                .truncate(true)
+                .read(true)
+                .write(true)
+                .open(&path)
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+            streams.push((name, file, 0));
+        }
+        Ok(Self { dir, size, streams })
+    }
+
+    /// Appends a frame to stream `stream`.
+    pub fn append(&mut self, stream: usize, image: &DisplayImage) -> Result<(), String> {
+        let (_, file, frames) = &mut self.streams[stream];
+        let error = |e: std::io::Error| format!("{}: spool: {e}", self.dir.display());
+        file.write_all(&images::display_rgba8(image)).map_err(error)?;
+        *frames += 1;
+        Ok(())
+    }
+
+    pub fn size(&self) -> [u32; 2] {
+        self.size
+    }
+
+    pub fn streams(&self) -> usize {
+        self.streams.len()
+    }
+
+    pub fn name(&self, stream: usize) -> &str {
+        &self.streams[stream].0
+    }
+
+    /// How many frames stream `stream` holds.
+    pub fn frames(&self, stream: usize) -> usize {
+        self.streams[stream].2
+    }
+
+    /// Frame `frame` of stream `stream`, whole.
+    pub fn frame(&self, stream: usize, frame: usize) -> Result<Vec<u8>, String> {
+        let [width, height] = self.size;
+        let bytes = width as usize * height as usize * 4;
+        let mut out = vec![0; bytes];
+        self.read(stream, (frame * bytes) as u64, &mut out)?;
+        Ok(out)
+    }
+
+    /// The `square` of frame `frame` of stream `stream`.
+    pub fn crop(&self, stream: usize, frame: usize, square: Square) -> Result<Vec<u8>, String> {
+        let [width, height] = self.size.map(u64::from);
+        let row = width * 4;
+        let mut out = vec![0; square.side as usize * square.side as usize * 4];
+        for (y, line) in (u64::from(square.y)..).zip(out.chunks_exact_mut(square.side as usize * 4)) {
+            self.read(stream, frame as u64 * row * height + y * row + u64::from(square.x) * 4, line)?;
+        }
+        Ok(out)
+    }
+
+    fn read(&self, stream: usize, offset: u64, out: &mut [u8]) -> Result<(), String> {
+        self.streams[stream]
+            .1
+            .read_exact_at(out, offset)
+            .map_err(|e| format!("{}: spool: {e}", self.dir.display()))
+    }
+}
+
+impl Drop for Spool {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The test command: set up the machine if needed (lavapipe, and Chromium for the report's
 # browser test), then build in release (the profile results are filed under) and run every
-# test on lavapipe.
+# test on lavapipe. Tests that need root or Chromium are listed as ignored, with the reason;
+# `ci/test.sh -- --include-ignored` runs them too (`.ci/run` does).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ci/setup.sh --browser

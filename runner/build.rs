@@ -21,8 +21,8 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 fn main() {
     let mut files = Vec::new();
     rust_files(Path::new("../renderer/src"), &mut files);
+    rust_files(Path::new("src/manifest"), &mut files);
     files.push(PathBuf::from("src/scenes.rs"));
-    files.push(PathBuf::from("src/manifest.rs"));
     files.sort();
     let mut hasher = Sha256::new();
     for file in &files {
@@ -32,7 +32,7 @@ fn main() {
         hasher.update(&bytes);
     }
     // A folder is scanned whole, so added files count too.
-    for watched in ["../renderer/src", "src/scenes.rs", "src/manifest.rs"] {
+    for watched in ["../renderer/src", "src/scenes.rs", "src/manifest"] {
         println!("cargo::rerun-if-changed={watched}");
     }
     let digest: String = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();

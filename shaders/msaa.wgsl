@@ -37,7 +37,7 @@ const SAMPLES: u32 = 4u;
 
 // The samples of a pixel lie on one surface when they share a material, their normals' cosine
 // with sample 0's is at least EDGE_COS and each lies within EDGE_GAP · depth of sample 0's
-// tangent plane (passes/msaa.rs: the thresholds).
+// tangent plane (technique/msaa.rs: the thresholds).
 override EDGE_COS: f32;
 override EDGE_GAP: f32;
 

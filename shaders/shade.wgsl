@@ -9,7 +9,7 @@
 #include "lib/shading.wgsl"
 
 // A texture lookup's footprint in G-buffer texels: 1, but √½ in TAA (a mip bias of −½),
-// whose jittered frames together sample each pixel many times (passes/taa.rs).
+// whose jittered frames together sample each pixel many times (technique/taa.rs).
 override FOOTPRINT: f32 = 1.0;
 
 @fragment

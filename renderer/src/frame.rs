@@ -1,28 +1,20 @@
 //! The recipe of a frame: which passes a (scene, mode) pair runs, how their ports connect, and
 //! which outputs are read back. Built from what the scene needs, so a scene without
-//! shadow-casting lights has no shadow pass and no cube, and only adaptive modes evaluate.
+//! shadow-casting lights has no shadow pass and no cube; each technique adds its own passes
+//! (`technique/`).
 
-use crate::adaptive::{Counts, ExtraSamples, Reconstruction};
-use crate::graph::{Dims, Graph, Output, PassId, Plan};
-use crate::mode::{Mode, Technique};
-use crate::passes::Node;
-use crate::passes::adaptive::{
-    self as adaptive_passes, CompactNode, EvaluateNode, Extra, GatherNode, List, ShadeExtraNode,
-    ShadeFirstNode,
-};
+use crate::color::ColorSettings;
+use crate::error::RenderError;
+use crate::graph::{Dims, Output, PassId, Plan};
+use crate::mode::Mode;
 use crate::passes::display::DisplayNode;
-use crate::passes::fxaa::FxaaNode;
-use crate::passes::gbuffer::{self, GBufferNode, MSAA_SAMPLES};
-use crate::passes::keep::KeepNode;
-use crate::passes::msaa::{MsaaNode, MsaaStep};
-use crate::passes::shade::{ResolveNode, ShadeNode};
+use crate::passes::gbuffer::{self, GBufferNode};
 use crate::passes::shadow::{self, ShadowNode};
-use crate::passes::smaa::{SmaaNode, SmaaStep};
-use crate::passes::taa::{self, TaaNode};
 use crate::passes::tonemap::TonemapNode;
 use crate::scene::{Lighting, Scene, ShadowCubes};
+use crate::settings::RenderSettings;
 use crate::shaders::Features;
-use crate::{error::RenderError, settings::RenderSettings};
+use crate::technique::{self, Frame, FrameGraph, Sources, Technique, add};
 
 /// What a scene asks of its frames, besides its mode.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -77,37 +69,33 @@ impl std::fmt::Display for SceneNeeds {
     }
 }
 
-pub(crate) type FrameGraph = Graph<Box<dyn Node>>;
-
-fn add(graph: &mut FrameGraph, node: impl Node + 'static) -> PassId {
-    graph.add(node.decl(), Box::new(node))
-}
-
-/// The passes that every shading pass reads from.
-#[derive(Debug, Clone, Copy)]
-struct Sources {
-    gbuffer: PassId,
-    /// The G-buffer's ports: single- or multisampled.
-    ports: [&'static str; 4],
-    shadow: Option<PassId>,
-}
-
-impl Sources {
-    fn feed(self, graph: &mut FrameGraph, pass: PassId) {
-        graph.connect_all(self.gbuffer, pass, &self.ports);
-        if let Some(shadow) = self.shadow {
-            graph.connect(shadow, shadow::CUBES, pass, shadow::CUBES);
-        }
-    }
-}
-
-/// The graph of `mode`'s frame for a scene with `needs`. `limits` bound the adaptive list.
+/// The graph of `mode`'s frame for a scene with `needs`: the shadow cubes (where the scene has
+/// shadow-casting lights), the G-buffer, the technique's passes to the HDR image, the colour
+/// end, and the technique's passes on the display image. `limits` bound the lists that some
+/// techniques build.
 pub(crate) fn frame_graph(
     needs: &SceneNeeds,
     mode: Mode,
     settings: &RenderSettings,
     limits: &wgpu::Limits,
 ) -> Result<FrameGraph, RenderError> {
+    let mut frame = begin(needs, mode.technique, settings, limits);
+    let hdr = technique::add_shading(&mut frame, mode.technique, mode.m, mode.stalled)?;
+    frame.graph.retain(hdr, "color", Output::Hdr);
+    let display = add_color_end(&mut frame.graph, hdr, &settings.color);
+    let last = technique::add_post_process(&mut frame, mode.technique, display);
+    frame.graph.retain(last, "display", Output::Display);
+    Ok(frame.graph)
+}
+
+/// A frame's first passes, which every technique shares: the shadow cubes and the G-buffer
+/// (multisampled for MSAA, with motion vectors under TAA).
+fn begin<'a>(
+    needs: &SceneNeeds,
+    technique: Technique,
+    settings: &'a RenderSettings,
+    limits: &'a wgpu::Limits,
+) -> Frame<'a> {
     let mut g = FrameGraph::new();
     let cubes = needs.shadows.map(|c| shadow::cubes(c.lights, c.resolution));
     // Shadows first: nothing in the frame depends on the order beyond that, and it keeps the
@@ -116,8 +104,7 @@ pub(crate) fn frame_graph(
     if let Some(shadow) = shadow {
         g.retain(shadow, shadow::CUBES, Output::ShadowCubes);
     }
-    let samples = if mode.technique == Technique::Msaa { MSAA_SAMPLES } else { 1 };
-    let motion = mode.is_jittered();
+    let (samples, motion) = (technique.gbuffer_samples(), technique.is_jittered());
     let gbuffer = add(&mut g, GBufferNode { samples, motion });
     if samples == 1 {
         g.retain(gbuffer, gbuffer::NORMAL, Output::GBufferNormal);
@@ -126,129 +113,21 @@ pub(crate) fn frame_graph(
     if motion {
         g.retain(gbuffer, gbuffer::MOTION, Output::Motion);
     }
-    let sources = Sources { gbuffer, ports: gbuffer::ports(samples), shadow };
-    let (m, stalled) = (mode.m, mode.stalled);
-    let hdr = match mode.technique {
-        Technique::Msaa => {
-            let (width, height) = (settings.width, settings.height);
-            let [classify, shade_samples, pixels] = [MsaaStep::Classify, MsaaStep::Samples, MsaaStep::Pixels]
-                .map(|step| add(&mut g, MsaaNode { step, stalled, shadows: cubes, width, height }));
-            for port in [gbuffer::MS_NORMAL, gbuffer::MS_DEPTH] {
-                g.connect(gbuffer, port, classify, port);
-            }
-            for pass in [shade_samples, pixels] {
-                sources.feed(&mut g, pass);
-                g.connect(classify, "list_words", pass, "list");
-            }
-            g.connect(classify, "edge_words", pixels, "edges");
-            g.connect(shade_samples, "shaded_samples", pixels, "shaded_samples");
-            g.retain(pixels, "counts", Output::SampleCounts);
-            pixels
-        }
-        Technique::Deferred | Technique::Fxaa | Technique::Smaa | Technique::Reference | Technique::Taa => {
-            let footprint = if mode.is_jittered() { taa::FOOTPRINT } else { 1.0 };
-            let shade = add(&mut g, ShadeNode { stalled, shadows: cubes, footprint });
-            sources.feed(&mut g, shade);
-            match mode.technique {
-                Technique::Reference => {
-                    let resolve = add(&mut g, ResolveNode { m });
-                    g.connect(shade, "color", resolve, "supersampled");
-                    resolve
-                }
-                Technique::Taa => {
-                    let taa = add(&mut g, TaaNode);
-                    g.connect(shade, "color", taa, "current");
-                    g.connect_all(gbuffer, taa, &[gbuffer::MOTION, gbuffer::DEPTH]);
-                    let keep = add(&mut g, taa::keep_history());
-                    g.connect(taa, "history_next", keep, "history_next");
-                    g.carry(keep, "history", taa, "history");
-                    taa
-                }
-                _ => shade,
-            }
-        }
-        Technique::Adaptive(metrics, reconstruction, counts) => {
-            let coverage = reconstruction == Reconstruction::Coverage;
-            let first = add(&mut g, ShadeFirstNode { m, stalled, reconstruction, shadows: cubes });
-            sources.feed(&mut g, first);
-            g.retain(first, "first", Output::First);
-            let textured = needs.features.textured;
-            let evaluate_node = EvaluateNode {
-                m,
-                metrics,
-                textured,
-                reconstruction,
-                settings: settings.adaptive,
-                tonemap: settings.color.tonemap,
-                counts,
-            };
-            let reads = evaluate_node.gbuffer_reads();
-            let evaluate = add(&mut g, evaluate_node);
-            g.connect_all(gbuffer, evaluate, reads);
-            g.connect(first, "first", evaluate, "first");
-            g.retain(evaluate, "counts", Output::SampleCounts);
-            if counts == Counts::Stable {
-                let keep = add(
-                    &mut g,
-                    KeepNode {
-                        name: "count_history",
-                        next: "count_history_next",
-                        kept: "count_history",
-                        resource: adaptive_passes::count_history(),
-                    },
-                );
-                g.connect(evaluate, "count_history_next", keep, "count_history_next");
-                g.carry(keep, "count_history", evaluate, "count_history");
-            }
-            // `-coverage` reads its samples' slopes from the list, which the loop has no room for.
-            let extra = match settings.adaptive.extra_samples {
-                ExtraSamples::Loop if !coverage => Extra::Loop { stalled, shadows: cubes },
-                ExtraSamples::Loop | ExtraSamples::Compact => {
-                    Extra::List(List::new(m, settings.width, settings.height, limits)?)
-                }
-            };
-            let list = match extra {
-                Extra::List(list) => Some(list),
-                Extra::Loop { .. } => None,
-            };
-            let gather = add(&mut g, GatherNode { m, extra, reconstruction });
-            g.connect(first, "first", gather, "first");
-            g.connect(evaluate, "counts", gather, "counts");
-            match list {
-                None => sources.feed(&mut g, gather),
-                Some(list) => {
-                    let compact = add(&mut g, CompactNode { m, reconstruction, list });
-                    g.connect(evaluate, "counts", compact, "counts");
-                    let extra =
-                        add(&mut g, ShadeExtraNode { m, stalled, reconstruction, list, shadows: cubes });
-                    sources.feed(&mut g, extra);
-                    g.connect(compact, "entries", extra, "list_entries");
-                    g.connect(compact, "totals", extra, "list_totals");
-                    g.connect(compact, "pixel_offsets", gather, "list_offsets");
-                    g.connect(extra, "extra", gather, "extra_samples");
-                    if coverage {
-                        for pass in [compact, extra, gather] {
-                            g.connect(evaluate, "groups", pass, "groups");
-                        }
-                        g.connect(first, "first_slope", gather, "first_slope");
-                        g.connect(extra, "extra_slope", gather, "extra_slopes");
-                        g.connect_all(gbuffer, gather, &gbuffer::PORTS);
-                    }
-                }
-            }
-            gather
-        }
-    };
-    g.retain(hdr, "color", Output::Hdr);
-    add_display(&mut g, hdr, mode, settings);
-    Ok(g)
+    Frame {
+        graph: g,
+        sources: Sources { gbuffer, ports: gbuffer::ports(samples), shadow },
+        cubes,
+        width: settings.width,
+        height: settings.height,
+        textured: needs.features.textured,
+        color: &settings.color,
+        adaptive: &settings.adaptive,
+        limits,
+    }
 }
 
-/// The colour end of a frame: the tonemap pass in an HDR scene, the display encoding, and in
-/// FXAA and SMAA modes their passes on the encoded image.
-fn add_display(g: &mut FrameGraph, hdr: PassId, mode: Mode, settings: &RenderSettings) {
-    let color = &settings.color;
-    let bits = color.bits;
+/// The colour end of a frame: the tonemap pass in an HDR scene, then the display encoding.
+fn add_color_end(g: &mut FrameGraph, hdr: PassId, color: &ColorSettings) -> PassId {
     let (linear, port) = match color.tonemap {
         Some(tonemap) => {
             let tonemap = add(g, TonemapNode { tonemap });
@@ -257,30 +136,9 @@ fn add_display(g: &mut FrameGraph, hdr: PassId, mode: Mode, settings: &RenderSet
         }
         None => (hdr, "color"),
     };
-    let display = add(g, DisplayNode { expose: color.tonemap.is_none(), bits });
+    let display = add(g, DisplayNode { expose: color.tonemap.is_none(), bits: color.bits });
     g.connect(linear, port, display, "linear");
-    let last = match mode.technique {
-        Technique::Fxaa => {
-            let fxaa = add(g, FxaaNode { bits });
-            g.connect(display, "display", fxaa, "encoded");
-            fxaa
-        }
-        Technique::Smaa => {
-            let (width, height) = (settings.width, settings.height);
-            let [edges, weights, blend] = [SmaaStep::Edges, SmaaStep::Weights, SmaaStep::Blend]
-                .map(|step| add(g, SmaaNode { step, bits, width, height }));
-            g.connect(display, "display", edges, "encoded");
-            g.connect(display, "display", blend, "encoded");
-            for pass in [weights, blend] {
-                g.connect(edges, "edge_words", pass, "edges");
-                g.connect(edges, "list_words", pass, "list");
-            }
-            g.connect(weights, "blend_weights", blend, "blend_weights");
-            blend
-        }
-        _ => display,
-    };
-    g.retain(last, "display", Output::Display);
+    display
 }
 
 /// The dimensions a mode's graph resolves against.

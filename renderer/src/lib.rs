@@ -1,14 +1,14 @@
 //! The GPU side of aabench: a Vulkan device (lavapipe on CI machines), scenes imported from
 //! glTF, an enlarged G-buffer, deferred shading, brute-force reference supersampling and
-//! adaptive supersampling (Holländer, Boubekeur & Eisemann 2013), and the post-process
-//! anti-aliasing it is compared with (FXAA, SMAA).
+//! adaptive supersampling (Holländer, Boubekeur & Eisemann 2013), and the anti-aliasing it is
+//! compared with (FXAA, SMAA, 4× MSAA, TAA), each technique in a room of its own
+//! (`technique/`).
 //!
 //! The renderer knows nothing of manifests, baselines or reports: the runner turns those into
 //! a [`Scene`](scene::Scene), [`Lighting`](scene::Lighting) and [`RenderSettings`], asks a
 //! [`SceneRenderer`] to [`prepare`](SceneRenderer::prepare) each [`Mode`], times its frames and
 //! reads back its images.
 
-pub mod adaptive;
 mod bindings;
 pub mod color;
 mod error;
@@ -22,20 +22,19 @@ mod render;
 pub mod scene;
 mod settings;
 pub mod shaders;
-pub mod smaa;
+pub mod technique;
 
-pub use adaptive::{AdaptiveSettings, Counts, ExtraSamples, Reconstruction, StableCounts};
 pub use color::ColorSettings;
 pub use error::RenderError;
 pub use gpu::{Gpu, PlatformInfo};
-pub use mode::{Metrics, Mode, Technique};
+pub use mode::Mode;
 pub use passes::gbuffer::BACKGROUND_MATERIAL;
-/// TAA's constants and jitter (see `passes/taa.rs`).
-pub mod taa {
-    pub use crate::passes::taa::{JITTER_PHASES, MOVING_FRAMES, STILL_FRAMES, WARMUP_FRAMES, jitter};
-}
 pub use render::{
     DisplayImage, FrameImages, FrameTiming, GBufferImages, PassTime, PreparedMode, SceneRenderer,
     ShadowDepths, Truth,
 };
 pub use settings::{MAX_STALL_ITERATIONS, RenderSettings, loop_stall_limit};
+pub use technique::adaptive::{
+    AdaptiveSettings, Counts, ExtraSamples, Metrics, Reconstruction, StableCounts,
+};
+pub use technique::{Marker, Shape, Technique, adaptive, smaa, taa};

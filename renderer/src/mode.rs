@@ -4,42 +4,8 @@
 use std::fmt;
 use std::str::FromStr;
 
-use crate::adaptive::{Counts, Reconstruction};
-
-/// Which of the adaptive metrics decide the sample count (the paper's Fig. 8 ablation).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Metrics {
-    /// max(k_d, k_n, k_s): the paper's method.
-    Both,
-    /// Depth variance and normal cone only.
-    Geometry,
-    /// Luminance range of the shade-first image only.
-    Shading,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Technique {
-    /// One sample per pixel.
-    Deferred,
-    /// One sample per pixel, then FXAA 3.11 on the display-encoded image.
-    Fxaa,
-    /// One sample per pixel, then SMAA 1x on the display-encoded image.
-    Smaa,
-    /// MSAA-based deferred shading: a w × h G-buffer of 4 samples per pixel (M = 2: as many
-    /// samples as the 2×2 grid, at the rotated-grid positions), shaded per sample where they
-    /// lie on more than one surface and once per pixel elsewhere.
-    Msaa,
-    /// Temporal anti-aliasing: one jittered sample per pixel and frame, blended into a history
-    /// reprojected along per-pixel motion vectors (see `passes/taa.rs`). Its image depends on
-    /// the frames before: a still is the last of [`crate::taa::WARMUP_FRAMES`] frames rendered
-    /// from a reset at one camera.
-    Taa,
-    /// All M² samples of an M·w × M·h G-buffer shaded, box-filtered.
-    Reference,
-    /// Holländer et al. 2013: the same G-buffer, samples shaded where the metrics ask (in this
-    /// frame alone, or also in the frame before), and the pixel reconstructed from them.
-    Adaptive(Metrics, Reconstruction, Counts),
-}
+use crate::technique::Technique;
+use crate::technique::adaptive::{self, Counts, Metrics, Reconstruction};
 
 /// A technique at a supersampling factor, with or without the expensive (stalled) shader.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -55,18 +21,15 @@ impl Mode {
         Mode { technique, m, stalled }
     }
 
-    /// The sixteen modes that adaptive is measured against: deferred 1×1, FXAA, SMAA, 4×
-    /// MSAA, TAA and reference 2×2–4×4, each plain and stalled.
+    /// The modes that adaptive is measured against: each of [`Technique::COMPARED`] at each of
+    /// its sizes (the reference from 2×2), plain and stalled.
     pub fn baseline_modes() -> Vec<Mode> {
         let mut modes = Vec::new();
         for stalled in [false, true] {
-            modes.push(Mode::new(Technique::Deferred, 1, stalled));
-            modes.push(Mode::new(Technique::Fxaa, 1, stalled));
-            modes.push(Mode::new(Technique::Smaa, 1, stalled));
-            modes.push(Mode::new(Technique::Msaa, 2, stalled));
-            modes.push(Mode::new(Technique::Taa, 1, stalled));
-            for m in 2..=4 {
-                modes.push(Mode::new(Technique::Reference, m, stalled));
+            for technique in Technique::COMPARED {
+                // reference-1x1 renders deferred-1x1's image: no group lists it.
+                let listed = technique.sizes().filter(|&m| technique != Technique::Reference || m > 1);
+                modes.extend(listed.map(|m| Mode::new(technique, m, stalled)));
             }
         }
         modes
@@ -114,18 +77,42 @@ impl Mode {
         ]
     }
 
-    /// Whether the mode keeps state from one frame for the next (TAA's history, a `-stable`
-    /// mode's sample counts): it has frame uniforms of its own, with the previous frame's
-    /// camera, and resources the graph carries into the next frame.
+    /// Whether the mode keeps state from one frame for the next ([`Technique::carries_history`]).
     pub fn carries_history(&self) -> bool {
-        self.is_jittered() || self.counts() == Counts::Stable
+        self.technique.carries_history()
     }
 
-    /// Whether the mode jitters its samples from frame to frame (TAA): its frames at one camera
-    /// differ, so its still is the last of a run of warm-up frames. A `-stable` mode's frames at
-    /// one camera are its first frame's, bit for bit.
+    /// Whether the mode jitters its samples from frame to frame ([`Technique::is_jittered`]). A
+    /// `-stable` mode's frames at one camera are its first frame's, bit for bit.
     pub fn is_jittered(&self) -> bool {
-        self.technique == Technique::Taa
+        self.technique.is_jittered()
+    }
+
+    /// The mode whose image this one's is compared with, at the same M and stall
+    /// ([`Technique::compared_with`]): for FXAA, SMAA and TAA deferred-1x1, which is the 1×1
+    /// reference bit for bit; for adaptive modes and 4× MSAA the reference at their M.
+    pub fn compared_with(&self) -> Option<Mode> {
+        let technique = self.technique.compared_with()?;
+        Some(Mode::new(technique, self.m, self.stalled))
+    }
+
+    /// A short name for a plot's point, without the stall (the plot's series says it):
+    /// `adaptive-3x3-geometry-stalled` → `ada 3×3 geometry`.
+    pub fn short_label(&self) -> String {
+        let m = self.m;
+        match self.technique {
+            Technique::Deferred => "1×1".into(),
+            Technique::Msaa => "msaa 4×".into(),
+            Technique::Reference => format!("ref {m}×{m}"),
+            Technique::Adaptive(metrics, reconstruction, counts) => {
+                let words = adaptive::id_suffixes(metrics, reconstruction, counts);
+                std::iter::once(format!("ada {m}×{m}"))
+                    .chain(words.into_iter().map(String::from))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            }
+            technique => technique.name().into(),
+        }
     }
 
     /// Where an adaptive mode's sample counts come from (`PerFrame` for every other mode).
@@ -166,31 +153,13 @@ impl Mode {
 
 impl fmt::Display for Mode {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        let name = match self.technique {
-            Technique::Deferred => "deferred",
-            // Post-process modes have no supersampling factor to name.
-            Technique::Fxaa => return f.write_str(if self.stalled { "fxaa-stalled" } else { "fxaa" }),
-            Technique::Smaa => return f.write_str(if self.stalled { "smaa-stalled" } else { "smaa" }),
-            Technique::Msaa => return f.write_str(if self.stalled { "msaa-4x-stalled" } else { "msaa-4x" }),
-            Technique::Taa => return f.write_str(if self.stalled { "taa-stalled" } else { "taa" }),
-            Technique::Reference => "reference",
-            Technique::Adaptive(..) => "adaptive",
-        };
-        write!(f, "{name}-{m}x{m}", m = self.m)?;
+        match self.technique.fixed_id() {
+            Some(id) => f.write_str(id)?,
+            None => write!(f, "{}-{m}x{m}", self.technique.name(), m = self.m)?,
+        }
         if let Technique::Adaptive(metrics, reconstruction, counts) = self.technique {
-            match metrics {
-                Metrics::Both => {}
-                Metrics::Geometry => f.write_str("-geometry")?,
-                Metrics::Shading => f.write_str("-shading")?,
-            }
-            match reconstruction {
-                Reconstruction::Equal => {}
-                Reconstruction::Area => f.write_str("-area")?,
-                Reconstruction::Cells => f.write_str("-cells")?,
-                Reconstruction::Coverage => f.write_str("-coverage")?,
-            }
-            if counts == Counts::Stable {
-                f.write_str("-stable")?;
+            for word in adaptive::id_suffixes(metrics, reconstruction, counts) {
+                write!(f, "-{word}")?;
             }
         }
         if self.stalled {
@@ -216,88 +185,63 @@ impl FromStr for Mode {
     fn from_str(id: &str) -> Result<Mode, ModeError> {
         let fail = |reason: &str| ModeError { id: id.to_string(), reason: reason.to_string() };
         if id.chars().any(|c| c.is_ascii_uppercase()) {
-            let lower = id.to_ascii_lowercase();
-            let hint = if lower.parse::<Mode>().is_ok() {
-                format!(": did you mean `{lower}`?")
+            return Err(fail(&uppercase_reason(id)));
+        }
+        let (plain, stalled) = match id.strip_suffix("-stalled") {
+            Some(plain) => (plain, true),
+            None => (id, false),
+        };
+        let mut words = plain.split('-');
+        let name = words.next().unwrap_or_default();
+        // A technique of one size is its own id, plain or stalled, and nothing else.
+        let fixed_technique =
+            Technique::COMPARED.into_iter().find(|t| t.fixed_id().is_some() && t.name() == name);
+        if let Some(technique) = fixed_technique {
+            let fixed = technique.fixed_id().expect("found by its fixed id");
+            return if plain == fixed {
+                Ok(Mode::new(technique, *technique.sizes().start(), stalled))
             } else {
-                String::new()
+                Err(fail(&format!("{}: `{fixed}` or `{fixed}-stalled`", technique.fixed_id_rule())))
             };
-            return Err(fail(&format!("mode ids are lowercase{hint}")));
         }
-        match id {
-            "fxaa" => return Ok(Mode::new(Technique::Fxaa, 1, false)),
-            "fxaa-stalled" => return Ok(Mode::new(Technique::Fxaa, 1, true)),
-            "smaa" => return Ok(Mode::new(Technique::Smaa, 1, false)),
-            "smaa-stalled" => return Ok(Mode::new(Technique::Smaa, 1, true)),
-            "msaa-4x" => return Ok(Mode::new(Technique::Msaa, 2, false)),
-            "msaa-4x-stalled" => return Ok(Mode::new(Technique::Msaa, 2, true)),
-            "taa" => return Ok(Mode::new(Technique::Taa, 1, false)),
-            "taa-stalled" => return Ok(Mode::new(Technique::Taa, 1, true)),
-            _ => {}
-        }
-        let mut parts = id.split('-');
-        let technique = parts.next().unwrap_or_default();
-        if technique == "msaa" {
-            return Err(fail("lavapipe renders 4× MSAA only: `msaa-4x` or `msaa-4x-stalled`"));
-        }
-        let size = parts.next().ok_or_else(|| fail("missing the size, e.g. `-2x2`"))?;
+        let size = words.next().ok_or_else(|| fail("missing the size, e.g. `-2x2`"))?;
         let m = match size.split_once('x') {
             Some((a, b)) if a == b => a.parse::<u32>().map_err(|_| fail("the size must be MxM"))?,
             _ => return Err(fail("the size must be MxM with equal sides")),
         };
-        let mut rest: Vec<&str> = parts.collect();
-        let stalled = rest.last() == Some(&"stalled");
-        if stalled {
-            rest.pop();
-        }
-        let counts = if technique == "adaptive" && rest.last() == Some(&"stable") {
-            rest.pop();
-            Counts::Stable
-        } else {
-            Counts::PerFrame
-        };
-        let reconstruction = match (technique, rest.last()) {
-            ("adaptive", Some(&"area")) => Reconstruction::Area,
-            ("adaptive", Some(&"cells")) => Reconstruction::Cells,
-            ("adaptive", Some(&"coverage")) => Reconstruction::Coverage,
-            _ => Reconstruction::Equal,
-        };
-        if reconstruction != Reconstruction::Equal {
-            rest.pop();
-        }
-        let technique = match (technique, rest.as_slice()) {
+        let rest: Vec<&str> = words.collect();
+        let technique = match (name, rest.as_slice()) {
             ("deferred", []) => Technique::Deferred,
             ("reference", []) => Technique::Reference,
-            ("adaptive", []) => Technique::Adaptive(Metrics::Both, reconstruction, counts),
-            ("adaptive", ["geometry"]) => Technique::Adaptive(Metrics::Geometry, reconstruction, counts),
-            ("adaptive", ["shading"]) => Technique::Adaptive(Metrics::Shading, reconstruction, counts),
-            ("deferred" | "reference" | "adaptive", _) => return Err(fail("unexpected suffix")),
-            ("fxaa", _) => return Err(fail("FXAA has no size: `fxaa` or `fxaa-stalled`")),
-            ("smaa", _) => return Err(fail("SMAA has no size: `smaa` or `smaa-stalled`")),
-            ("taa", _) => return Err(fail("TAA has no size: `taa` or `taa-stalled`")),
-            _ => {
-                return Err(fail(
-                    "the technique must be deferred, fxaa, smaa, msaa, taa, reference or adaptive",
-                ));
+            ("adaptive", suffixes) => {
+                let (metrics, reconstruction, counts) = adaptive::parse_suffixes(suffixes).map_err(fail)?;
+                Technique::Adaptive(metrics, reconstruction, counts)
             }
+            ("deferred" | "reference", _) => return Err(fail("unexpected suffix")),
+            _ => return Err(fail(&technique_reason())),
         };
-        if counts == Counts::Stable && reconstruction == Reconstruction::Coverage {
-            return Err(fail(
-                "`-coverage` picks its samples per surface, not by count: it has no `-stable` variant",
-            ));
-        }
-        let allowed = match technique {
-            Technique::Deferred | Technique::Fxaa | Technique::Smaa | Technique::Taa => 1..=1,
-            Technique::Msaa => 2..=2,
-            // reference-1x1 exists to check that the supersampling path equals deferred-1x1.
-            Technique::Reference => 1..=4,
-            Technique::Adaptive(..) => 2..=4,
-        };
+        let allowed = technique.sizes();
         if !allowed.contains(&m) {
             return Err(fail(&format!("M must be in {}..={}", allowed.start(), allowed.end())));
         }
         Ok(Mode::new(technique, m, stalled))
     }
+}
+
+/// Why an id with capitals does not parse, with the lowercase id where that one does.
+fn uppercase_reason(id: &str) -> String {
+    let lower = id.to_ascii_lowercase();
+    let hint =
+        if lower.parse::<Mode>().is_ok() { format!(": did you mean `{lower}`?") } else { String::new() };
+    format!("mode ids are lowercase{hint}")
+}
+
+/// What an unknown first word of an id is told: the techniques there are.
+fn technique_reason() -> String {
+    let names: Vec<&str> =
+        Technique::COMPARED.iter().map(|t| t.name()).chain(std::iter::once("adaptive")).collect();
+    let (last, others) = names.split_last().expect("techniques");
+    format!("the technique must be {} or {last}", others.join(", "))
 }
 
 #[cfg(test)]
@@ -313,27 +257,22 @@ mod tests {
     }
 
     #[test]
-    fn every_listed_mode_round_trips_through_its_id() {
-        let all = [
-            Mode::baseline_modes(),
-            Mode::adaptive_modes(),
-            Mode::ablation_modes(),
-            Mode::variant_modes(),
-            Mode::stable_modes(),
-        ]
-        .concat();
-        assert_eq!(all.len(), 16 + 6 + 12 + 18 + 12);
-        assert!(all.iter().any(|m| m.to_string() == "fxaa-stalled"));
-        assert!(all.iter().any(|m| m.to_string() == "smaa-stalled"));
-        assert!(all.iter().any(|m| m.to_string() == "msaa-4x-stalled"));
-        assert!(all.iter().any(|m| m.to_string() == "taa-stalled"));
-        assert!(all.iter().any(|m| m.to_string() == "adaptive-3x3-area-stalled"));
-        assert!(all.iter().any(|m| m.to_string() == "adaptive-4x4-cells"));
-        assert!(all.iter().any(|m| m.to_string() == "adaptive-2x2-coverage-stalled"));
-        assert!(all.iter().any(|m| m.to_string() == "adaptive-4x4-stable"));
-        assert!(all.iter().any(|m| m.to_string() == "adaptive-3x3-cells-stable-stalled"));
-        for mode in all {
-            assert_eq!(mode.to_string().parse::<Mode>(), Ok(mode));
+    fn every_listed_mode_round_trips_through_its_id_and_no_group_lists_one_twice() {
+        let all: Vec<Mode> = Mode::groups().into_iter().flat_map(|(_, modes)| modes).collect();
+        for (i, mode) in all.iter().enumerate() {
+            assert_eq!(mode.to_string().parse::<Mode>(), Ok(*mode), "{mode}");
+            assert!(!all[..i].contains(mode), "{mode} is listed twice");
+        }
+        // Every compared technique, each adaptive variant and both stalls have their modes.
+        for technique in Technique::COMPARED {
+            for stalled in [false, true] {
+                let listed = |m: &Mode| m.technique == technique && m.stalled == stalled;
+                assert!(Mode::baseline_modes().iter().any(listed), "{technique:?} stalled {stalled}");
+            }
+            if let Some(id) = technique.fixed_id() {
+                assert_eq!(id.parse::<Mode>().map(|m| m.technique), Ok(technique));
+                assert_eq!(format!("{id}-stalled").parse::<Mode>().map(|m| m.stalled), Ok(true));
+            }
         }
         let combined = "adaptive-2x2-geometry-area".parse::<Mode>().unwrap();
         assert_eq!(
@@ -347,6 +286,18 @@ mod tests {
             Technique::Adaptive(Metrics::Shading, Reconstruction::Area, Counts::Stable)
         );
         assert!(stable.carries_history() && !stable.is_jittered());
+        assert_eq!(
+            "adaptive-3x3-geometry-stalled".parse::<Mode>().unwrap().short_label(),
+            "ada 3×3 geometry"
+        );
+        assert_eq!(
+            "msaa-4x".parse::<Mode>().unwrap().compared_with().map(|m| m.to_string()),
+            Some("reference-2x2".into())
+        );
+        assert_eq!(
+            "taa-stalled".parse::<Mode>().unwrap().compared_with().map(|m| m.to_string()),
+            Some("deferred-1x1-stalled".into())
+        );
     }
 
     #[test]
@@ -373,6 +324,7 @@ mod tests {
         check("adaptive-2x2-stable-cells", "unexpected suffix");
         check("reference-2x2-stable", "unexpected suffix");
         check("adaptive-4x4-coverage-stable", "no `-stable` variant");
-        check("supersample-2x2", "technique must be");
+        check("supersample-2x2", "technique must be deferred, fxaa, smaa, msaa, taa, reference or adaptive");
+        check("taa-stalled-stalled", "TAA has no size: `taa` or `taa-stalled`");
     }
 }

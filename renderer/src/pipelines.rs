@@ -85,9 +85,9 @@ pub(crate) struct Pipelines {
     group_layouts: HashMap<Vec<wgpu::BindGroupLayoutEntry>, wgpu::BindGroupLayout>,
     render: HashMap<RenderKey, wgpu::RenderPipeline>,
     compute: HashMap<ComputeKey, wgpu::ComputePipeline>,
-    sample_cells: HashMap<u32, wgpu::Buffer>,
+    constant_buffers: HashMap<(&'static str, u32), wgpu::Buffer>,
     texel_sampler: Option<wgpu::Sampler>,
-    smaa_lookup: Option<[wgpu::Texture; 2]>,
+    constant_textures: HashMap<&'static str, wgpu::Texture>,
 }
 
 impl Pipelines {
@@ -101,9 +101,9 @@ impl Pipelines {
             group_layouts: HashMap::new(),
             render: HashMap::new(),
             compute: HashMap::new(),
-            sample_cells: HashMap::new(),
+            constant_buffers: HashMap::new(),
             texel_sampler: None,
-            smaa_lookup: None,
+            constant_textures: HashMap::new(),
         }
     }
 
@@ -206,53 +206,68 @@ impl Pipelines {
             .clone()
     }
 
-    /// The cells of the M×M dither order's prefixes (`adaptive::sample_cells`) as a storage
-    /// buffer.
-    pub fn sample_cells(&mut self, m: u32) -> wgpu::Buffer {
+    /// A storage buffer of constant data that passes own, created on first use from
+    /// `contents` and kept under `key` (a name and a number, e.g. the adaptive window's side).
+    pub fn constant_buffer(
+        &mut self,
+        key: (&'static str, u32),
+        contents: impl FnOnce() -> Vec<u8>,
+    ) -> wgpu::Buffer {
         use wgpu::util::DeviceExt;
         let device = &self.device;
-        self.sample_cells
-            .entry(m)
+        self.constant_buffers
+            .entry(key)
             .or_insert_with(|| {
                 device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("sample cells"),
-                    contents: bytemuck::cast_slice(&crate::adaptive::sample_cells(m)),
+                    label: Some(key.0),
+                    contents: &contents(),
                     usage: wgpu::BufferUsages::STORAGE,
                 })
             })
             .clone()
     }
 
-    /// SMAA's area and search textures (`renderer/data/smaa`), uploaded on first use.
-    pub fn smaa_lookup(&mut self) -> [wgpu::Texture; 2] {
+    /// A constant texture that passes own (SMAA's lookup textures), uploaded on first use and
+    /// kept under its name.
+    pub fn constant_texture(&mut self, constant: &ConstantTexture) -> wgpu::Texture {
         use wgpu::util::DeviceExt;
         let (device, queue) = (&self.device, &self.queue);
-        self.smaa_lookup
-            .get_or_insert_with(|| {
-                crate::smaa::LOOKUP_TEXTURES.map(|lookup| {
-                    device.create_texture_with_data(
-                        queue,
-                        &wgpu::TextureDescriptor {
-                            label: Some(lookup.name),
-                            size: wgpu::Extent3d {
-                                width: lookup.width,
-                                height: lookup.height,
-                                depth_or_array_layers: 1,
-                            },
-                            mip_level_count: 1,
-                            sample_count: 1,
-                            dimension: wgpu::TextureDimension::D2,
-                            format: lookup.format,
-                            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                            view_formats: &[],
+        self.constant_textures
+            .entry(constant.name)
+            .or_insert_with(|| {
+                device.create_texture_with_data(
+                    queue,
+                    &wgpu::TextureDescriptor {
+                        label: Some(constant.name),
+                        size: wgpu::Extent3d {
+                            width: constant.width,
+                            height: constant.height,
+                            depth_or_array_layers: 1,
                         },
-                        wgpu::util::TextureDataOrder::LayerMajor,
-                        lookup.bytes,
-                    )
-                })
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format: constant.format,
+                        usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                        view_formats: &[],
+                    },
+                    wgpu::util::TextureDataOrder::LayerMajor,
+                    constant.bytes,
+                )
             })
             .clone()
     }
+}
+
+/// A precomputed texture that a pass reads (`Pipelines::constant_texture`): rows from the top,
+/// no padding.
+#[derive(Debug, Clone, Copy)]
+pub struct ConstantTexture {
+    pub name: &'static str,
+    pub width: u32,
+    pub height: u32,
+    pub format: wgpu::TextureFormat,
+    pub bytes: &'static [u8],
 }
 
 /// The most colour targets a screen pass writes: a colour and its slope in albedo

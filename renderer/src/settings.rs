@@ -1,7 +1,7 @@
 //! What a scene is rendered with besides its geometry and lights, and the stall limits.
 
-use crate::adaptive::AdaptiveSettings;
 use crate::color::ColorSettings;
+use crate::technique::adaptive::AdaptiveSettings;
 
 /// What a scene is rendered with, besides its geometry and lights.
 #[derive(Debug, Clone, PartialEq)]

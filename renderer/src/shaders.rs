@@ -10,38 +10,9 @@ use std::path::{Path, PathBuf};
 
 use crate::error::RenderError;
 
-macro_rules! sources {
-    ($($name:literal),* $(,)?) => {
-        /// Every file under `shaders/`, by its path relative to that folder.
-        pub const SOURCES: &[(&str, &str)] = &[
-            $(($name, include_str!(concat!("../../shaders/", $name)))),*
-        ];
-    };
-}
-
-sources!(
-    "lib/common.wgsl",
-    "lib/finite.wgsl",
-    "lib/scene.wgsl",
-    "lib/geometry.wgsl",
-    "lib/gbuffer.wgsl",
-    "lib/shadows.wgsl",
-    "lib/shading.wgsl",
-    "lib/color.wgsl",
-    "lib/compact.wgsl",
-    "lib/pixel_list.wgsl",
-    "gbuffer.wgsl",
-    "shadow.wgsl",
-    "shade.wgsl",
-    "resolve.wgsl",
-    "tonemap.wgsl",
-    "display.wgsl",
-    "fxaa.wgsl",
-    "smaa.wgsl",
-    "adaptive.wgsl",
-    "msaa.wgsl",
-    "taa.wgsl",
-);
+/// Every file under `shaders/`, by its path relative to that folder (`lib/common.wgsl`), in
+/// name order; `build.rs` finds them.
+pub const SOURCES: &[(&str, &str)] = include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 
 /// The pass shaders: every source that is not an include under `lib/`.
 pub fn pass_files() -> impl Iterator<Item = &'static str> {

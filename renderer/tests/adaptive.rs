@@ -7,7 +7,7 @@
 //! its two ablations per pixel, the `-area` variant reweighs only pixels between one sample and
 //! all, and the compact and loop strategies agree. The CPU twin's own cases (adversarial
 //! windows, zero constants on a silhouette, the area weights' hand-worked values) are unit
-//! tests in `src/adaptive.rs`, and `tests/properties.rs` checks it over hostile inputs.
+//! tests in `src/technique/adaptive/`, and `tests/properties.rs` checks it over hostile inputs.
 
 mod support;
 

@@ -66,13 +66,17 @@ fn features_remove_the_bindings_a_scene_does_not_need() {
 
 #[test]
 fn every_file_in_the_shaders_folder_is_embedded_and_used() {
-    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../shaders");
+    let root = std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shaders"));
     let mut on_disk = Vec::new();
-    for dir in ["", "lib/"] {
-        for entry in std::fs::read_dir(format!("{root}/{dir}")).expect("shaders folder") {
+    let mut folders = vec![root.clone()];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).expect("shaders folder") {
             let path = entry.expect("entry").path();
-            if path.extension().is_some_and(|e| e == "wgsl") {
-                on_disk.push(format!("{dir}{}", path.file_name().unwrap().to_string_lossy()));
+            if path.is_dir() {
+                folders.push(path);
+            } else if path.extension().is_some_and(|e| e == "wgsl") {
+                let relative = path.strip_prefix(&root).unwrap().to_string_lossy().replace('\\', "/");
+                on_disk.push(relative);
             }
         }
     }

@@ -3,7 +3,7 @@
 //!
 //! Each pixel's flicker is its squared change of error, ((A_f − A_{f−1}) − (T_f − T_{f−1}))²
 //! summed over channels, frame pairs and modes: the per-pixel terms of every mode's
-//! `instability` (`sequence.rs`), so the region is where the instabilities come from. Modes
+//! `instability` (`run/sequence.rs`), so the region is where the instabilities come from. Modes
 //! flicker in the same places (edges, thin geometry, fine texture), and the sum is led by the
 //! modes that flicker most, which is where a reader should look. The region is known only at the
 //! last frame, so it is cut from the spooled frames (`spool.rs`).

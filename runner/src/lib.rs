@@ -23,10 +23,10 @@ pub mod record;
 pub mod report;
 pub mod run;
 pub mod scenes;
-pub mod sequence;
 pub mod spool;
 pub mod stats;
 pub mod truth;
+pub mod vocabulary;
 pub mod worker;
 
 /// Exit codes, one meaning each: 0 success; 1 `compare` found a regression; 2 the command could

@@ -452,12 +452,11 @@ mod tests {
     #[test]
     fn groups_and_ids_combine_without_duplicates() {
         let modes = parse_modes("baseline, deferred-1x1,adaptive-2x2-geometry").unwrap();
-        assert_eq!(modes.len(), 17);
-        assert_eq!(modes[1].to_string(), "fxaa");
-        assert_eq!(modes[2].to_string(), "smaa");
-        assert_eq!(modes[3].to_string(), "msaa-4x");
-        assert_eq!(modes[4].to_string(), "taa");
-        assert_eq!(modes[16].to_string(), "adaptive-2x2-geometry");
+        let baseline = Mode::baseline_modes();
+        // The group in its order, then the one id it did not already hold.
+        assert_eq!(&modes[..baseline.len()], &baseline[..]);
+        let rest: Vec<String> = modes[baseline.len()..].iter().map(Mode::to_string).collect();
+        assert_eq!(rest, ["adaptive-2x2-geometry"]);
         assert!(parse_modes("reference-9x9").unwrap_err().contains("M must be"));
         assert!(parse_modes(" , ").is_err());
     }
@@ -481,18 +480,37 @@ mod tests {
     fn quick_leaves_out_the_ablations_and_nightly_adds_them() {
         let quick = Tier::Quick.default_modes();
         let nightly = Tier::Nightly.default_modes();
-        assert_eq!(quick.len(), 29);
-        assert_eq!(nightly.len(), 49);
-        assert!(quick.iter().all(|m| !m.to_string().contains("geometry")));
+        for modes in [&quick, &nightly] {
+            for (i, mode) in modes.iter().enumerate() {
+                assert!(!modes[..i].contains(mode), "{mode} twice");
+            }
+        }
+        assert!(quick.iter().all(|m| nightly.contains(m)), "the quick tier is a subset of the nightly");
+        // Every technique the paper is compared with, and the paper's modes, in both.
+        for mode in Mode::baseline_modes().iter().chain(&Mode::adaptive_modes()) {
+            assert!(quick.contains(mode), "{mode} not in the quick tier");
+        }
+        let has = |modes: &[Mode], test: &dyn Fn(&Mode) -> bool| modes.iter().filter(|m| test(m)).count();
+        let ablation = |m: &Mode| matches!(m.technique, aabench_renderer::Technique::Adaptive(metrics, ..) if metrics != aabench_renderer::Metrics::Both);
+        assert_eq!(has(&quick, &ablation), 0);
+        assert!(has(&nightly, &ablation) > 0 && nightly.iter().filter(|m| ablation(m)).all(|m| !m.stalled));
         let area: Vec<String> = quick.iter().map(Mode::to_string).filter(|id| id.contains("area")).collect();
         assert_eq!(area, ["adaptive-2x2-area", "adaptive-3x3-area", "adaptive-4x4-area"]);
+        // Nightly-only: the stalled -cells modes, every -coverage mode, the -stable modes but
+        // adaptive-4x4-stable.
         let stalled_cells =
-            |modes: &[Mode]| modes.iter().filter(|m| m.stalled && m.to_string().contains("cells")).count();
-        assert_eq!((stalled_cells(&quick), stalled_cells(&nightly)), (0, 3));
-        let coverage = |modes: &[Mode]| modes.iter().filter(|m| m.to_string().contains("coverage")).count();
-        assert_eq!((coverage(&quick), coverage(&nightly)), (0, 6));
-        let stable = |modes: &[Mode]| modes.iter().filter(|m| m.to_string().contains("stable")).count();
-        assert_eq!((stable(&quick), stable(&nightly)), (1, 6));
-        assert!(quick.iter().any(|m| m.to_string() == "adaptive-4x4-stable"));
+            |m: &Mode| m.stalled && m.reconstruction() == aabench_renderer::Reconstruction::Cells;
+        let coverage = |m: &Mode| m.reconstruction() == aabench_renderer::Reconstruction::Coverage;
+        for nightly_only in [&stalled_cells as &dyn Fn(&Mode) -> bool, &coverage] {
+            assert_eq!(has(&quick, nightly_only), 0);
+            assert!(Mode::variant_modes().iter().filter(|m| nightly_only(m)).all(|m| nightly.contains(m)));
+        }
+        let stable: Vec<String> = quick
+            .iter()
+            .filter(|m| m.counts() == aabench_renderer::Counts::Stable)
+            .map(Mode::to_string)
+            .collect();
+        assert_eq!(stable, ["adaptive-4x4-stable"]);
+        assert!(Mode::stable_modes().iter().filter(|m| !m.stalled).all(|m| nightly.contains(m)));
     }
 }

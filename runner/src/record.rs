@@ -161,6 +161,11 @@ impl SceneRecord {
         self.modes.iter().find(|m| m.mode == id)
     }
 
+    /// The record of `mode`, where the scene ran it.
+    pub fn mode_of(&self, mode: aabench_renderer::Mode) -> Option<&ModeRecord> {
+        self.mode(&mode.to_string())
+    }
+
     /// Round-by-round ratios of `mode`'s frame time to `anchor`'s. Every round renders each
     /// mode once, so round i of both ran moments apart and share the machine's state.
     pub fn paired_ratios(&self, mode: &str, anchor: &str) -> Option<Vec<f64>> {
@@ -228,6 +233,14 @@ pub struct ModeRecord {
     /// Its sequence against the truth's, where the scene has a camera path.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sequence: Option<ModeSequence>,
+}
+
+impl ModeRecord {
+    /// The mode the record's id names; `None` for an id this build does not know (a record of
+    /// another version of aabench).
+    pub fn parsed(&self) -> Option<aabench_renderer::Mode> {
+        self.mode.parse().ok()
+    }
 }
 
 /// A mode's pass graph as compiled for this scene: what ran and what it allocated, against
@@ -405,7 +418,7 @@ impl FrontPlace {
     }
 }
 
-/// What a scene's sequence rendered (`sequence.rs`).
+/// What a scene's sequence rendered (`run/sequence.rs`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SequenceRecord {
     /// The camera path: `orbit`, `dolly`, `pan`, `static` or `keyframes`.
@@ -489,7 +502,7 @@ pub struct ModeSequence {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub frame_ms: Option<Summary>,
     /// Temporal modes (taa): the error where the history cannot hold the surface, the pixels
-    /// that the previous frame did not see (`sequence.rs`).
+    /// that the previous frame did not see (`run/sequence.rs`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ghosting: Option<Ghosting>,
     /// FNV-1a 64 of each frame's display image and sample counts, as `output_hash`.

@@ -2,7 +2,7 @@
 //! image (`images::display_rgba8`), appended to one file per stream as it is rendered.
 //!
 //! What needs every frame at once waits for the last: FLIP along the path, computed once the
-//! renders are done so that it neither slows nor disturbs them (`sequence.rs`), and the
+//! renders are done so that it neither slows nor disturbs them (`run/sequence.rs`), and the
 //! worst-flickering square, known only at the end (`flicker.rs`). A 256×192 frame takes 192 KB,
 //! a 1024×768 one 3 MB, so a nightly scene's spool runs to a few GB, mostly read back from the
 //! page cache. The folder is removed when the spool is dropped.

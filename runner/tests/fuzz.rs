@@ -19,7 +19,7 @@
 //!
 //! The fuzzer found five panics, each fixed with a test: four in the gltf crate (now in
 //! `renderer/tests/import.rs`) and a light at 10³⁰⁸, finite in f64 and infinite in f32
-//! (manifest positions are now bounded to ±10¹², a unit test of `src/manifest.rs`). A review
+//! (manifest positions are now bounded to ±10¹², a unit test of `src/manifest/`). A review
 //! of its reach found four more that the first mutations could not produce (a short stride, a
 //! count of 0, %-escapes, multiplied node scales), which the insert mutation now can.
 

@@ -1,7 +1,8 @@
-//! The crates' layering: in neither crate does a top-level module use another that uses it back,
-//! directly or through others (ARCHITECTURE.md lists the order). A module's uses are read from
-//! its source files: every `crate::name` and every name in a `crate::{…}` group, outside
-//! `#[cfg(test)]` modules, doc comments and comments.
+//! The crates' layering: ARCHITECTURE.md lists each crate's top-level modules in layers, and
+//! every module uses only modules of earlier layers (so no module uses another that uses it
+//! back, directly or through others), and the list names every module there is. A module's uses
+//! are read from its source files: every `crate::name` and every name in a `crate::{…}` group,
+//! outside `#[cfg(test)]` modules, doc comments and comments.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -223,5 +224,118 @@ fn neither_crate_has_an_import_cycle_between_its_modules() {
         let graph = module_graph(&workspace().join(crate_src));
         assert!(graph.len() > 10, "{crate_src}: only {} modules found", graph.len());
         assert_eq!(cycle(&graph), None, "{crate_src}: modules use each other in a cycle");
+    }
+}
+
+/// The layers of a crate as ARCHITECTURE.md lists them: the line `- <crate>: `a`, `b` → `c` …`,
+/// each layer the modules between arrows.
+fn documented_layers(crate_name: &str) -> Vec<Vec<String>> {
+    let map = std::fs::read_to_string(workspace().join("ARCHITECTURE.md")).unwrap();
+    let prefix = format!("- {crate_name}: ");
+    let line = map
+        .lines()
+        .find_map(|line| line.strip_prefix(&prefix))
+        .unwrap_or_else(|| panic!("ARCHITECTURE.md has no line `{prefix}…` listing the layers"));
+    line.split('→')
+        .map(|layer| {
+            layer
+                .split(',')
+                .map(|m| m.trim().trim_matches('`').to_string())
+                .filter(|m| !m.is_empty())
+                .collect()
+        })
+        .collect()
+}
+
+/// Every edge that goes against the layers: a module that uses one of its own layer or a later
+/// one.
+fn against_the_layers(graph: &BTreeMap<String, BTreeSet<String>>, layers: &[Vec<String>]) -> Vec<String> {
+    let layer = |module: &str| layers.iter().position(|l| l.iter().any(|m| m == module));
+    let mut wrong = Vec::new();
+    for (module, used) in graph {
+        for other in used {
+            if let (Some(a), Some(b)) = (layer(module), layer(other))
+                && b >= a
+            {
+                wrong.push(format!("{module} (layer {}) uses {other} (layer {})", a + 1, b + 1));
+            }
+        }
+    }
+    wrong
+}
+
+#[test]
+fn the_layers_reject_a_use_upwards_or_within_a_layer() {
+    let layers: Vec<Vec<String>> = vec![vec!["a".into(), "b".into()], vec!["c".into()]];
+    let graph: BTreeMap<String, BTreeSet<String>> = [
+        ("c".to_string(), BTreeSet::from(["a".to_string()])),
+        ("a".into(), BTreeSet::from(["b".to_string(), "c".to_string()])),
+    ]
+    .into();
+    assert_eq!(
+        against_the_layers(&graph, &layers),
+        ["a (layer 1) uses b (layer 1)", "a (layer 1) uses c (layer 2)"]
+    );
+}
+
+#[test]
+fn every_module_is_on_the_map_and_uses_only_earlier_layers() {
+    for (crate_name, src) in [("renderer", "renderer/src"), ("runner", "runner/src")] {
+        let graph = module_graph(&workspace().join(src));
+        let layers = documented_layers(crate_name);
+        let listed: BTreeSet<String> = layers.iter().flatten().cloned().collect();
+        let modules: BTreeSet<String> = graph.keys().cloned().collect();
+        let missing: Vec<&String> = modules.difference(&listed).collect();
+        let stale: Vec<&String> = listed.difference(&modules).collect();
+        assert!(
+            missing.is_empty() && stale.is_empty(),
+            "{crate_name}: not on the map {missing:?}, on the map but gone {stale:?}"
+        );
+        let wrong = against_the_layers(&graph, &layers);
+        assert!(wrong.is_empty(), "{crate_name}: {wrong:#?}\nthe graph: {graph:#?}");
+    }
+}
+
+/// The files of a folder, recursively, relative to it with `/` between folders.
+fn files_under(root: &Path, extension: &str) -> Vec<String> {
+    let mut files = Vec::new();
+    let mut folders = vec![root.to_path_buf()];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                folders.push(path);
+            } else if path.extension().is_some_and(|e| e == extension) {
+                files.push(path.strip_prefix(root).unwrap().to_string_lossy().replace('\\', "/"));
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+#[test]
+fn every_source_file_is_in_the_code_map_and_every_test_it_names_exists() {
+    let map = std::fs::read_to_string(workspace().join("ARCHITECTURE.md")).unwrap();
+    let named: BTreeSet<&str> = map.split('`').skip(1).step_by(2).collect();
+    let mut missing = Vec::new();
+    for (folder, extension) in [("renderer/src", "rs"), ("runner/src", "rs"), ("shaders", "wgsl")] {
+        for file in files_under(&workspace().join(folder), extension) {
+            if !named.contains(file.as_str()) {
+                missing.push(format!("{folder}/{file}"));
+            }
+        }
+    }
+    assert!(missing.is_empty(), "ARCHITECTURE.md's code map lacks {missing:?}");
+    // `path/to/file.rs::test_name` (or `…::tests::name`) names a function of that file.
+    for reference in named.iter().filter(|r| r.contains(".rs::")) {
+        let (file, path) = reference.split_once("::").unwrap();
+        let function = path.rsplit("::").next().unwrap();
+        let source = std::fs::read_to_string(workspace().join(file))
+            .unwrap_or_else(|e| panic!("ARCHITECTURE.md names {reference}: {file}: {e}"));
+        assert!(
+            source.contains(&format!("fn {function}(")),
+            "ARCHITECTURE.md names {reference}, which {file} lacks"
+        );
     }
 }

@@ -8,7 +8,7 @@
 //! `empty`. Closed pipes end output quietly; two runs started together into one folder keep
 //! both records; SIGTERM ends a run like Ctrl-C; a run started with SIGHUP ignored keeps
 //! timing; a mode over `--memory-limit` fails alone; a full disk is reported and leaves only
-//! whole files. The memory budget under a cgroup limit is a unit test in `src/run.rs`.
+//! whole files. The memory budget under a cgroup limit is a unit test in `src/run/memory.rs`.
 
 use std::process::{Command, Stdio};
 
@@ -335,11 +335,11 @@ impl Drop for SmallDisk {
     }
 }
 
-/// On a 48 KiB tmpfs (mounted only when the tests run as root, as CI does; skipped otherwise)
-/// the run reports `No space left on device`, the modes whose images failed keep their PSNR
+/// On a 48 KiB tmpfs (mounted as root, as CI runs it) the run reports `No space left on device`, the modes whose images failed keep their PSNR
 /// against the truth, and every file left is whole (JSON parses, PNG and EXR decode) with no
 /// temporary left.
 #[test]
+#[ignore = "mounts a small tmpfs, which needs root: `.ci/run` runs it with --include-ignored"]
 fn a_full_disk_is_reported_and_leaves_only_whole_files() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let ws = Workspace::new("full-disk");
@@ -347,7 +347,7 @@ fn a_full_disk_is_reported_and_leaves_only_whole_files() {
     ws.manifest("plane", "plane", |_| {});
     // Room for run.json and a few images, not for all of them.
     let Some(disk) = SmallDisk::mount(ws.dir.join("full"), 48) else {
-        eprintln!("skipped: mounting a small tmpfs needs root (CI runs as root)");
+        precondition(false, "mounting a small tmpfs needs root");
         return;
     };
     let output = ws.run(&[
@@ -406,6 +406,7 @@ fn a_full_disk_is_reported_and_leaves_only_whole_files() {
 }
 
 #[test]
+#[ignore = "mounts a small tmpfs, which needs root: `.ci/run` runs it with --include-ignored"]
 fn a_merge_that_runs_out_of_disk_leaves_nothing_and_the_retry_succeeds() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let ws = Workspace::new("merge-full");
@@ -422,7 +423,7 @@ fn a_merge_that_runs_out_of_disk_leaves_nothing_and_the_retry_succeeds() {
         std::fs::read_dir(dir).unwrap().next().unwrap().unwrap().path().to_str().unwrap().to_owned()
     };
     let Some(disk) = SmallDisk::mount(ws.dir.join("small"), 256) else {
-        eprintln!("skipped: mounting a small tmpfs needs root (CI runs as root)");
+        precondition(false, "mounting a small tmpfs needs root");
         return;
     };
     // A filler leaves room for some of the images, not all.

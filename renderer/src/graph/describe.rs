@@ -71,30 +71,7 @@ impl<T> Graph<T> {
                 );
             }
         }
-        let _ = writeln!(out, "\nallocations");
-        for (index, physical) in plan.allocation.physical.iter().enumerate() {
-            let held: Vec<String> = physical
-                .resources
-                .iter()
-                .map(|&r| {
-                    let resource = &plan.resources[r];
-                    format!(
-                        "{} ({}–{})",
-                        label(resource.writer),
-                        position(plan, resource.first),
-                        position(plan, resource.last)
-                    )
-                })
-                .collect();
-            let _ = writeln!(
-                out,
-                "  #{index:<3} {:<26} {:>11}  {}\n        holds {}",
-                physical.desc.to_string(),
-                mib(physical.desc.bytes()),
-                usage(physical.usage),
-                held.join(", ")
-            );
-        }
+        allocations(&mut out, plan);
         let _ = writeln!(
             out,
             "\nbytes: {} allocated, {} with one allocation per output, {} lower bound",
@@ -135,5 +112,34 @@ impl<T> Graph<T> {
         }
         out.push_str("}\n");
         out
+    }
+}
+
+/// The plan's allocations, each with the resources it holds in turn and their lifetimes.
+fn allocations(out: &mut String, plan: &Plan) {
+    let label = |r: PortRef| format!("{}.{}", plan.names[r.pass], r.port);
+    let _ = writeln!(out, "\nallocations");
+    for (index, physical) in plan.allocation.physical.iter().enumerate() {
+        let held: Vec<String> = physical
+            .resources
+            .iter()
+            .map(|&r| {
+                let resource = &plan.resources[r];
+                format!(
+                    "{} ({}–{})",
+                    label(resource.writer),
+                    position(plan, resource.first),
+                    position(plan, resource.last)
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            out,
+            "  #{index:<3} {:<26} {:>11}  {}\n        holds {}",
+            physical.desc.to_string(),
+            mib(physical.desc.bytes()),
+            usage(physical.usage),
+            held.join(", ")
+        );
     }
 }

@@ -23,6 +23,10 @@ impl DisplayNode {
 }
 
 impl Node for DisplayNode {
+    fn encodes_color(&self) -> bool {
+        true
+    }
+
     fn decl(&self) -> PassDecl {
         PassDecl {
             name: "display",
@@ -42,7 +46,7 @@ impl Node for DisplayNode {
             shader: "display.wgsl",
             vertex: FULLSCREEN.0,
             fragment: Some("display"),
-            constants: encoding(&ctx.settings.color).flag("EXPOSE", self.expose),
+            constants: encoding(ctx.color).flag("EXPOSE", self.expose),
         };
         Ok(Box::new(ctx.screen(io, "display", program, &["display"], FULLSCREEN.1, &[])?))
     }

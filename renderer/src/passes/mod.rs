@@ -1,4 +1,6 @@
-//! Passes: units of GPU work that are submitted and timed one at a time.
+//! Passes: units of GPU work that are submitted and timed one at a time, and the ones every
+//! technique shares (the G-buffer, shadows, deferred shading, the colour end, a kept history,
+//! lists of marked pixels). Each technique's own passes are in its room under `technique/`.
 //!
 //! A [`Node`] declares a pass's ports (device-free, for the graph's compile step) and builds
 //! the pass from a small [`BuildContext`] and the resources its ports were given ([`Io`]).
@@ -6,31 +8,30 @@
 //! like the WGSL variable (see `bindings.rs`). Every port a pass declares for binding must be
 //! bound by one of its shaders, or building it fails: a declaration cannot drift from the WGSL.
 
-pub(crate) mod adaptive;
 pub(crate) mod display;
-pub(crate) mod fxaa;
 pub(crate) mod gbuffer;
 pub(crate) mod keep;
-pub(crate) mod msaa;
 pub(crate) mod pixel_list;
 pub(crate) mod shade;
 pub(crate) mod shadow;
-pub(crate) mod smaa;
-pub(crate) mod taa;
 pub(crate) mod tonemap;
 
 use std::collections::{BTreeSet, HashMap};
 
 use crate::bindings::{self, Bound, Stages};
+use crate::color::ColorSettings;
+use crate::error::RenderError;
 use crate::graph::{Access, PassDecl, Port, Resource};
 use crate::pipelines::{
     ComputeKey, Constants, LayoutEntries, MAX_SCREEN_TARGETS, Pipelines, Raster, RenderKey, ScreenTargets,
 };
 use crate::scene::GpuScene;
-use crate::{error::RenderError, settings::RenderSettings};
 
 /// Linear HDR radiance.
 pub(crate) const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// Per-pixel sample counts, 1…16 (adaptive modes, MSAA).
+pub(crate) const COUNT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Uint;
 
 /// The target of display code values: 8-bit unorm up to 8 bits per channel, else 10-bit.
 pub(crate) fn display_format(bits: u32) -> wgpu::TextureFormat {
@@ -56,6 +57,13 @@ impl std::fmt::Debug for dyn Pass {
 pub(crate) trait Node: std::fmt::Debug + Send + Sync {
     fn decl(&self) -> PassDecl;
     fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError>;
+
+    /// Whether the pass belongs to the frame's colour end, which turns the HDR image into the
+    /// display image (tonemap, display, a post-process on the display image): where a given
+    /// HDR image is encoded from (`PreparedMode::display_from_hdr`).
+    fn encodes_color(&self) -> bool {
+        false
+    }
 }
 
 /// What a pass is built from: never the whole renderer.
@@ -63,7 +71,10 @@ pub(crate) trait Node: std::fmt::Debug + Send + Sync {
 pub(crate) struct BuildContext<'a> {
     pub scene: &'a GpuScene,
     pub pipelines: &'a mut Pipelines,
-    pub settings: &'a RenderSettings,
+    /// From linear HDR to the display image.
+    pub color: &'a ColorSettings,
+    /// Dependent ALU iterations per shaded sample of a stalled mode.
+    pub stall_iterations: u32,
 }
 
 /// A texture or buffer given to a port.
@@ -264,7 +275,7 @@ impl BuildContext<'_> {
 
     /// Override constants of the shading code: light count and stall.
     pub fn shading_constants(&self, stalled: bool) -> Constants {
-        let stall = if stalled { self.settings.stall_iterations } else { 0 };
+        let stall = if stalled { self.stall_iterations } else { 0 };
         Constants::new().with("LIGHT_COUNT", self.scene.light_count).with("STALL_ITERATIONS", stall)
     }
 }

@@ -1,10 +1,9 @@
 //! Brute-force shading: every G-buffer sample shaded (deferred 1×1 when the G-buffer is w × h,
-//! the reference's supersampled image when it is M·w × M·h), and the M×M box filter.
+//! the reference's supersampled image when it is M·w × M·h).
 
 use super::{BuildContext, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, shading_inputs};
 use crate::error::RenderError;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
-use crate::pipelines::Constants;
 
 /// One fragment per G-buffer sample, into `color` at the G-buffer's extent.
 #[derive(Debug)]
@@ -12,7 +11,7 @@ pub(crate) struct ShadeNode {
     pub stalled: bool,
     pub shadows: Option<Resource>,
     /// A texture lookup's footprint relative to the G-buffer texel's: 1, or
-    /// [`super::taa::FOOTPRINT`].
+    /// [`crate::technique::taa::FOOTPRINT`].
     pub footprint: f64,
 }
 
@@ -35,33 +34,5 @@ impl Node for ShadeNode {
             program.constants = program.constants.with("FOOTPRINT", self.footprint);
         }
         Ok(Box::new(ctx.screen(io, "shade", program, &["color"], FULLSCREEN.1, &[])?))
-    }
-}
-
-/// Box-filters the M·w × M·h `supersampled` image into `color`.
-#[derive(Debug)]
-pub(crate) struct ResolveNode {
-    pub m: u32,
-}
-
-impl Node for ResolveNode {
-    fn decl(&self) -> PassDecl {
-        PassDecl {
-            name: "resolve",
-            ports: vec![
-                Port::new("supersampled", Resource::texture(HDR_FORMAT, Extent::GBuffer), Access::Loaded),
-                Port::new("color", Resource::texture(HDR_FORMAT, Extent::Output), Access::Attachment),
-            ],
-        }
-    }
-
-    fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
-        let program = Program {
-            shader: "resolve.wgsl",
-            vertex: FULLSCREEN.0,
-            fragment: Some("resolve"),
-            constants: Constants::new().with("M", self.m),
-        };
-        Ok(Box::new(ctx.screen(io, "resolve", program, &["color"], FULLSCREEN.1, &[])?))
     }
 }

@@ -18,6 +18,10 @@ pub(crate) struct TonemapNode {
 }
 
 impl Node for TonemapNode {
+    fn encodes_color(&self) -> bool {
+        true
+    }
+
     fn decl(&self) -> PassDecl {
         PassDecl {
             name: "tonemap",

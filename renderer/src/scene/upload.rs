@@ -9,7 +9,7 @@ use wgpu::util::DeviceExt;
 
 use super::shadow::{self, MAX_SHADOW_LIGHTS, ShadowCubes};
 use super::textures;
-use super::{AlphaMode, DrawClass, FrameUniforms, LightKind, Lighting, Scene, TextureRef};
+use super::{AlphaMode, DrawClass, FrameUniforms, Light, LightKind, Lighting, Scene, TextureRef};
 use crate::bindings::Bound;
 
 /// Lights a scene may have: the size of the shaders' uniform light table.
@@ -146,34 +146,7 @@ impl GpuScene {
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(gpu_material).collect();
         let lights = &lighting.lights[..lighting.lights.len().min(MAX_LIGHTS)];
         let shadows = ShadowCubes::of(lights);
-        let mut table = Vec::with_capacity(MAX_LIGHTS);
-        let mut faces = Vec::new();
-        for light in lights {
-            let near = f64::from(light.range) * shadow::NEAR_FRACTION;
-            let cube = match light.cube() {
-                Some(_) if faces.len() < 6 * MAX_SHADOW_LIGHTS => {
-                    faces.extend(shadow::face_matrices(light.position, near, f64::from(light.range)));
-                    (faces.len() / 6 - 1) as i32
-                }
-                _ => -1,
-            };
-            let settings = light.shadow.unwrap_or_default();
-            let (kind, direction, spot_scale, spot_offset) = light_shape(light.kind);
-            table.push(GpuLight {
-                position: light.position.to_array(),
-                range: light.range,
-                radiance: (light.color * light.intensity).to_array(),
-                shadow: cube,
-                shadow_bias: settings.bias,
-                shadow_radius: settings.radius,
-                shadow_near: near as f32,
-                kind,
-                direction,
-                spot_scale,
-                spot_offset,
-                padding: [0.0; 3],
-            });
-        }
+        let (mut table, mut faces) = light_table(lights);
         // A fixed-size uniform array: unused entries stay zero.
         table.resize(MAX_LIGHTS, GpuLight::zeroed());
         let storage = wgpu::BufferUsages::STORAGE;
@@ -281,6 +254,41 @@ impl GpuScene {
             pass.draw_indexed(range.clone(), 0, instances.clone());
         }
     }
+}
+
+/// The lights' table as the shaders read it, and the view-projection of every face of the
+/// shadow cubes of the lights that cast shadows (at most [`MAX_SHADOW_LIGHTS`]; a light past
+/// them shines without shadow).
+fn light_table(lights: &[Light]) -> (Vec<GpuLight>, Vec<[[f32; 4]; 4]>) {
+    let mut table = Vec::with_capacity(MAX_LIGHTS);
+    let mut faces = Vec::new();
+    for light in lights {
+        let near = f64::from(light.range) * shadow::NEAR_FRACTION;
+        let cube = match light.cube() {
+            Some(_) if faces.len() < 6 * MAX_SHADOW_LIGHTS => {
+                faces.extend(shadow::face_matrices(light.position, near, f64::from(light.range)));
+                (faces.len() / 6 - 1) as i32
+            }
+            _ => -1,
+        };
+        let settings = light.shadow.unwrap_or_default();
+        let (kind, direction, spot_scale, spot_offset) = light_shape(light.kind);
+        table.push(GpuLight {
+            position: light.position.to_array(),
+            range: light.range,
+            radiance: (light.color * light.intensity).to_array(),
+            shadow: cube,
+            shadow_bias: settings.bias,
+            shadow_radius: settings.radius,
+            shadow_near: near as f32,
+            kind,
+            direction,
+            spot_scale,
+            spot_offset,
+            padding: [0.0; 3],
+        });
+    }
+    (table, faces)
 }
 
 fn gpu_material(material: &super::Material) -> GpuMaterial {

@@ -62,6 +62,27 @@ pub fn summary(verdict: &Verdict) -> String {
     };
     let _ = writeln!(out, "## aabench gate: {headline}\n");
     let _ = writeln!(out, "{}\n", tally(verdict));
+    provenance(&mut out, verdict);
+    for note in &verdict.notes {
+        let _ = writeln!(out, "- {note}");
+    }
+    if !verdict.notes.is_empty() {
+        out.push('\n');
+    }
+    outcome_tables(&mut out, verdict);
+    let unchanged = verdict.counts.get(&Outcome::Unchanged).copied().unwrap_or(0);
+    let hashes = verdict.checks.iter().filter(|c| c.metric == "output_hash").count();
+    let hashes = if hashes > 0 {
+        format!(" ({hashes} of them an output hash that changed while every metric stayed within tolerance)")
+    } else {
+        String::new()
+    };
+    let _ = writeln!(out, "{unchanged} checks unchanged{hashes}.");
+    out
+}
+
+/// What was compared with what, and what time was gated against.
+fn provenance(out: &mut String, verdict: &Verdict) {
     let against = match (&verdict.baseline_dir, verdict.same_platform) {
         (None, _) => "no baselines".to_string(),
         (Some(dir), true) => format!("`{}` (same platform)", dir.display()),
@@ -104,12 +125,10 @@ pub fn summary(verdict: &Verdict) -> String {
             verdict.to_confirm.join(", ")
         );
     }
-    for note in &verdict.notes {
-        let _ = writeln!(out, "- {note}");
-    }
-    if !verdict.notes.is_empty() {
-        out.push('\n');
-    }
+}
+
+/// A table of checks per outcome that is not `unchanged`, worst first.
+fn outcome_tables(out: &mut String, verdict: &Verdict) {
     for (outcome, title) in [
         (Outcome::Regressed, "Regressed"),
         (Outcome::Failed, "Failed"),
@@ -142,15 +161,6 @@ pub fn summary(verdict: &Verdict) -> String {
         }
         out.push('\n');
     }
-    let unchanged = verdict.counts.get(&Outcome::Unchanged).copied().unwrap_or(0);
-    let hashes = verdict.checks.iter().filter(|c| c.metric == "output_hash").count();
-    let hashes = if hashes > 0 {
-        format!(" ({hashes} of them an output hash that changed while every metric stayed within tolerance)")
-    } else {
-        String::new()
-    };
-    let _ = writeln!(out, "{unchanged} checks unchanged{hashes}.");
-    out
 }
 
 /// JUnit XML: a suite per scene, a test case per mode; regressed and failed checks are

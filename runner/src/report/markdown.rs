@@ -10,28 +10,25 @@ use std::path::Path;
 
 use image::RgbaImage;
 
+use aabench_renderer::{Counts, Metrics, Mode, Reconstruction, Technique};
+
 use super::{
-    ErrorMetric, MODE_COLUMNS, SEQUENCE_COLUMNS, VARIANTS, decibels, error_points, fastest_by_level,
-    mode_cells, open_rgba, plots, sequence_cells, sequence_summary, side_by_side, technique_cell,
-    worst_window,
+    ErrorMetric, PAPER, competitors, decibels, error_points, fastest_by_level, mode_cells, mode_columns,
+    open_rgba, plots, reconstructions, sequence_cells, sequence_columns, sequence_summary, side_by_side,
+    technique_cell, worst_window,
 };
 use crate::record::{ModeRecord, RunRecord, SceneRecord};
 use crate::truth::TRUTH_ID;
 
-/// The modes of the overview table, where the run has them: the baselines, then M = 2 and
-/// M = 4 of the reference, the paper's adaptive mode and the variant nearest the truth.
-const OVERVIEW: [&str; 10] = [
-    "deferred-1x1",
-    "fxaa",
-    "smaa",
-    "msaa-4x",
-    "taa",
-    "reference-2x2",
-    "adaptive-2x2",
-    "reference-4x4",
-    "adaptive-4x4",
-    "adaptive-4x4-cells",
-];
+/// The modes of the overview table, where the run has them: the competitors, then M = 2 and
+/// M = 4 of the reference and the paper's adaptive mode, and the variant nearest the truth.
+fn overview_modes() -> Vec<Mode> {
+    let reference = |m| Mode::new(Technique::Reference, m, false);
+    let [adaptive_4, _, cells_4, _] = reconstructions(4);
+    let mut modes = competitors();
+    modes.extend([reference(2), reconstructions(2)[0], reference(4), adaptive_4, cells_4]);
+    modes
+}
 
 /// Side of a strip panel's crop in pixels, and how much the strip enlarges it.
 const STRIP_CROP: u32 = 48;
@@ -40,18 +37,19 @@ const STRIP_ZOOM: u32 = 4;
 const STRIP_GAP: u32 = 6;
 
 /// The modes of the flicker animation after the truth, left to right, where the run animated
-/// them: the 1×1 techniques, then 16 samples a pixel from the reference, the paper's adaptive
-/// mode and its stable variant.
-const FLICKER_MODES: [&str; 8] = [
-    "deferred-1x1",
-    "fxaa",
-    "smaa",
-    "msaa-4x",
-    "taa",
-    "reference-4x4",
-    "adaptive-4x4",
-    "adaptive-4x4-stable",
-];
+/// them: the competitors, then 16 samples a pixel from the reference, the paper's adaptive mode
+/// and its stable variant.
+fn flicker_modes() -> Vec<Mode> {
+    let mut modes = competitors();
+    let stable = Technique::Adaptive(Metrics::Both, Reconstruction::Equal, Counts::Stable);
+    modes.extend([
+        Mode::new(Technique::Reference, 4, false),
+        Mode::new(PAPER, 4, false),
+        Mode::new(stable, 4, false),
+    ]);
+    modes
+}
+
 /// How much the flicker animation enlarges the square.
 const FLICKER_ZOOM: u32 = 2;
 
@@ -101,8 +99,11 @@ fn provenance(out: &mut String, run: &RunRecord) {
 /// Scenes as rows, the overview's modes as columns: frame ms / PSNR against the truth, in bold
 /// where the mode is on the scene's front.
 pub fn overview(out: &mut String, run: &RunRecord) {
-    let columns: Vec<&str> =
-        OVERVIEW.into_iter().filter(|id| run.scenes.iter().any(|s| s.mode(id).is_some())).collect();
+    let columns: Vec<String> = overview_modes()
+        .into_iter()
+        .filter(|mode| run.scenes.iter().any(|s| s.mode_of(*mode).is_some()))
+        .map(|mode| mode.to_string())
+        .collect();
     if columns.is_empty() {
         out.push_str("The run has none of the overview's modes; each scene's table follows.\n");
         return;
@@ -147,7 +148,8 @@ fn variants(out: &mut String, run: &RunRecord) {
         .scenes
         .iter()
         .flat_map(|s| &s.modes)
-        .any(|m| m.mode.split('-').any(|part| VARIANTS.contains(&part)));
+        .filter_map(ModeRecord::parsed)
+        .any(|mode| mode.reconstruction() != Reconstruction::Equal);
     if !has_variants {
         return;
     }
@@ -158,13 +160,12 @@ fn variants(out: &mut String, run: &RunRecord) {
     );
     for scene in &run.scenes {
         for m in 2..=4 {
-            for stall in ["", "-stalled"] {
-                let mode = |id: String| scene.mode(&format!("{id}{stall}"));
-                if mode(format!("adaptive-{m}x{m}")).is_none() {
+            for stalled in [false, true] {
+                let at = |mode: Mode| scene.mode_of(Mode { stalled, ..mode });
+                let [adaptive, area, cells, coverage] = reconstructions(m).map(at);
+                if adaptive.is_none() {
                     continue;
                 }
-                let cells = mode(format!("adaptive-{m}x{m}-cells"));
-                let coverage = mode(format!("adaptive-{m}x{m}-coverage"));
                 let place = |mode: Option<&ModeRecord>| {
                     mode.and_then(|c| c.front.as_ref()).map_or("–".into(), |place| place.describe())
                 };
@@ -172,10 +173,10 @@ fn variants(out: &mut String, run: &RunRecord) {
                     out,
                     "| {} | {m}×{m}{} | {} | {} | {} | {} | {} | {} | {} |",
                     cell_text(&scene.name),
-                    if stall.is_empty() { "" } else { " stalled" },
-                    overview_cell(mode(format!("reference-{m}x{m}"))),
-                    overview_cell(mode(format!("adaptive-{m}x{m}"))),
-                    overview_cell(mode(format!("adaptive-{m}x{m}-area"))),
+                    if stalled { " stalled" } else { "" },
+                    overview_cell(at(Mode::new(Technique::Reference, m, false))),
+                    overview_cell(adaptive),
+                    overview_cell(area),
                     overview_cell(cells),
                     overview_cell(coverage),
                     place(cells),
@@ -206,7 +207,7 @@ fn passes(out: &mut String, run: &RunRecord) {
         .scenes
         .iter()
         .flat_map(|scene| (2..=4).map(move |m| (scene, m)))
-        .filter(|(scene, m)| scene.mode(&format!("adaptive-{m}x{m}")).is_some())
+        .filter(|(scene, m)| scene.mode_of(Mode::new(PAPER, *m, false)).is_some())
         .collect();
     if rows.is_empty() {
         return;
@@ -218,8 +219,8 @@ fn passes(out: &mut String, run: &RunRecord) {
         "---:|".repeat(COLUMNS.len() + 2)
     );
     for (scene, m) in rows {
-        for id in [format!("reference-{m}x{m}"), format!("adaptive-{m}x{m}")] {
-            let Some(mode) = scene.mode(&id) else { continue };
+        for id in [Mode::new(Technique::Reference, m, false), Mode::new(PAPER, m, false)] {
+            let Some(mode) = scene.mode_of(id) else { continue };
             let median = |name: &str| mode.passes.iter().find(|p| p.name == name).map(|p| p.ms.median);
             let cells: Vec<String> =
                 COLUMNS.iter().map(|name| median(name).map_or("–".into(), |ms| format!("{ms:.1}"))).collect();
@@ -258,16 +259,18 @@ fn scene_table(out: &mut String, scene: &SceneRecord) {
         scene.status,
         scene.error.as_ref().map_or(String::new(), |e| format!(": {}", cell_text(e)))
     );
-    let _ = writeln!(out, "| {} |", MODE_COLUMNS.join(" | "));
-    let _ = writeln!(out, "|---|{}", "---:|".repeat(MODE_COLUMNS.len() - 1));
+    let columns = mode_columns();
+    let _ = writeln!(out, "| {} |", columns.join(" | "));
+    let _ = writeln!(out, "|---|{}", "---:|".repeat(columns.len() - 1));
     for mode in &scene.modes {
         let cells: Vec<String> = mode_cells(mode).iter().map(|c| cell_text(c)).collect();
         let _ = writeln!(out, "| {} |", cells.join(" | "));
     }
     if let Some(sequence) = &scene.sequence {
         let _ = writeln!(out, "\nAlong the camera path: {}.\n", cell_text(&sequence_summary(sequence)));
-        let _ = writeln!(out, "| {} |", SEQUENCE_COLUMNS.join(" | "));
-        let _ = writeln!(out, "|---|{}", "---:|".repeat(SEQUENCE_COLUMNS.len() - 1));
+        let columns = sequence_columns();
+        let _ = writeln!(out, "| {} |", columns.join(" | "));
+        let _ = writeln!(out, "|---|{}", "---:|".repeat(columns.len() - 1));
         for cells in scene.modes.iter().filter_map(sequence_cells) {
             let cells: Vec<String> = cells.iter().map(|c| cell_text(c)).collect();
             let _ = writeln!(out, "| {} |", cells.join(" | "));
@@ -327,7 +330,7 @@ pub fn figures(run_dir: &Path, run: &RunRecord, dir: &Path) -> Result<(Vec<Strin
     Ok((written, left_out))
 }
 
-/// Writes to `path` the truth's and the [`FLICKER_MODES`]' animations of the sequence's
+/// Writes to `path` the truth's and the [`flicker_modes`]' animations of the sequence's
 /// worst-flickering square side by side, frame for frame, enlarged: what it shows, or why the
 /// scene has none.
 fn flicker_animation(run_dir: &Path, scene: &SceneRecord, path: &Path) -> Result<String, String> {
@@ -335,10 +338,10 @@ fn flicker_animation(run_dir: &Path, scene: &SceneRecord, path: &Path) -> Result
     let Some(region) = &sequence.region else {
         return Err(sequence.region_error.clone().unwrap_or_else(|| "no flicker region".into()));
     };
-    let streams: Vec<(&str, &String)> = std::iter::once("truth")
-        .chain(FLICKER_MODES)
-        .filter_map(|id| Some((id, region.animations.get(id)?)))
-        .collect();
+    let ids: Vec<String> =
+        std::iter::once("truth".to_string()).chain(flicker_modes().iter().map(Mode::to_string)).collect();
+    let streams: Vec<(&str, &String)> =
+        ids.iter().filter_map(|id| Some((id.as_str(), region.animations.get(id)?))).collect();
     let mut animations = Vec::new();
     for (_, file) in &streams {
         let frames = crate::images::read_apng(&run_dir.join(file)).map_err(|e| format!("{e:#}"))?;
@@ -379,21 +382,14 @@ fn standalone(svg: &str) -> String {
 }
 
 /// The modes a strip shows after the truth, left to right, at the largest M of the scene's
-/// adaptive modes: deferred-1x1, fxaa, smaa, msaa-4x, taa, the reference, the paper's adaptive mode (whose worst
-/// window against the truth the strip shows) and the `-cells` variant, those the scene has.
+/// adaptive modes: the competitors, the reference, the paper's adaptive mode (whose worst window
+/// against the truth the strip shows) and the `-cells` variant, those the scene has.
 fn strip_modes(scene: &SceneRecord) -> Option<Vec<&ModeRecord>> {
-    let m = (2..=4).rev().find(|m| scene.mode(&format!("adaptive-{m}x{m}")).is_some())?;
-    let ids = [
-        "deferred-1x1".to_string(),
-        "fxaa".into(),
-        "smaa".into(),
-        "msaa-4x".into(),
-        "taa".into(),
-        format!("reference-{m}x{m}"),
-        format!("adaptive-{m}x{m}"),
-        format!("adaptive-{m}x{m}-cells"),
-    ];
-    Some(ids.iter().filter_map(|id| scene.mode(id)).collect())
+    let m = (2..=4).rev().find(|&m| scene.mode_of(Mode::new(PAPER, m, false)).is_some())?;
+    let [adaptive, _, cells, _] = reconstructions(m);
+    let mut modes = competitors();
+    modes.extend([Mode::new(Technique::Reference, m, false), adaptive, cells]);
+    Some(modes.into_iter().filter_map(|mode| scene.mode_of(mode)).collect())
 }
 
 /// The truth and the [`strip_modes`], cropped at the window where the paper's adaptive mode
@@ -404,9 +400,11 @@ fn strip(run_dir: &Path, scene: &SceneRecord) -> Result<(RgbaImage, String), Str
         return Err("no truth image".into());
     };
     let Some(modes) = strip_modes(scene) else { return Err("no adaptive mode".into()) };
-    let panels: Vec<(&str, &str)> =
-        modes.iter().filter_map(|m| Some((m.mode.as_str(), m.images.display.as_deref()?))).collect();
-    let Some(&(_, worst)) = panels.iter().find(|(id, _)| id.starts_with("adaptive")) else {
+    let panels: Vec<(&ModeRecord, &str)> =
+        modes.iter().filter_map(|m| Some((*m, m.images.display.as_deref()?))).collect();
+    let adaptive =
+        |mode: &ModeRecord| matches!(mode.parsed().map(|m| m.technique), Some(Technique::Adaptive(..)));
+    let Some(&(_, worst)) = panels.iter().find(|(mode, _)| adaptive(mode)) else {
         return Err("no adaptive image".into());
     };
     let truth = open_rgba(run_dir, truth_file)?;
@@ -423,6 +421,7 @@ fn strip(run_dir: &Path, scene: &SceneRecord) -> Result<(RgbaImage, String), Str
     let crops: Vec<RgbaImage> =
         images.iter().map(|image| image::imageops::crop_imm(image, x, y, side, side).to_image()).collect();
     let out = side_by_side(&crops, STRIP_ZOOM, STRIP_GAP);
-    let names: Vec<&str> = std::iter::once(TRUTH_ID).chain(panels.iter().map(|(id, _)| *id)).collect();
+    let names: Vec<&str> =
+        std::iter::once(TRUTH_ID).chain(panels.iter().map(|(mode, _)| mode.mode.as_str())).collect();
     Ok((out, format!("{side}×{side} at ({x}, {y}), ×{STRIP_ZOOM}: {}", names.join(", "))))
 }

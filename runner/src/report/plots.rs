@@ -1,33 +1,16 @@
 //! The report's plots, drawn as SVG with plotters: error against run time per scene, and key
 //! metrics over past runs.
 
+use aabench_renderer::{Marker, Shape};
 use plotters::coord::Shift;
 use plotters::prelude::*;
-
-/// What kind of mode a point is: its marker shape.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Kind {
-    Deferred,
-    Fxaa,
-    /// SMAA: a hollow square beside deferred's filled one.
-    Smaa,
-    /// TAA: a hollow square crossed, between SMAA's square and FXAA's cross.
-    Taa,
-    Reference,
-    /// 4× MSAA: a hollow triangle beside the reference's filled one (the 2×2 reference shades
-    /// as many samples everywhere).
-    Msaa,
-    Adaptive,
-    /// An adaptive variant beyond the paper (`-area`, `-cells`, `-coverage`, `-stable`): a
-    /// hollow circle beside adaptive's disc.
-    Variant,
-}
 
 /// One mode on the error-against-time plot.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Point {
     pub label: String,
-    pub kind: Kind,
+    /// Its technique's ([`aabench_renderer::Technique::marker`]).
+    pub marker: Marker,
     pub stalled: bool,
     /// Frame time median and its interval, ms.
     pub time: f64,
@@ -145,46 +128,11 @@ pub fn error_against_time(title: &str, axes: [&str; 2], points: &[Point]) -> Res
                 .map_err(fail)?
                 .label(format!("{name} (dashed: the front)"))
                 .legend(move |(x, y)| Circle::new((x, y), 4, style));
-            for kind in [
-                Kind::Deferred,
-                Kind::Fxaa,
-                Kind::Smaa,
-                Kind::Taa,
-                Kind::Reference,
-                Kind::Msaa,
-                Kind::Adaptive,
-                Kind::Variant,
-            ] {
-                let of_kind = series.iter().filter(|p| p.kind == kind);
-                chart
-                    .draw_series(of_kind.map(|p| {
-                        let at = EmptyElement::at((p.time, p.error));
-                        match kind {
-                            Kind::Deferred => at + Rectangle::new([(-4, -4), (4, 4)], style).into_dyn(),
-                            Kind::Fxaa => at + Cross::new((0, 0), 5, colour.stroke_width(2)).into_dyn(),
-                            Kind::Smaa => {
-                                at + Rectangle::new([(-4, -4), (4, 4)], colour.stroke_width(2)).into_dyn()
-                            }
-                            // Its cross is drawn below.
-                            Kind::Taa => {
-                                at + Rectangle::new([(-5, -5), (5, 5)], colour.stroke_width(1)).into_dyn()
-                            }
-                            Kind::Reference => at + TriangleMarker::new((0, 0), 6, style).into_dyn(),
-                            Kind::Msaa => {
-                                at + TriangleMarker::new((0, 0), 6, colour.stroke_width(2)).into_dyn()
-                            }
-                            Kind::Adaptive => at + Circle::new((0, 0), 4, style).into_dyn(),
-                            Kind::Variant => at + Circle::new((0, 0), 4, colour.stroke_width(2)).into_dyn(),
-                        }
-                    }))
-                    .map_err(fail)?;
-            }
-            let taa = series.iter().filter(|p| p.kind == Kind::Taa);
-            chart
-                .draw_series(taa.map(|p| {
-                    EmptyElement::at((p.time, p.error)) + Cross::new((0, 0), 4, colour.stroke_width(1))
-                }))
-                .map_err(fail)?;
+            let markers = series.iter().flat_map(|p| {
+                let at = (p.time, p.error);
+                marker_shapes(p.marker, colour).into_iter().map(move |shape| EmptyElement::at(at) + shape)
+            });
+            chart.draw_series(markers).map_err(fail)?;
             let font = ("sans-serif", 11).into_font().color(&colour);
             chart
                 .draw_series(series.iter().map(|p| {
@@ -200,6 +148,24 @@ pub fn error_against_time(title: &str, axes: [&str; 2], points: &[Point]) -> Res
             .draw()
             .map_err(fail)
     })
+}
+
+/// The shapes of a technique's marker, around the point: filled, or drawn in outline.
+fn marker_shapes<DB: DrawingBackend>(
+    marker: Marker,
+    colour: RGBColor,
+) -> Vec<DynElement<'static, DB, (i32, i32)>> {
+    let style = if marker.filled { ShapeStyle::from(&colour).filled() } else { colour.stroke_width(2) };
+    match marker.shape {
+        Shape::Square => vec![Rectangle::new([(-4, -4), (4, 4)], style).into_dyn()],
+        Shape::Cross => vec![Cross::new((0, 0), 5, colour.stroke_width(2)).into_dyn()],
+        Shape::CrossedSquare => vec![
+            Rectangle::new([(-5, -5), (5, 5)], colour.stroke_width(1)).into_dyn(),
+            Cross::new((0, 0), 4, colour.stroke_width(1)).into_dyn(),
+        ],
+        Shape::Triangle => vec![TriangleMarker::new((0, 0), 6, style).into_dyn()],
+        Shape::Circle => vec![Circle::new((0, 0), 4, style).into_dyn()],
+    }
 }
 
 /// One line of a history plot: a value per run (`None` where a run lacks it).
@@ -271,7 +237,7 @@ mod tests {
     fn point(label: &str, time: f64, error: f64) -> Point {
         Point {
             label: label.into(),
-            kind: Kind::Adaptive,
+            marker: Marker { shape: Shape::Circle, filled: true },
             stalled: false,
             time,
             time_low: time * 0.9,

@@ -135,3 +135,15 @@ pub fn wait_for_line(lines: &Receiver<String>, text: &str) {
         }
     }
 }
+
+/// Whether a test's precondition holds (root, Chromium). A test that needs one is `#[ignore]`d
+/// with its reason, so that a plain `cargo test` lists it as not run; run anyway (`--ignored`,
+/// as `.ci/run` does), it fails where `CI` is set, and elsewhere says that it skipped.
+pub fn precondition(holds: bool, what: &str) -> bool {
+    if holds {
+        return true;
+    }
+    assert!(std::env::var_os("CI").is_none(), "{what}, and CI is set: this test must run here");
+    eprintln!("skipped: {what}");
+    false
+}

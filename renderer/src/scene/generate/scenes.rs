@@ -19,105 +19,140 @@ fn turned(angle_y: f32, x: f32, y: f32, z: f32) -> Affine3A {
 
 /// A Sponza-like court, 30 m × 13 m, two storeys of colonnades along both long sides.
 pub(super) fn atrium(b: &mut Builder) {
-    let tiles = b.texture("floor-tiles", &textures::floor_tiles(TEXTURE_SIZE));
-    let bricks = b.texture("bricks", &textures::bricks(TEXTURE_SIZE));
-    let fabric = b.texture("fabric", &textures::fabric(TEXTURE_SIZE));
-    let leaves = b.texture("leaves", &textures::leaves(TEXTURE_SIZE));
-    let stone = b.texture("stone", &textures::stone(TEXTURE_SIZE));
-    let floor = b.material(MaterialDesc::new("floor", [1.0; 3], 0.35).textured(tiles));
-    let brick = b.material(MaterialDesc::new("brick", [1.0; 3], 0.8).textured(bricks));
-    let curtain = b.material(MaterialDesc::new("curtain", [1.0; 3], 0.7).textured(fabric).double_sided());
-    let foliage =
-        b.material(MaterialDesc::new("foliage", [1.0; 3], 0.6).textured(leaves).masked(0.5).double_sided());
-    let sandstone = b.material(MaterialDesc::new("sandstone", [1.0; 3], 0.55).textured(stone));
-    let bronze = b.material(MaterialDesc::new("bronze", [0.8, 0.5, 0.25], 0.3).metallic(1.0));
-
-    let (half_length, court, outer) = (15.0f32, 4.0f32, 6.6f32);
-    let bay = 2.5f32;
-    let columns: Vec<f32> = (0..11).map(|i| -12.5 + bay * i as f32).collect();
-
-    b.mesh(floor).append(&mesh::floor(2.0 * half_length, 2.0 * outer, 60, 26, 0.5), Affine3A::IDENTITY);
+    let court = Atrium::materials(b);
+    b.mesh(court.floor).append(
+        &mesh::floor(2.0 * Atrium::HALF_LENGTH, 2.0 * Atrium::OUTER, 60, 26, 0.5),
+        Affine3A::IDENTITY,
+    );
     let height = 10.25;
     for side in [-1.0f32, 1.0] {
-        let wall = mesh::cuboid(Vec3::new(2.0 * half_length, height, 0.3), 0.25);
-        b.mesh(brick).append(&wall, at(0.0, height / 2.0, side * (outer + 0.15)));
-        let end = mesh::cuboid(Vec3::new(0.3, height, 2.0 * outer), 0.25);
-        b.mesh(brick).append(&end, at(side * (half_length + 0.15), height / 2.0, 0.0));
+        let wall = mesh::cuboid(Vec3::new(2.0 * Atrium::HALF_LENGTH, height, 0.3), 0.25);
+        b.mesh(court.brick).append(&wall, at(0.0, height / 2.0, side * (Atrium::OUTER + 0.15)));
+        let end = mesh::cuboid(Vec3::new(0.3, height, 2.0 * Atrium::OUTER), 0.25);
+        b.mesh(court.brick).append(&end, at(side * (Atrium::HALF_LENGTH + 0.15), height / 2.0, 0.0));
     }
-
-    // Two storeys: (column foot, column height, radius, arch inner radius, arch outer radius).
-    let storeys = [(0.0f32, 3.6f32, 0.3f32, 0.95f32, 1.25f32), (5.45, 3.0, 0.25, 1.0, 1.25)];
-    for (storey, &(foot, shaft, radius, inner, outer_radius)) in storeys.iter().enumerate() {
-        // Fluted shaft with a slight taper (entasis).
-        let column = mesh::cylinder(shaft, 48, 36, |angle, t| {
-            radius * (1.0 + 0.035 * (20.0 * angle).cos()) * (1.0 - 0.08 * t)
-        });
-        let base = mesh::cuboid(Vec3::new(2.6 * radius, 0.3, 2.6 * radius), 1.0);
-        let capital = mesh::cuboid(Vec3::new(2.8 * radius, 0.3, 2.8 * radius), 1.0);
-        let spring = foot + shaft + 0.3;
-        let arch = mesh::arch(inner, outer_radius, 2.0 * radius, 48, 1.0);
-        for side in [-1.0f32, 1.0] {
-            let z = side * court;
-            for &x in &columns {
-                b.mesh(sandstone).append(&column, at(x, foot, z));
-                b.mesh(sandstone).append(&base, at(x, foot + 0.15, z));
-                b.mesh(sandstone).append(&capital, at(x, foot + shaft + 0.15, z));
-            }
-            for pair in columns.windows(2) {
-                b.mesh(sandstone).append(&arch, at((pair[0] + pair[1]) / 2.0, spring, z));
-            }
-            // The entablature over the arches, and the gallery floor behind it.
-            let top = spring + outer_radius;
-            let beam = mesh::cuboid(Vec3::new(2.0 * half_length, 0.3, 0.7), 1.0);
-            b.mesh(sandstone).append(&beam, at(0.0, top + 0.15, z));
-            if storey == 0 {
-                let slab = mesh::cuboid(Vec3::new(2.0 * half_length, 0.3, outer - court), 0.5);
-                b.mesh(floor).append(&slab, at(0.0, top + 0.15, side * (court + outer) / 2.0));
-            }
-        }
-    }
-
-    // Upper-storey balustrades: a rail over bulging balusters every 15 cm.
-    let baluster = mesh::cylinder(0.9, 12, 8, |_, t| 0.025 + 0.02 * (t * std::f32::consts::PI).sin());
-    let rail = mesh::cuboid(Vec3::new(2.0 * half_length, 0.08, 0.14), 1.0);
-    let gallery = 5.45;
-    for side in [-1.0f32, 1.0] {
-        let z = side * (court - 0.3);
-        b.mesh(sandstone).append(&rail, at(0.0, gallery + 0.94, z));
-        for pair in columns.windows(2) {
-            let mut x = pair[0] + 0.35;
-            while x < pair[1] - 0.3 {
-                b.mesh(bronze).append(&baluster, at(x, gallery, z));
-                x += 0.15;
-            }
-        }
-    }
-
+    court.colonnades(b);
+    court.balustrades(b);
     // Curtains hung in the upper arcade of one side.
     let drape = mesh::curtain(2.1, 2.9, 6.0, 0.08, 48, 64);
-    for pair in columns.windows(2) {
-        b.mesh(curtain).append(&drape, at((pair[0] + pair[1]) / 2.0, 8.6, -(court + 0.35)));
+    for pair in court.columns.windows(2) {
+        b.mesh(court.curtain).append(&drape, at((pair[0] + pair[1]) / 2.0, 8.6, -(Atrium::COURT + 0.35)));
     }
+    court.planters(b);
+    b.camera([-13.0, 1.8, 0.0], [10.0, 3.2, 0.0], 62.0, 80.0);
+}
 
-    // Planters down the middle of the court, each with a bush of alpha-masked leaf cards.
-    let planter = mesh::cuboid(Vec3::new(0.8, 0.6, 0.8), 1.0);
-    let card = mesh::quad(0.6, 0.6);
-    for x in [-10.0f32, -6.0, -2.0, 2.0, 6.0, 10.0] {
-        b.mesh(sandstone).append(&planter, at(x, 0.3, 0.0));
-        for _ in 0..90 {
-            let offset = Vec3::new(b.rng.range(-0.5, 0.5), b.rng.range(0.7, 1.7), b.rng.range(-0.5, 0.5));
-            let rotation = Quat::from_euler(
-                glam::EulerRot::YXZ,
-                b.rng.range(0.0, std::f32::consts::TAU),
-                b.rng.range(-0.6, 0.6),
-                b.rng.range(-0.6, 0.6),
-            );
-            let place = Affine3A::from_rotation_translation(rotation, Vec3::new(x, 0.0, 0.0) + offset);
-            b.mesh(foliage).append(&card, place);
+/// The atrium's materials and the places of its columns along the court.
+struct Atrium {
+    floor: usize,
+    brick: usize,
+    curtain: usize,
+    foliage: usize,
+    sandstone: usize,
+    bronze: usize,
+    columns: Vec<f32>,
+}
+
+impl Atrium {
+    /// Half the court's length, the colonnades' distance from its axis, the outer walls'.
+    const HALF_LENGTH: f32 = 15.0;
+    const COURT: f32 = 4.0;
+    const OUTER: f32 = 6.6;
+
+    fn materials(b: &mut Builder) -> Atrium {
+        let tiles = b.texture("floor-tiles", &textures::floor_tiles(TEXTURE_SIZE));
+        let bricks = b.texture("bricks", &textures::bricks(TEXTURE_SIZE));
+        let fabric = b.texture("fabric", &textures::fabric(TEXTURE_SIZE));
+        let leaves = b.texture("leaves", &textures::leaves(TEXTURE_SIZE));
+        let stone = b.texture("stone", &textures::stone(TEXTURE_SIZE));
+        let bay = 2.5f32;
+        Atrium {
+            floor: b.material(MaterialDesc::new("floor", [1.0; 3], 0.35).textured(tiles)),
+            brick: b.material(MaterialDesc::new("brick", [1.0; 3], 0.8).textured(bricks)),
+            curtain: b.material(MaterialDesc::new("curtain", [1.0; 3], 0.7).textured(fabric).double_sided()),
+            foliage: b.material(
+                MaterialDesc::new("foliage", [1.0; 3], 0.6).textured(leaves).masked(0.5).double_sided(),
+            ),
+            sandstone: b.material(MaterialDesc::new("sandstone", [1.0; 3], 0.55).textured(stone)),
+            bronze: b.material(MaterialDesc::new("bronze", [0.8, 0.5, 0.25], 0.3).metallic(1.0)),
+            columns: (0..11).map(|i| -12.5 + bay * i as f32).collect(),
         }
     }
 
-    b.camera([-13.0, 1.8, 0.0], [10.0, 3.2, 0.0], 62.0, 80.0);
+    /// Two storeys of fluted columns, arches, entablatures and the gallery floor.
+    fn colonnades(&self, b: &mut Builder) {
+        // Per storey: column foot, column height, radius, arch inner radius, arch outer radius.
+        let storeys = [(0.0f32, 3.6f32, 0.3f32, 0.95f32, 1.25f32), (5.45, 3.0, 0.25, 1.0, 1.25)];
+        for (storey, &(foot, shaft, radius, inner, outer_radius)) in storeys.iter().enumerate() {
+            // Fluted shaft with a slight taper (entasis).
+            let column = mesh::cylinder(shaft, 48, 36, |angle, t| {
+                radius * (1.0 + 0.035 * (20.0 * angle).cos()) * (1.0 - 0.08 * t)
+            });
+            let base = mesh::cuboid(Vec3::new(2.6 * radius, 0.3, 2.6 * radius), 1.0);
+            let capital = mesh::cuboid(Vec3::new(2.8 * radius, 0.3, 2.8 * radius), 1.0);
+            let spring = foot + shaft + 0.3;
+            let arch = mesh::arch(inner, outer_radius, 2.0 * radius, 48, 1.0);
+            for side in [-1.0f32, 1.0] {
+                let z = side * Atrium::COURT;
+                for &x in &self.columns {
+                    b.mesh(self.sandstone).append(&column, at(x, foot, z));
+                    b.mesh(self.sandstone).append(&base, at(x, foot + 0.15, z));
+                    b.mesh(self.sandstone).append(&capital, at(x, foot + shaft + 0.15, z));
+                }
+                for pair in self.columns.windows(2) {
+                    b.mesh(self.sandstone).append(&arch, at((pair[0] + pair[1]) / 2.0, spring, z));
+                }
+                // The entablature over the arches, and the gallery floor behind it.
+                let top = spring + outer_radius;
+                let beam = mesh::cuboid(Vec3::new(2.0 * Atrium::HALF_LENGTH, 0.3, 0.7), 1.0);
+                b.mesh(self.sandstone).append(&beam, at(0.0, top + 0.15, z));
+                if storey == 0 {
+                    let depth = Atrium::OUTER - Atrium::COURT;
+                    let slab = mesh::cuboid(Vec3::new(2.0 * Atrium::HALF_LENGTH, 0.3, depth), 0.5);
+                    let z = side * (Atrium::COURT + Atrium::OUTER) / 2.0;
+                    b.mesh(self.floor).append(&slab, at(0.0, top + 0.15, z));
+                }
+            }
+        }
+    }
+
+    /// Upper-storey balustrades: a rail over bulging balusters every 15 cm.
+    fn balustrades(&self, b: &mut Builder) {
+        let baluster = mesh::cylinder(0.9, 12, 8, |_, t| 0.025 + 0.02 * (t * std::f32::consts::PI).sin());
+        let rail = mesh::cuboid(Vec3::new(2.0 * Atrium::HALF_LENGTH, 0.08, 0.14), 1.0);
+        let gallery = 5.45;
+        for side in [-1.0f32, 1.0] {
+            let z = side * (Atrium::COURT - 0.3);
+            b.mesh(self.sandstone).append(&rail, at(0.0, gallery + 0.94, z));
+            for pair in self.columns.windows(2) {
+                let mut x = pair[0] + 0.35;
+                while x < pair[1] - 0.3 {
+                    b.mesh(self.bronze).append(&baluster, at(x, gallery, z));
+                    x += 0.15;
+                }
+            }
+        }
+    }
+
+    /// Planters down the middle of the court, each with a bush of alpha-masked leaf cards.
+    fn planters(&self, b: &mut Builder) {
+        let planter = mesh::cuboid(Vec3::new(0.8, 0.6, 0.8), 1.0);
+        let card = mesh::quad(0.6, 0.6);
+        for x in [-10.0f32, -6.0, -2.0, 2.0, 6.0, 10.0] {
+            b.mesh(self.sandstone).append(&planter, at(x, 0.3, 0.0));
+            for _ in 0..90 {
+                let offset = Vec3::new(b.rng.range(-0.5, 0.5), b.rng.range(0.7, 1.7), b.rng.range(-0.5, 0.5));
+                let rotation = Quat::from_euler(
+                    glam::EulerRot::YXZ,
+                    b.rng.range(0.0, std::f32::consts::TAU),
+                    b.rng.range(-0.6, 0.6),
+                    b.rng.range(-0.6, 0.6),
+                );
+                let place = Affine3A::from_rotation_translation(rotation, Vec3::new(x, 0.0, 0.0) + offset);
+                b.mesh(self.foliage).append(&card, place);
+            }
+        }
+    }
 }
 
 /// Thin geometry and grazing planes: what a single sample per pixel cannot resolve.

@@ -32,22 +32,15 @@ impl Importer {
         let default_material = self.scene.materials.len() - 1;
         let material = primitive.material().index().unwrap_or(default_material);
         let class = self.scene.materials[material].draw_class();
-        // A mirroring transform turns counter-clockwise front faces clockwise (glTF 2.0, 3.7.4).
         let mirrored = DMat3::from_mat4(world).determinant() < 0.0;
         let normal_matrix = DMat3::from_mat4(world).inverse().transpose();
-        // World positions stay f64 until `finish` knows the scene's origin.
-        let world_positions: Vec<DVec3> =
-            positions.iter().map(|p| world.transform_point3(DVec3::from(p.map(f64::from)))).collect();
-        // Finite scales can multiply up to positions no f32 (nor camera) can hold.
-        let beyond = |p: &DVec3| !p.is_finite() || p.abs().max_element() > crate::scene::MAX_COORDINATE;
-        if let Some(i) = world_positions.iter().position(beyond) {
-            return Err(format!(
-                "{}: vertex {i} lies at {} in world space, beyond ±{:e} (the node transforms multiply up)",
+        let world_positions = to_world(&positions, world).map_err(|(i, p)| {
+            format!(
+                "{}: vertex {i} lies at {p} in world space, beyond ±{:e} (the node transforms multiply up)",
                 name(),
-                world_positions[i],
                 crate::scene::MAX_COORDINATE
-            ));
-        }
+            )
+        })?;
         let vertex = |normal: Vec3, uv: [f32; 2]| Vertex {
             position: [0.0; 3],
             normal: normal.to_array(),
@@ -59,7 +52,6 @@ impl Importer {
         let vertices = &mut self.scene.vertices;
         let positions_world = &mut self.world;
         let triangles = self.triangles.entry(class).or_default();
-        let wind = |t: &[u32]| if mirrored { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] };
 
         match normals {
             Some(normals) => {
@@ -70,19 +62,14 @@ impl Importer {
                     positions_world.push(*p);
                 }
                 let added: Vec<[u32; 3]> =
-                    indices.chunks_exact(3).map(|t| wind(t).map(|i| base + i)).collect();
+                    indices.chunks_exact(3).map(|t| wound(t, mirrored).map(|i| base + i)).collect();
                 let from = base as usize;
                 repair_normals(&mut vertices[from..], &positions_world[from..], &added, base);
                 triangles.extend(added);
             }
             None => {
                 // Flat normals: every triangle gets its own three vertices.
-                for t in indices.chunks_exact(3) {
-                    let corners = wind(t).map(|i| (world_positions[i as usize], uvs[i as usize]));
-                    let normal = (corners[1].0 - corners[0].0)
-                        .cross(corners[2].0 - corners[0].0)
-                        .normalize_or_zero()
-                        .as_vec3();
+                for (normal, corners) in flat_triangles(&indices, &world_positions, &uvs, mirrored) {
                     let base = vertices.len() as u32;
                     for (position, uv) in corners {
                         vertices.push(vertex(normal, uv));
@@ -97,6 +84,49 @@ impl Importer {
             self.add_tangents(class, first_vertex, first_triangle, file_tangents);
         }
         Ok(())
+    }
+}
+
+/// A triangle's indices in front-face order: a mirroring transform turns counter-clockwise front
+/// faces clockwise (glTF 2.0, 3.7.4).
+fn wound(t: &[u32], mirrored: bool) -> [u32; 3] {
+    if mirrored { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] }
+}
+
+/// A triangle's corner: its world position and UV.
+type Corner = (DVec3, [f32; 2]);
+
+/// Each triangle's corners (world position and UV, in front-face order) with the normal of its
+/// plane: flat shading, where the file gives no normals.
+fn flat_triangles(
+    indices: &[u32],
+    positions: &[DVec3],
+    uvs: &[[f32; 2]],
+    mirrored: bool,
+) -> Vec<(Vec3, [Corner; 3])> {
+    indices
+        .chunks_exact(3)
+        .map(|t| {
+            let corners = wound(t, mirrored).map(|i| (positions[i as usize], uvs[i as usize]));
+            let normal = (corners[1].0 - corners[0].0)
+                .cross(corners[2].0 - corners[0].0)
+                .normalize_or_zero()
+                .as_vec3();
+            (normal, corners)
+        })
+        .collect()
+}
+
+/// The positions moved to world space, where they stay f64 until `finish` knows the scene's
+/// origin; or the index and place of the first that lies beyond what an f32 (and a camera) can
+/// hold: finite scales can multiply up to such places.
+fn to_world(positions: &[[f32; 3]], world: DMat4) -> Result<Vec<DVec3>, (usize, DVec3)> {
+    let world_positions: Vec<DVec3> =
+        positions.iter().map(|p| world.transform_point3(DVec3::from(p.map(f64::from)))).collect();
+    let beyond = |p: &DVec3| !p.is_finite() || p.abs().max_element() > crate::scene::MAX_COORDINATE;
+    match world_positions.iter().position(beyond) {
+        Some(i) => Err((i, world_positions[i])),
+        None => Ok(world_positions),
     }
 }
 

@@ -8,14 +8,15 @@
 //! in depth of more than 1 % is an edge, a slanted plane is not (where the stored normal is
 //! the plane's; a shading normal that tilts away may list a steep pixel, which costs time only).
 
-use super::gbuffer::{MS_DEPTH, MS_NORMAL, MSAA_SAMPLES};
-use super::{
-    BuildContext, Compute, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, pixel_list, shading_inputs_of,
-};
-use crate::adaptive::SURFACE_GAP;
+use super::Frame;
+use super::adaptive::SURFACE_GAP;
 use crate::error::RenderError;
-use crate::graph::{Access, Extent, PassDecl, Port, Resource};
-use crate::passes::adaptive::COUNT_FORMAT;
+use crate::graph::{Access, Extent, Output, PassDecl, PassId, Port, Resource};
+use crate::passes::gbuffer::{MS_DEPTH, MS_NORMAL, MSAA_SAMPLES};
+use crate::passes::{
+    BuildContext, COUNT_FORMAT, Compute, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, pixel_list,
+    shading_inputs_of,
+};
 use crate::pipelines::Constants;
 
 const SHADER: &str = "msaa.wgsl";
@@ -29,19 +30,19 @@ pub const EDGE_GAP: f32 = SURFACE_GAP;
 
 /// Which of the passes after the G-buffer a node is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum MsaaStep {
+enum MsaaStep {
     Classify,
     Samples,
     Pixels,
 }
 
 #[derive(Debug)]
-pub(crate) struct MsaaNode {
-    pub step: MsaaStep,
-    pub stalled: bool,
-    pub shadows: Option<Resource>,
-    pub width: u32,
-    pub height: u32,
+struct MsaaNode {
+    step: MsaaStep,
+    stalled: bool,
+    shadows: Option<Resource>,
+    width: u32,
+    height: u32,
 }
 
 impl MsaaNode {
@@ -143,4 +144,24 @@ impl Node for MsaaNode {
         let program = Program { shader: SHADER, vertex, fragment: Some(fragment), constants };
         Ok(Box::new(ctx.screen(io, name, program, targets, vertices, &[])?))
     }
+}
+
+/// MSAA-based deferred shading after the 4× G-buffer: the pixels an edge crosses classified and
+/// listed, their samples shaded, then every pixel; the pass whose `color` is the HDR image.
+pub(crate) fn add(frame: &mut Frame, stalled: bool) -> PassId {
+    let (shadows, width, height, sources) = (frame.cubes, frame.width, frame.height, frame.sources);
+    let g = &mut frame.graph;
+    let [classify, shade_samples, pixels] = [MsaaStep::Classify, MsaaStep::Samples, MsaaStep::Pixels]
+        .map(|step| super::add(g, MsaaNode { step, stalled, shadows, width, height }));
+    for port in [MS_NORMAL, MS_DEPTH] {
+        g.connect(sources.gbuffer, port, classify, port);
+    }
+    for pass in [shade_samples, pixels] {
+        sources.feed(g, pass);
+        g.connect(classify, "list_words", pass, "list");
+    }
+    g.connect(classify, "edge_words", pixels, "edges");
+    g.connect(shade_samples, "shaded_samples", pixels, "shaded_samples");
+    g.retain(pixels, "counts", Output::SampleCounts);
+    pixels
 }

@@ -1,8 +1,9 @@
 //! FXAA 3.11's quality path (its default preset, 12) on the display-encoded image: `shaders/fxaa.wgsl`.
 
-use super::{BuildContext, FULLSCREEN, Io, Node, Pass, Program, display_format};
+use super::Frame;
 use crate::error::RenderError;
-use crate::graph::{Access, Extent, PassDecl, Port, Resource};
+use crate::graph::{Access, Extent, PassDecl, PassId, Port, Resource};
+use crate::passes::{BuildContext, FULLSCREEN, Io, Node, Pass, Program, display, display_format};
 
 /// FXAA's defaults, as the shader's override constants: sub-pixel removal, edge threshold,
 /// edge threshold minimum.
@@ -16,6 +17,10 @@ pub(crate) struct FxaaNode {
 }
 
 impl Node for FxaaNode {
+    fn encodes_color(&self) -> bool {
+        true
+    }
+
     fn decl(&self) -> PassDecl {
         let image = Resource::texture(display_format(self.bits), Extent::Output);
         PassDecl {
@@ -28,7 +33,7 @@ impl Node for FxaaNode {
     }
 
     fn build(&self, ctx: &mut BuildContext, io: &mut Io) -> Result<Box<dyn Pass>, RenderError> {
-        let constants = super::display::encoding(&ctx.settings.color)
+        let constants = display::encoding(ctx.color)
             .with("SUBPIX", SUBPIX)
             .with("EDGE_THRESHOLD", EDGE_THRESHOLD)
             .with("EDGE_THRESHOLD_MIN", EDGE_THRESHOLD_MIN);
@@ -36,4 +41,11 @@ impl Node for FxaaNode {
             Program { shader: "fxaa.wgsl", vertex: FULLSCREEN.0, fragment: Some("fxaa"), constants };
         Ok(Box::new(ctx.screen(io, "fxaa", program, &["display"], FULLSCREEN.1, &[])?))
     }
+}
+
+/// FXAA on the display image that `display` wrote.
+pub(crate) fn add(frame: &mut Frame, display: PassId) -> PassId {
+    let fxaa = super::add(&mut frame.graph, FxaaNode { bits: frame.color.bits });
+    frame.graph.connect(display, "display", fxaa, "encoded");
+    fxaa
 }

@@ -1,22 +1,19 @@
 //! The passes of an adaptive mode (see `shaders/adaptive.wgsl` for the algorithm's outline).
 
-use super::tonemap::curve_constants;
 use super::{
-    BuildContext, Compute, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, gbuffer, shading_inputs,
-};
-use crate::adaptive::{
-    Counts, DepthMetric, LIST_TEXEL_BITS, Reconstruction, STABLE_DEPTH_TOLERANCE, SURFACE_COS, SURFACE_GAP,
-    packed_dither_matrix, packed_sample_order,
+    AdaptiveSettings, Counts, DepthMetric, LIST_TEXEL_BITS, Metrics, Reconstruction, STABLE_DEPTH_TOLERANCE,
+    SURFACE_COS, SURFACE_GAP, packed_dither_matrix, packed_sample_order, sample_cells,
 };
 use crate::bindings::Bound;
 use crate::color::Tonemap;
+use crate::error::RenderError;
 use crate::graph::{Access, Extent, PassDecl, Port, Resource};
-use crate::mode::Metrics;
+use crate::passes::tonemap::curve_constants;
+use crate::passes::{
+    BuildContext, COUNT_FORMAT, Compute, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program, gbuffer,
+    shading_inputs,
+};
 use crate::pipelines::Constants;
-use crate::{adaptive::AdaptiveSettings, error::RenderError};
-
-/// Per-pixel sample counts, 1…16.
-pub(crate) const COUNT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R8Uint;
 
 /// Two rectangles over the blocks of the compact target that hold list entries.
 const COMPACT_ROWS: (&str, u32) = ("compact_rows", 12);
@@ -59,7 +56,8 @@ fn window(m: u32) -> Constants {
 /// The table of cells that the `-area` and `-cells` variants read: constant data, owned by the
 /// pass rather than a frame resource. The passes that can read it bind it in every mode.
 fn cells_table(ctx: &mut BuildContext, m: u32) -> [(&'static str, Bound); 1] {
-    [("sample_cells", Bound::Buffer(ctx.pipelines.sample_cells(m)))]
+    let cells = || bytemuck::cast_slice(&sample_cells(m)).to_vec();
+    [("sample_cells", Bound::Buffer(ctx.pipelines.constant_buffer(("sample cells", m), cells)))]
 }
 
 /// Which variant's reading of the list the passes that read it follow: each sample standing

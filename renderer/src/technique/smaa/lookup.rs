@@ -1,5 +1,6 @@
-//! SMAA 1x's settings and lookup textures. The passes are in `passes/smaa.rs` and
-//! `shaders/smaa.wgsl`; the textures' provenance and licence in `renderer/data/smaa/`.
+//! SMAA 1x's preset and lookup textures (their provenance and licence in `renderer/data/smaa/`).
+
+use crate::pipelines::ConstantTexture;
 
 /// The reference implementation's default quality preset (its `SMAA_PRESET_HIGH`), as the
 /// shader's override constants.
@@ -26,31 +27,21 @@ pub const PRESET_HIGH: SmaaPreset = SmaaPreset {
     corner_rounding: 25.0,
 };
 
-/// One precomputed texture: rows from the top, no padding.
-#[derive(Debug, Clone, Copy)]
-pub struct LookupTexture {
-    pub name: &'static str,
-    pub width: u32,
-    pub height: u32,
-    pub format: wgpu::TextureFormat,
-    pub bytes: &'static [u8],
-}
-
 /// The area texture (distances along a line and crossing edges to the areas a pixel covers on
 /// either side) and the search texture (the last search read to how far the line went).
-pub const LOOKUP_TEXTURES: [LookupTexture; 2] = [
-    LookupTexture {
+pub const LOOKUP_TEXTURES: [ConstantTexture; 2] = [
+    ConstantTexture {
         name: "smaa_area",
         width: 160,
         height: 560,
         format: wgpu::TextureFormat::Rg8Unorm,
-        bytes: include_bytes!("../data/smaa/area.bin"),
+        bytes: include_bytes!("../../../data/smaa/area.bin"),
     },
-    LookupTexture {
+    ConstantTexture {
         name: "smaa_search",
         width: 64,
         height: 16,
         format: wgpu::TextureFormat::R8Unorm,
-        bytes: include_bytes!("../data/smaa/search.bin"),
+        bytes: include_bytes!("../../../data/smaa/search.bin"),
     },
 ];

@@ -4,13 +4,14 @@
 //!
 //! The resolve pass reads the history of the previous frame and writes the next one, so the two
 //! cannot be one texture: the resolve writes `history_next`, and `taa_history` copies it into
-//! `history`, which the graph carries into the next frame (`keep.rs`).
+//! `history`, which the graph carries into the next frame (`passes/keep.rs`).
 
-use super::gbuffer::{DEPTH, DEPTH_FORMAT, MOTION, MOTION_FORMAT};
-use super::keep::KeepNode;
-use super::{BuildContext, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program};
+use super::Frame;
 use crate::error::RenderError;
-use crate::graph::{Access, Extent, PassDecl, Port, Resource};
+use crate::graph::{Access, Extent, PassDecl, PassId, Port, Resource};
+use crate::passes::gbuffer::{DEPTH, DEPTH_FORMAT, MOTION, MOTION_FORMAT};
+use crate::passes::keep::KeepNode;
+use crate::passes::{BuildContext, FULLSCREEN, HDR_FORMAT, Io, Node, Pass, Program};
 use crate::pipelines::Constants;
 
 /// The most frames a history averages where its pixel moves: the newest frame's weight, the
@@ -57,7 +58,7 @@ fn halton(mut index: u32, base: u32) -> f64 {
 /// The resolve: `current` (this frame's HDR image) and the reprojected `history` into `color`
 /// and `history_next`.
 #[derive(Debug)]
-pub(crate) struct TaaNode;
+struct TaaNode;
 
 impl Node for TaaNode {
     fn decl(&self) -> PassDecl {
@@ -85,9 +86,23 @@ impl Node for TaaNode {
 }
 
 /// Copies `history_next` into `history`, which the next frame's resolve reads.
-pub(crate) fn keep_history() -> KeepNode {
+fn keep_history() -> KeepNode {
     let history = Resource::texture(HISTORY_FORMAT, Extent::Output);
     KeepNode { name: "taa_history", next: "history_next", kept: "history", resource: history }
+}
+
+/// The jittered frame shaded with TAA's texture footprint, resolved against the history, and
+/// the history kept for the next frame; the pass whose `color` is the HDR image.
+pub(crate) fn add(frame: &mut Frame, stalled: bool) -> PassId {
+    let shade = frame.shade_all(stalled, FOOTPRINT);
+    let (g, gbuffer) = (&mut frame.graph, frame.sources.gbuffer);
+    let taa = super::add(g, TaaNode);
+    g.connect(shade, "color", taa, "current");
+    g.connect_all(gbuffer, taa, &[MOTION, DEPTH]);
+    let keep = super::add(g, keep_history());
+    g.connect(taa, "history_next", keep, "history_next");
+    g.carry(keep, "history", taa, "history");
+    taa
 }
 
 #[cfg(test)]

@@ -25,23 +25,20 @@
 //! mode's own motion vectors and depths.
 
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use aabench_renderer::scene::Camera;
 use aabench_renderer::taa::WARMUP_FRAMES;
 use aabench_renderer::{DisplayImage, Mode};
 
+use super::scene::SceneRun;
 use crate::flicker::{self, TRUTH_STREAM, pixel_changes_of_error};
-use crate::manifest::Manifest;
 use crate::metrics::{self, Decibels, FrameChecks};
 use crate::motion::MotionSpec;
-use crate::plan::RunPlan;
-use crate::progress::Progress;
 use crate::record::{Ghosting, ModeSequence, SequenceRecord, fingerprint};
 use crate::spool::Spool;
 use crate::truth;
-use crate::worker::Worker;
 
 /// What the sequence is measured along and against: the path and its cameras in this tier, and
 /// the still frame's camera, truth and truth key.
@@ -85,7 +82,7 @@ struct Geometry {
 
 /// How much deeper than every surface seen around its place in the frame before a point must
 /// have been, relatively, to count as hidden then.
-pub const HIDDEN_DEPTH: f64 = 0.01;
+pub(super) const HIDDEN_DEPTH: f64 = 0.01;
 
 /// What the sequence keeps of a mode between frames, and its sums so far.
 #[derive(Default)]
@@ -114,14 +111,10 @@ struct ModeState {
 /// Renders the scene's sequence with the prepared modes on the worker: `modes` pairs each with
 /// whether its stills succeeded (a mode whose stills failed is left out). Returns the scene's
 /// record and each mode's outcome.
-pub async fn run(
-    worker: &mut Worker,
-    plan: &RunPlan,
-    manifest: &Manifest,
+pub(super) async fn run(
+    scene: &mut SceneRun<'_>,
     along: Along<'_>,
     modes: &[(Mode, bool)],
-    progress: &Progress,
-    cancel: &Arc<AtomicBool>,
 ) -> (SequenceRecord, Vec<ModeOutcome>) {
     let start = Instant::now();
     let mut record = SequenceRecord {
@@ -141,33 +134,22 @@ pub async fn run(
     };
     let mut states: Vec<ModeState> = modes.iter().map(|_| ModeState::default()).collect();
     // Every mode's frames are spooled, to stream `index + 1`; the truth's to stream 0.
-    let out_dir = plan.run_dir.join(&manifest.name).join("path");
-    let size = plan.tier.resolution(manifest);
+    let out_dir = scene.dir.join("path");
+    let size = scene.resolution;
     let names =
         std::iter::once(TRUTH_STREAM.to_string()).chain(modes.iter().map(|(mode, _)| mode.to_string()));
     let mut spool = Spool::create(out_dir.join(".spool"), size, names.collect());
     let mut flicker = vec![0u64; size[0] as usize * size[1] as usize];
-    let rendered = render_frames(
-        worker,
-        plan,
-        manifest,
-        &along,
-        modes,
-        progress,
-        cancel,
-        &mut record,
-        &mut states,
-        (&mut spool, &mut flicker),
-    );
+    let rendered = render_frames(scene, &along, modes, &mut record, &mut states, (&mut spool, &mut flicker));
     if let Err(error) = rendered.await {
-        progress.line(&format!("[{}] warning: the sequence stopped: {error}", manifest.name));
+        scene.warn(&format!("the sequence stopped: {error}"));
         record.error = Some(error);
     }
     let done = record.frames_done as usize;
-    progress.status(&format!("[{}] sequence: FLIP and the worst-flickering region", manifest.name));
+    scene.status("sequence: FLIP and the worst-flickering region");
     let animated_streams: Vec<usize> =
         (0..modes.len()).filter(|&i| animated(modes[i].0, modes)).map(|i| i + 1).collect();
-    let (delay_s, run_dir) = (along.motion.time_step_s, plan.run_dir.clone());
+    let (delay_s, run_dir) = (along.motion.time_step_s, scene.plan.run_dir.clone());
     let after = tokio::task::spawn_blocking(move || {
         let spool = spool?;
         let start = Instant::now();
@@ -190,10 +172,7 @@ pub async fn run(
             }
         }
         Err(error) => {
-            progress.line(&format!(
-                "[{}] warning: no FLIP along the path and no flicker region: {error}",
-                manifest.name
-            ));
+            scene.warn(&format!("no FLIP along the path and no flicker region: {error}"));
             record.region_error = Some(error);
         }
     }
@@ -210,15 +189,10 @@ fn animated(mode: Mode, modes: &[(Mode, bool)]) -> bool {
 
 /// Renders frame after frame: the truth, then every mode. `record.frames_done` counts the
 /// frames that every mode still running rendered.
-#[allow(clippy::too_many_arguments)]
 async fn render_frames(
-    worker: &mut Worker,
-    plan: &RunPlan,
-    manifest: &Manifest,
+    scene: &mut SceneRun<'_>,
     along: &Along<'_>,
     modes: &[(Mode, bool)],
-    progress: &Progress,
-    cancel: &Arc<AtomicBool>,
     record: &mut SequenceRecord,
     states: &mut [ModeState],
     (spool, flicker): (&mut Result<Spool, String>, &mut [u64]),
@@ -236,17 +210,18 @@ async fn render_frames(
     let mut previous_truth: Option<DisplayImage> = None;
     let mut truth_change = 0u64;
     for (frame, &camera) in along.cameras.iter().enumerate() {
-        if cancel.load(Ordering::SeqCst) {
+        if scene.cancelled() {
             return Err(format!("interrupted after {frame} of {frames} frames"));
         }
         if modes.iter().zip(states.iter()).all(|((_, prepared), state)| !prepared || state.error.is_some()) {
             return Err("no mode is left to render".into());
         }
-        let status = |what: &str| {
-            progress.status(&format!("[{}] sequence frame {}/{frames}: {what}", manifest.name, frame + 1))
+        let status = |scene: &SceneRun, what: &str| {
+            scene.status(&format!("sequence frame {}/{frames}: {what}", frame + 1))
         };
-        worker
-            .call(plan.frame_timeout, move |state| {
+        scene
+            .worker
+            .call(scene.plan.frame_timeout, move |state| {
                 state.renderer.as_mut().expect("an uploaded scene").set_camera(&camera)
             })
             .await
@@ -255,9 +230,8 @@ async fn render_frames(
         let truth = match along.still_truth {
             Some(still) if camera == *along.still_camera => still.clone(),
             _ => {
-                status("the truth");
-                truth_frame(worker, plan, manifest, along.still_key, frame, &camera, record, progress, cancel)
-                    .await?
+                status(scene, "the truth");
+                truth_frame(scene, along.still_key, frame, &camera, record).await?
             }
         };
         keep(0, &truth);
@@ -266,8 +240,8 @@ async fn render_frames(
             if !prepared || state.error.is_some() {
                 continue;
             }
-            status(&mode.to_string());
-            match render(worker, plan, index, mode.m, frame == 0).await {
+            status(scene, &mode.to_string());
+            match render(scene, index, mode.m, frame == 0).await {
                 Ok(Ok(rendered)) => {
                     keep(index + 1, &rendered.display);
                     state.add(*mode, rendered, &truth, previous_truth.as_ref(), flicker);
@@ -298,14 +272,15 @@ async fn render_frames(
 /// history of its warm-up frames at the first camera. The outer error is the worker's (it can
 /// render nothing more), the inner the mode's.
 async fn render(
-    worker: &mut Worker,
-    plan: &RunPlan,
+    scene: &mut SceneRun<'_>,
     index: usize,
     m: u32,
     first: bool,
 ) -> Result<Result<ModeFrame, String>, String> {
-    let timeout = if first { plan.frame_timeout.saturating_mul(WARMUP_FRAMES) } else { plan.frame_timeout };
-    let frame = worker
+    let frame_timeout = scene.plan.frame_timeout;
+    let timeout = if first { frame_timeout.saturating_mul(WARMUP_FRAMES) } else { frame_timeout };
+    let frame = scene
+        .worker
         .call(timeout, move |state| {
             let prepared = state.modes[index].as_ref().expect("prepared mode");
             let timing = if first { prepared.render_still()? } else { prepared.render()? };
@@ -332,22 +307,17 @@ async fn render(
 
 /// The truth at frame `frame` of the path: from the cache, or rendered now and cached. Its key
 /// is the still truth's with the frame's camera added.
-#[allow(clippy::too_many_arguments)]
 async fn truth_frame(
-    worker: &mut Worker,
-    plan: &RunPlan,
-    manifest: &Manifest,
+    scene: &mut SceneRun<'_>,
     still_key: &str,
     frame: usize,
     camera: &Camera,
     record: &mut SequenceRecord,
-    progress: &Progress,
-    cancel: &Arc<AtomicBool>,
 ) -> Result<DisplayImage, String> {
     if still_key.is_empty() {
         return Err("the still truth has no key to derive the frames' from".into());
     }
-    let resolution = plan.tier.resolution(manifest);
+    let (plan, manifest, resolution) = (scene.plan, scene.manifest, scene.resolution);
     let key = truth::frame_key(still_key, camera);
     let name = format!("{}-frame{frame:03}", manifest.name);
     let cache = truth::cache_file(&plan.truth_cache_dir(manifest), &name, resolution, &key);
@@ -357,14 +327,13 @@ async fn truth_frame(
     let start = Instant::now();
     let timeout = plan.frame_timeout.saturating_mul(16);
     let (rendered, not_cached) =
-        truth::render_and_store(worker, timeout, &cache, resolution, Arc::clone(cancel))
+        truth::render_and_store(scene.worker, timeout, &cache, resolution, Arc::clone(scene.cancel))
             .await
             .map_err(|e| format!("the truth of frame {frame}: {e}"))?;
     record.truth_rendered += 1;
     record.truth_render_s += start.elapsed().as_secs_f64();
     if let Some(error) = not_cached {
-        progress
-            .line(&format!("[{}] warning: the truth of frame {frame} not cached: {error}", manifest.name));
+        scene.warn(&format!("the truth of frame {frame} not cached: {error}"));
     }
     Ok(rendered.images.display)
 }

@@ -1,29 +1,37 @@
 //! SMAA 1x on the display-encoded image, in three passes (`shaders/smaa.wgsl`): luma edges
 //! packed as bits, blending weights from the area and search textures, neighbourhood blending.
+//! The preset and the lookup textures are in `lookup.rs`, the textures' provenance and licence
+//! in `renderer/data/smaa/`.
 
-use super::{BuildContext, Compute, FULLSCREEN, Io, Node, Pass, Program, display_format, pixel_list};
+mod lookup;
+
+pub use lookup::{LOOKUP_TEXTURES, PRESET_HIGH, SmaaPreset};
+
+use super::Frame;
 use crate::bindings::Bound;
 use crate::error::RenderError;
-use crate::graph::{Access, Extent, PassDecl, Port, Resource};
+use crate::graph::{Access, Extent, PassDecl, PassId, Port, Resource};
+use crate::passes::{
+    BuildContext, Compute, FULLSCREEN, Io, Node, Pass, Program, display, display_format, pixel_list,
+};
 use crate::pipelines::Constants;
-use crate::smaa::PRESET_HIGH;
 
 const SHADER: &str = "smaa.wgsl";
 
 /// Which of SMAA's passes a node is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum SmaaStep {
+enum SmaaStep {
     Edges,
     Weights,
     Blend,
 }
 
 #[derive(Debug)]
-pub(crate) struct SmaaNode {
-    pub step: SmaaStep,
-    pub bits: u32,
-    pub width: u32,
-    pub height: u32,
+struct SmaaNode {
+    step: SmaaStep,
+    bits: u32,
+    width: u32,
+    height: u32,
 }
 
 impl SmaaNode {
@@ -62,7 +70,7 @@ impl SmaaNode {
 
     fn constants(&self, ctx: &BuildContext) -> Constants {
         let preset = PRESET_HIGH;
-        super::display::encoding(&ctx.settings.color)
+        display::encoding(ctx.color)
             .with("THRESHOLD", preset.threshold)
             .with("LOCAL_CONTRAST_ADAPTATION", preset.local_contrast_adaptation)
             .with("MAX_SEARCH_STEPS", preset.max_search_steps)
@@ -76,6 +84,10 @@ impl SmaaNode {
 }
 
 impl Node for SmaaNode {
+    fn encodes_color(&self) -> bool {
+        true
+    }
+
     fn decl(&self) -> PassDecl {
         let image = Resource::texture(display_format(self.bits), Extent::Output);
         let ports = match self.step {
@@ -123,9 +135,25 @@ impl Node for SmaaNode {
         };
         let (vertex, vertices, entry, target) = fragment;
         let program = Program { shader: SHADER, vertex, fragment: Some(entry), constants };
-        let [area, search] = ctx.pipelines.smaa_lookup();
+        let [area, search] = LOOKUP_TEXTURES.map(|lookup| ctx.pipelines.constant_texture(&lookup));
         let lookup = |texture| Bound::Texture { texture, filterable: false, view_format: None };
         let owned = [("smaa_area", lookup(area)), ("smaa_search", lookup(search))];
         Ok(Box::new(ctx.screen(io, name, program, &[target], vertices, &owned)?))
     }
+}
+
+/// SMAA's three passes on the display image that `display` wrote.
+pub(crate) fn add(frame: &mut Frame, display: PassId) -> PassId {
+    let (bits, width, height) = (frame.color.bits, frame.width, frame.height);
+    let g = &mut frame.graph;
+    let [edges, weights, blend] = [SmaaStep::Edges, SmaaStep::Weights, SmaaStep::Blend]
+        .map(|step| super::add(g, SmaaNode { step, bits, width, height }));
+    g.connect(display, "display", edges, "encoded");
+    g.connect(display, "display", blend, "encoded");
+    for pass in [weights, blend] {
+        g.connect(edges, "edge_words", pass, "edges");
+        g.connect(edges, "list_words", pass, "list");
+    }
+    g.connect(weights, "blend_weights", blend, "blend_weights");
+    blend
 }

@@ -1,0 +1,301 @@
+//! The report's tables: each scene's modes (their still, and along the camera path), the gate's
+//! checks, which technique for each scene, and the cost of the adaptive modes. The Markdown
+//! report takes its columns and cells from here too.
+
+use std::fmt::Write;
+
+use super::html::escape;
+use crate::compare::{Check, Outcome};
+use crate::record::{ModeRecord, RunRecord, SceneRecord, SequenceRecord};
+use crate::vocabulary::{self, Table};
+
+/// The columns of a scene's mode table, in the HTML report and in Markdown alike: the mode and
+/// its time, then the metrics with a column in the still's table, then its place on the front
+/// and, for adaptive modes, its cost against the reference.
+pub fn mode_columns() -> Vec<&'static str> {
+    let metrics = vocabulary::columns(Table::Still).map(|(_, column)| column.header);
+    ["mode", "frame ms", "interval ms", "×1x1"]
+        .into_iter()
+        .chain(metrics)
+        .chain(["front", "speed-up vs ref", "efficiency"])
+        .collect()
+}
+
+/// One row of the mode table, unescaped, in the order of [`mode_columns`]; `–` where the mode
+/// has no such number.
+pub fn mode_cells(mode: &ModeRecord) -> Vec<String> {
+    let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
+    let frame = mode.frame_ms.as_ref();
+    let metrics =
+        vocabulary::columns(Table::Still).map(|(metric, column)| vocabulary::cell(metric, column, mode));
+    [
+        mode.mode.clone(),
+        cell(frame.map(|f| format!("{:.1}", f.median))),
+        cell(frame.map(|f| format!("{:.1}–{:.1}", f.ci_low, f.ci_high))),
+        cell(mode.ratio_to_deferred.map(|r| format!("{r:.2}"))),
+    ]
+    .into_iter()
+    .chain(metrics)
+    .chain([
+        cell(mode.front.as_ref().map(|place| place.describe())),
+        cell(mode.adaptive.as_ref().map(|a| format!("{:.2}×", a.speedup))),
+        cell(mode.adaptive.as_ref().map(|a| format!("{:.2}", a.efficiency))),
+    ])
+    .collect()
+}
+
+/// The columns of a scene's table along its camera path ([`sequence_cells`]): the mode and its
+/// time per frame, the metrics with a column in the path's table, and TAA's ghosting.
+pub fn sequence_columns() -> Vec<&'static str> {
+    let metrics = vocabulary::columns(Table::Path).map(|(_, column)| column.header);
+    ["mode", "ms per frame along the path"]
+        .into_iter()
+        .chain(metrics)
+        .chain(["ghosting: disoccluded % · MSE there / elsewhere ×1e-3"])
+        .collect()
+}
+
+/// A mode's row along the scene's camera path, where it has one.
+pub fn sequence_cells(mode: &ModeRecord) -> Option<Vec<String>> {
+    let sequence = mode.sequence.as_ref()?;
+    let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
+    let ghosting = sequence.ghosting.as_ref().map(|g| {
+        let mse = |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.2}", v * 1e3));
+        format!("{:.2} · {} / {}", g.disoccluded * 100.0, mse(g.mse), mse(g.mse_elsewhere))
+    });
+    let metrics =
+        vocabulary::columns(Table::Path).map(|(metric, column)| vocabulary::cell(metric, column, mode));
+    Some(
+        [mode.mode.clone(), cell(sequence.frame_ms.as_ref().map(|f| format!("{:.1}", f.median)))]
+            .into_iter()
+            .chain(metrics)
+            .chain([cell(ghosting)])
+            .collect(),
+    )
+}
+
+/// The scene's modes along its camera path, where it has one.
+pub(super) fn sequence_table(page: &mut String, scene: &SceneRecord) {
+    let Some(sequence) = &scene.sequence else { return };
+    let rows: Vec<Vec<String>> = scene.modes.iter().filter_map(sequence_cells).collect();
+    let summary = escape(&sequence_summary(sequence));
+    let _ = writeln!(page, "<h3>Along the camera path</h3>\n<p class=\"meta\">{summary}</p>");
+    if rows.is_empty() {
+        return;
+    }
+    page.push_str("<table><thead><tr>");
+    for column in sequence_columns() {
+        let _ = write!(page, "<th>{}</th>", escape(column));
+    }
+    page.push_str("</tr></thead><tbody>\n");
+    for row in rows {
+        page.push_str("<tr>");
+        for cell in row {
+            let _ = write!(page, "<td>{}</td>", escape(&cell));
+        }
+        page.push_str("</tr>\n");
+    }
+    page.push_str("</tbody></table>\n");
+}
+
+/// One line on a scene's sequence: its path, frames and the truth's own change.
+pub fn sequence_summary(sequence: &SequenceRecord) -> String {
+    let truth = sequence.truth_change.map_or("–".into(), |c| format!("{c:.3e}"));
+    let mut line = format!(
+        "{} path, {} of {} frames of {:.4} s; the truth's own mean squared change per frame {truth}",
+        sequence.path, sequence.frames_done, sequence.frames, sequence.time_step_s
+    );
+    if let Some(error) = &sequence.error {
+        let _ = write!(line, "; stopped: {error}");
+    }
+    line
+}
+
+/// A PSNR to two decimals, `∞` for identical images, `–` without a comparison.
+pub fn decibels(quality: Option<&crate::metrics::Quality>) -> String {
+    quality.map_or("–".into(), |q| vocabulary::decibels(q.psnr_db.value()))
+}
+
+pub(super) fn mode_table(page: &mut String, scene: &SceneRecord, checks: &[&Check]) {
+    page.push_str("<table><thead><tr>");
+    for column in mode_columns() {
+        let _ = write!(page, "<th>{}</th>", escape(column));
+    }
+    if !checks.is_empty() {
+        page.push_str("<th>gate</th>");
+    }
+    page.push_str("</tr></thead><tbody>\n");
+    for mode in &scene.modes {
+        page.push_str("<tr>");
+        for cell in mode_cells(mode) {
+            let _ = write!(page, "<td>{}</td>", escape(&cell));
+        }
+        if !checks.is_empty() {
+            match mode_outcome(checks, &mode.mode) {
+                Some((outcome, details)) => {
+                    let _ = write!(
+                        page,
+                        "<td class=\"{0}\" title=\"{1}\">{0}</td>",
+                        outcome.name(),
+                        escape(&details)
+                    );
+                }
+                None => page.push_str("<td>–</td>"),
+            }
+        }
+        if let Some(error) = &mode.error {
+            let _ = write!(page, "<td class=\"failed\">{}</td>", escape(error));
+        }
+        page.push_str("</tr>\n");
+    }
+    page.push_str("</tbody></table>\n");
+}
+
+pub(super) fn verdict_table(page: &mut String, checks: &[&Check]) {
+    let notable: Vec<&&Check> = checks.iter().filter(|c| c.outcome != Outcome::Unchanged).collect();
+    if notable.is_empty() {
+        return;
+    }
+    if notable.iter().all(|c| c.outcome == Outcome::New && c.metric == "status")
+        && notable.len() == checks.len()
+    {
+        page.push_str("<p class=\"meta\">Gate: no baseline for this scene; every mode is new.</p>\n");
+        return;
+    }
+    page.push_str("<h3>Gate</h3>\n<table><thead><tr><th>mode</th><th>metric</th><th>outcome</th><th>detail</th></tr></thead><tbody>\n");
+    let mut sorted = notable;
+    sorted.sort_by_key(|c| c.outcome);
+    for check in sorted {
+        let _ = writeln!(
+            page,
+            "<tr><td>{}</td><td>{}</td><td class=\"{2}\">{2}</td><td>{3}</td></tr>",
+            escape(&check.mode),
+            escape(&check.metric),
+            check.outcome.name(),
+            escape(&check.detail)
+        );
+    }
+    page.push_str("</tbody></table>\n");
+}
+
+/// The worst outcome among a mode's checks, with every non-unchanged detail as a tooltip.
+fn mode_outcome(checks: &[&Check], mode: &str) -> Option<(Outcome, String)> {
+    let of_mode: Vec<&&Check> = checks.iter().filter(|c| c.mode == mode).collect();
+    let worst = of_mode.iter().map(|c| c.outcome).min()?;
+    let details: Vec<String> = of_mode
+        .iter()
+        .filter(|c| c.outcome != Outcome::Unchanged)
+        .map(|c| format!("{} {}: {}", c.outcome.name(), c.metric, c.detail))
+        .collect();
+    Some((worst, details.join("\n")))
+}
+
+/// The headline of the adaptive modes: how far each is from the fastest it could be. Its
+/// limit pays for the G-buffer, S and evaluation and shades the extra samples at the
+/// reference's cost per sample; what it loses beyond that is dearer extra samples, the list
+/// (evaluate + compact) and the gather.
+pub(super) fn adaptive_costs(page: &mut String, run: &RunRecord) {
+    let rows: Vec<(&SceneRecord, &crate::record::ModeRecord, &crate::record::AdaptiveCost)> = run
+        .scenes
+        .iter()
+        .flat_map(|scene| scene.modes.iter().filter_map(move |m| Some((scene, m, m.adaptive.as_ref()?))))
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    page.push_str(
+        "<section id=\"adaptive-cost\">\n<h2>Adaptive cost per sample</h2>\n<p class=\"meta\">Extra sample: \
+         <code>shade_extra</code> per sample shaded after S, against the same-M reference's <code>shade</code> \
+         per sample (1.00× is as cheap). Evaluate (with compact) and gather as shares of the frame. Limit: shadow \
+         + G-buffer + S + evaluate + the extra samples at the reference's cost; efficiency = limit / frame.</p>\n\
+         <table><thead><tr><th>scene</th><th>mode</th><th>speed-up vs ref</th><th>samples %</th>\
+         <th>extra sample</th><th>ns / ref ns</th><th>evaluate</th><th>gather</th><th>limit ms</th>\
+         <th>frame ms</th><th>efficiency</th></tr></thead><tbody>\n",
+    );
+    for (scene, mode, cost) in rows {
+        let samples = cost.samples.as_ref();
+        let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
+        let _ = writeln!(
+            page,
+            "<tr><td><a href=\"#{0}\">{0}</a></td><td>{1}</td><td>{2:.2}×</td><td>{3}</td><td>{4}</td><td>{5}</td>\
+             <td>{6}</td><td>{7}</td><td>{8:.1}</td><td>{9}</td><td>{10:.2}</td></tr>",
+            escape(&scene.name),
+            escape(&mode.mode),
+            cost.speedup,
+            cell(mode.samples.as_ref().map(|s| format!("{:.1}", s.shaded_percent))),
+            cell(samples.map(|s| format!("{:.2}×", s.extra_sample_cost))),
+            cell(samples.map(|s| format!("{:.1} / {:.1}", s.extra_sample_ns, s.reference_sample_ns))),
+            cell(samples.map(|s| format!("{:.0}%", 100.0 * s.evaluate_share))),
+            cell(samples.map(|s| format!("{:.0}%", 100.0 * s.gather_share))),
+            cost.limit_ms,
+            cell(mode.frame_ms.as_ref().map(|f| format!("{:.1}", f.median))),
+            cost.efficiency,
+        );
+    }
+    page.push_str("</tbody></table>\n</section>\n");
+}
+
+/// Which technique for this scene: for each PSNR against the truth that an unstalled mode on
+/// the scene's front reaches, lowest first, the fastest unstalled mode (by median) that
+/// reaches it, once per mode.
+pub fn fastest_by_level(scene: &SceneRecord) -> Vec<(f64, &ModeRecord)> {
+    let measured: Vec<(f64, f64, &ModeRecord)> = scene
+        .modes
+        .iter()
+        .filter(|m| !m.stalled)
+        .filter_map(|m| Some((m.vs_ground_truth.as_ref()?.psnr_db.value(), m.frame_ms.as_ref()?.median, m)))
+        .collect();
+    let mut levels: Vec<f64> = measured
+        .iter()
+        .filter(|(_, _, m)| m.front.as_ref().is_some_and(|place| place.on_front))
+        .map(|&(psnr, _, _)| psnr)
+        .collect();
+    levels.sort_by(f64::total_cmp);
+    let mut rows: Vec<(f64, &ModeRecord)> = Vec::new();
+    for level in levels {
+        let fastest =
+            measured.iter().filter(|(psnr, _, _)| *psnr >= level).min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some(&(_, _, mode)) = fastest
+            && rows.last().is_none_or(|(_, last)| last.mode != mode.mode)
+        {
+            rows.push((level, mode));
+        }
+    }
+    rows
+}
+
+/// `fastest_by_level` of every scene as one table: a row per scene, its levels in a cell.
+pub(super) fn technique_table(page: &mut String, run: &RunRecord) {
+    let rows: Vec<(&SceneRecord, Vec<(f64, &ModeRecord)>)> =
+        run.scenes.iter().map(|s| (s, fastest_by_level(s))).filter(|(_, r)| !r.is_empty()).collect();
+    if rows.is_empty() {
+        return;
+    }
+    page.push_str(
+        "<h2>Which technique for this scene</h2>\n<p>For each PSNR against the truth that a mode on the \
+         scene's front reaches, the fastest unstalled mode that reaches it (frame ms, FLIP).</p>\n\
+         <table><thead><tr><th>scene</th><th>at least … dB: the fastest mode</th></tr></thead><tbody>\n",
+    );
+    for (scene, levels) in rows {
+        let cells: Vec<String> = levels.iter().map(|(level, mode)| technique_cell(*level, mode)).collect();
+        let _ = writeln!(
+            page,
+            "<tr><td>{}</td><td>{}</td></tr>",
+            escape(&scene.name),
+            escape(&cells.join(" · "))
+        );
+    }
+    page.push_str("</tbody></table>\n");
+}
+
+/// `36.00 dB: reference-2x2 (280.7 ms, FLIP 0.0196)`.
+pub fn technique_cell(level: f64, mode: &ModeRecord) -> String {
+    let level = if level.is_finite() { format!("{level:.2} dB") } else { "∞ dB".into() };
+    let ms = mode.frame_ms.as_ref().map_or(0.0, |f| f.median);
+    let flip = mode
+        .vs_ground_truth
+        .as_ref()
+        .and_then(|q| q.flip)
+        .map_or(String::new(), |f| format!(", FLIP {f:.4}"));
+    format!("{level}: {} ({ms:.1} ms{flip})", mode.mode)
+}

@@ -1,0 +1,362 @@
+//! One scene in its phases: load the file, upload it (and meter its exposure), render the
+//! ground truth, prepare every mode, run the timed rounds (`rounds.rs`), render the sequence
+//! (`sequence.rs`), free the device, then write images and metrics (`results.rs`). A phase that
+//! fails ends the scene with its error; the run goes on.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use aabench_renderer::{DisplayImage, Mode, color};
+
+use super::results::finish_modes;
+use super::rounds::ModeRun;
+use super::{empty_scene, render_settings, sequence};
+use crate::images;
+use crate::inputs::SceneInputs;
+use crate::manifest::Manifest;
+use crate::plan::RunPlan;
+use crate::progress::Progress;
+use crate::record::{ExposureRecord, GraphRecord, SceneRecord, Status, fingerprint};
+use crate::scenes;
+use crate::truth::{self, TRUTH_ID, TRUTH_M, TruthRecord};
+use crate::worker::Worker;
+
+/// One scene's run: what its phases read and the GPU worker they render on.
+pub(super) struct SceneRun<'a> {
+    pub worker: &'a mut Worker,
+    pub plan: &'a RunPlan,
+    pub manifest: &'a Manifest,
+    pub progress: &'a Progress,
+    /// Set by the first signal: the current frame finishes and what was measured is kept.
+    pub cancel: &'a Arc<AtomicBool>,
+    /// The scene's resolution in the plan's tier.
+    pub resolution: [u32; 2],
+    /// The scene's folder in the run's: `<run>/<scene>/`.
+    pub dir: PathBuf,
+}
+
+impl<'a> SceneRun<'a> {
+    pub fn new(
+        worker: &'a mut Worker,
+        plan: &'a RunPlan,
+        manifest: &'a Manifest,
+        progress: &'a Progress,
+        cancel: &'a Arc<AtomicBool>,
+    ) -> SceneRun<'a> {
+        let resolution = plan.tier.resolution(manifest);
+        let dir = plan.run_dir.join(&manifest.name);
+        SceneRun { worker, plan, manifest, progress, cancel, resolution, dir }
+    }
+
+    /// Whether a signal asked the run to stop.
+    pub fn cancelled(&self) -> bool {
+        self.cancel.load(Ordering::SeqCst)
+    }
+
+    /// Shows what the scene is doing on the progress line.
+    pub fn status(&self, what: &str) {
+        self.progress.status(&format!("[{}] {what}", self.manifest.name));
+    }
+
+    /// Prints a warning about the scene.
+    pub fn warn(&self, what: &str) {
+        self.progress.line(&format!("[{}] warning: {what}", self.manifest.name));
+    }
+
+    /// The scene, phase after phase, into its record.
+    pub async fn run(mut self) -> SceneRecord {
+        let mut record = empty_scene(self.manifest);
+        record.resolution = Some(self.resolution);
+        if let Err(error) = std::fs::create_dir_all(&self.dir) {
+            return fail(record, format!("{}: {error}", self.dir.display()));
+        }
+        let (loaded, inputs) = match self.load(&mut record).await {
+            Ok(loaded) => loaded,
+            Err(error) => return fail(record, error),
+        };
+        let (still_camera, path) = (loaded.camera, loaded.path.clone());
+        match self.upload(loaded).await {
+            Ok((budget, exposure)) => {
+                record.memory_limit_bytes = budget;
+                record.exposure = Some(exposure);
+            }
+            Err(error) => return fail(record, error),
+        }
+        // The truth renders before any mode is prepared, so its peak memory is its own.
+        let (truth_record, truth_image) = self.ground_truth(&inputs).await;
+        record.truth = Some(truth_record);
+        if self.cancelled() {
+            self.free_scene().await;
+            record.status = Status::Interrupted;
+            record.error = Some("interrupted while its ground truth rendered: no mode ran".into());
+            return record;
+        }
+        let mut runs = match self.prepare_modes().await {
+            Ok((runs, target_bytes, texture_bytes)) => {
+                record.target_bytes = Some(target_bytes);
+                record.texture_bytes = Some(texture_bytes);
+                runs
+            }
+            Err(error) => return fail(record, error),
+        };
+        self.timed_rounds(&mut runs).await;
+        self.temporal_stills(&mut runs).await;
+        self.sequence(&mut record, &mut runs, &still_camera, &path, truth_image.as_ref()).await;
+        // Free the scene's device memory before the CPU work below.
+        self.free_scene().await;
+        self.status("writing images and metrics");
+        let interrupted = self.cancelled();
+        let started = Instant::now();
+        let (modes, perceptual_s) = finish_modes(&self, runs, truth_image, interrupted).await;
+        record.modes = modes;
+        record.images_s = Some(started.elapsed().as_secs_f64());
+        record.perceptual_s = Some(perceptual_s);
+        conclude(record, self.worker.is_stuck(), interrupted)
+    }
+
+    /// The scene's sequence along its camera path, where it has one and the plan renders
+    /// sequences: each mode's outcome joins its run (a sequence frame is a frame of the mode
+    /// like any other: NaN in it fails the mode).
+    async fn sequence(
+        &mut self,
+        record: &mut SceneRecord,
+        runs: &mut [ModeRun],
+        still_camera: &aabench_renderer::scene::Camera,
+        path: &[aabench_renderer::scene::Camera],
+        still_truth: Option<&DisplayImage>,
+    ) {
+        let Some(motion) = self.manifest.motion.as_ref().filter(|_| self.plan.sequences) else { return };
+        if self.cancelled() || self.worker.is_stuck() {
+            return;
+        }
+        let modes: Vec<(Mode, bool)> =
+            self.plan.modes.iter().zip(runs.iter()).map(|(mode, run)| (*mode, run.error.is_none())).collect();
+        let still_key = record.truth.as_ref().map(|truth| truth.key.clone()).unwrap_or_default();
+        let along = sequence::Along {
+            motion,
+            cameras: &path[..self.plan.tier.sequence_frames(motion) as usize],
+            still_camera,
+            still_truth,
+            still_key: &still_key,
+        };
+        let (sequence, outcomes) = sequence::run(self, along, &modes).await;
+        for (run, outcome) in runs.iter_mut().zip(outcomes) {
+            run.checks.add(outcome.checks);
+            run.sequence = outcome.sequence;
+            if let Some(error) = outcome.error {
+                run.error.get_or_insert(format!("sequence: {error}"));
+            }
+        }
+        record.sequence = Some(sequence);
+    }
+
+    /// Reads the manifest's glTF file and hashes the scene's inputs, off the async threads; records
+    /// what the file holds.
+    async fn load(&self, record: &mut SceneRecord) -> Result<(scenes::LoadedScene, SceneInputs), String> {
+        let manifest = self.manifest;
+        self.status(&format!("loading {}", manifest.gltf_path().display()));
+        let owned = manifest.clone();
+        let load = move || -> anyhow::Result<_> { Ok((scenes::load(&owned)?, SceneInputs::of(&owned)?)) };
+        let (loaded, inputs) = match tokio::task::spawn_blocking(load).await {
+            Ok(Ok(loaded)) => loaded,
+            Ok(Err(error)) => return Err(format!("{error:#}")),
+            Err(panic) => return Err(format!("loading panicked: {panic}")),
+        };
+        record.load_s = Some(loaded.seconds);
+        record.triangles = Some(loaded.scene.triangle_count());
+        record.textures = Some(loaded.scene.textures.len());
+        record.inputs = Some(inputs.clone());
+        for warning in &loaded.scene.warnings {
+            self.warn(warning);
+        }
+        record.warnings = loaded.scene.warnings.clone();
+        Ok((loaded, inputs))
+    }
+
+    /// Uploads the scene into a new renderer (dropping the previous scene's), sets the memory
+    /// budget its modes are prepared under, and meters the exposure where the manifest gives none.
+    /// Returns the budget and the exposure every mode and the truth render at.
+    async fn upload(&mut self, loaded: scenes::LoadedScene) -> Result<(Option<u64>, ExposureRecord), String> {
+        let (plan, manifest) = (self.plan, self.manifest);
+        let settings = render_settings(manifest, plan.tier, plan.extra_samples);
+        self.status("uploading");
+        let memory_limit = plan.memory_limit;
+        let metered = manifest.tonemap.exposure.is_none();
+        let uploaded = self
+            .worker
+            .call(plan.frame_timeout, move |state| {
+                let scenes::LoadedScene { scene, camera, lighting, .. } = loaded;
+                state.modes.clear();
+                state.renderer = None;
+                let mut renderer = aabench_renderer::SceneRenderer::new(
+                    state.gpu.clone(),
+                    &scene,
+                    &camera,
+                    &lighting,
+                    settings,
+                )?;
+                // After the upload, so that the scene's own memory is no longer available.
+                let budget =
+                    memory_limit.or_else(|| super::memory::available_memory().map(|bytes| bytes / 10 * 9));
+                renderer.set_memory_budget(budget);
+                if metered {
+                    renderer.meter_exposure(color::EXPOSURE_KEY, color::METERED_EXPOSURE_RANGE)?;
+                }
+                let exposure = ExposureRecord { value: renderer.exposure(), metered };
+                state.renderer = Some(renderer);
+                Ok::<_, aabench_renderer::RenderError>((budget, exposure))
+            })
+            .await;
+        match uploaded {
+            Ok(Ok(uploaded)) => Ok(uploaded),
+            // What the device refuses of the file's content (too many textures) names the file.
+            Ok(Err(error @ aabench_renderer::RenderError::Limit(_))) => {
+                Err(format!("{}: {error}", manifest.gltf_path().display()))
+            }
+            Ok(Err(error)) => Err(error.to_string()),
+            Err(error) => Err(error.to_string()),
+        }
+    }
+
+    /// The scene's ground truth, from the cache or rendered now (untimed; before any mode is
+    /// prepared, so the peak memory measured is the truth's own), and written into the run folder.
+    /// Returns the record and the display image, or the record with its error.
+    async fn ground_truth(&mut self, inputs: &SceneInputs) -> (TruthRecord, Option<DisplayImage>) {
+        let (plan, manifest, resolution) = (self.plan, self.manifest, self.resolution);
+        let mut record = TruthRecord {
+            id: TRUTH_ID.into(),
+            samples_per_pixel: TRUTH_M * TRUTH_M,
+            key: String::new(),
+            cached: false,
+            render_s: None,
+            tiles: None,
+            peak_rss_bytes: None,
+            image: None,
+            image_hash: None,
+            error: None,
+        };
+        let fail = |mut record: TruthRecord, error: String| {
+            record.error = Some(error);
+            (record, None)
+        };
+        match truth::cache_key(inputs, resolution, &self.worker.platform) {
+            Ok(key) => record.key = key,
+            Err(error) => return fail(record, format!("{error:#}")),
+        }
+        let cache =
+            truth::cache_file(&plan.truth_cache_dir(manifest), &manifest.name, resolution, &record.key);
+        let display = match truth::load_cached(&cache, resolution, manifest.display_bits()) {
+            Some(display) => {
+                record.cached = true;
+                display
+            }
+            None => {
+                self.status(&format!("rendering the ground truth ({TRUTH_ID}, untimed)"));
+                let measured = truth::peak_memory::reset();
+                let start = Instant::now();
+                // A signal stops the truth between tiles, not after the last one.
+                let timeout = plan.frame_timeout.saturating_mul(16);
+                let (truth, not_cached) = match truth::render_and_store(
+                    self.worker,
+                    timeout,
+                    &cache,
+                    resolution,
+                    Arc::clone(self.cancel),
+                )
+                .await
+                {
+                    Ok(rendered) => rendered,
+                    Err(error) => return fail(record, error),
+                };
+                record.render_s = Some(start.elapsed().as_secs_f64());
+                record.tiles = Some(truth.tiles);
+                record.peak_rss_bytes = if measured { truth::peak_memory::read() } else { None };
+                if let Some(error) = not_cached {
+                    self.warn(&format!("ground truth not cached: {error}"));
+                }
+                truth.images.display
+            }
+        };
+        record.image_hash = Some(fingerprint(&display, None));
+        let relative = format!("{}/{TRUTH_ID}.png", manifest.name);
+        match images::write_display_png(&plan.run_dir.join(&relative), resolution[0], resolution[1], &display)
+        {
+            Ok(()) => record.image = Some(relative),
+            Err(error) => return fail(record, format!("{error:#}")),
+        }
+        (record, Some(display))
+    }
+
+    /// Prepares every mode of the plan; a mode that cannot be prepared fails alone. Returns one
+    /// run per mode (its graph, or its error), the scene's target bytes and texture bytes.
+    async fn prepare_modes(&mut self) -> Result<(Vec<ModeRun>, u64, u64), String> {
+        let (plan, modes) = (self.plan, self.plan.modes.clone());
+        self.status(&format!("compiling {} modes", modes.len()));
+        let prepared = self
+            .worker
+            .call(plan.frame_timeout.saturating_mul(modes.len() as u32), move |state| {
+                let renderer = state.renderer.as_mut().expect("an uploaded scene");
+                let mut outcomes = Vec::new();
+                for mode in modes {
+                    match renderer.prepare(mode) {
+                        Ok(prepared) => {
+                            outcomes.push(Ok(GraphRecord::of(prepared.graph())));
+                            state.modes.push(Some(prepared));
+                        }
+                        Err(error) => {
+                            state.modes.push(None);
+                            outcomes.push(Err(error.to_string()));
+                        }
+                    }
+                }
+                (outcomes, renderer.target_bytes(), renderer.texture_bytes())
+            })
+            .await;
+        let (outcomes, target_bytes, texture_bytes) = prepared.map_err(|error| error.to_string())?;
+        let runs = outcomes
+            .into_iter()
+            .map(|outcome| match outcome {
+                Ok(graph) => ModeRun { graph: Some(graph), ..Default::default() },
+                Err(error) => ModeRun { error: Some(error), ..Default::default() },
+            })
+            .collect();
+        Ok((runs, target_bytes, texture_bytes))
+    }
+
+    /// Drops the scene's prepared modes and renderer, freeing its device memory.
+    async fn free_scene(&mut self) {
+        let _ = self
+            .worker
+            .call(self.plan.frame_timeout, |state| {
+                state.modes.clear();
+                state.renderer = None;
+            })
+            .await;
+    }
+}
+
+/// The scene's status from its modes, its truth and the worker.
+fn conclude(mut record: SceneRecord, worker_stuck: bool, interrupted: bool) -> SceneRecord {
+    let truth_error = record.truth.as_ref().and_then(|t| t.error.clone());
+    if let Some(error) = truth_error {
+        record.error = Some(format!("ground truth: {error}"));
+    } else if worker_stuck {
+        record.error = Some("the GPU worker stopped; see the failed mode".into());
+    }
+    record.status = if record.error.is_none() && record.modes.iter().all(|m| m.status == Status::Ok) {
+        Status::Ok
+    } else if interrupted {
+        Status::Interrupted
+    } else {
+        Status::Failed
+    };
+    record
+}
+
+fn fail(mut record: SceneRecord, error: String) -> SceneRecord {
+    record.status = Status::Failed;
+    record.error = Some(error);
+    record
+}

@@ -1,0 +1,339 @@
+//! Every metric a mode's record holds, in one table: its id, what people call it, where in the
+//! record it is read, how the gate decides it and with which tolerance, and its column in the
+//! report's tables. `compare` and the report (HTML and Markdown) loop over [`METRICS`]; a new
+//! metric is its function, one row here, one record field and its test.
+
+use crate::gate::QualityTolerances;
+use crate::record::ModeRecord;
+
+/// The part of a mode's record a metric is read from. Each is present or absent as a whole: a
+/// run whose mode lacks what its baseline has fails one check for it, not one per metric.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Source {
+    /// The comparison with the ground truth.
+    Truth,
+    /// The comparison with the mode it is compared with (`Mode::compared_with`).
+    Reference,
+    /// The sample statistics of a mode with a sample-count map.
+    Samples,
+    /// The mode along the scene's camera path.
+    Sequence,
+}
+
+impl Source {
+    /// Whether the mode's record holds this part.
+    pub fn present(self, mode: &ModeRecord) -> bool {
+        match self {
+            Source::Truth => mode.vs_ground_truth.is_some(),
+            Source::Reference => mode.vs_reference.is_some(),
+            Source::Samples => mode.samples.is_some(),
+            Source::Sequence => mode.sequence.is_some(),
+        }
+    }
+
+    /// The mode or truth that this part compares the mode with (`truth-8x8`, `deferred-1x1`),
+    /// where it is a comparison.
+    pub fn against(self, mode: &ModeRecord) -> Option<&str> {
+        let quality = match self {
+            Source::Truth => mode.vs_ground_truth.as_ref(),
+            Source::Reference => mode.vs_reference.as_ref(),
+            Source::Samples | Source::Sequence => None,
+        };
+        quality.map(|q| q.against.as_str())
+    }
+
+    /// The check a run fails when its mode lacks this part and the baseline's has it, and why.
+    pub fn missing(self) -> (&'static str, &'static str) {
+        match self {
+            Source::Truth => {
+                ("psnr_vs_truth", "the baseline has an error against the truth, the run has none")
+            }
+            Source::Reference => {
+                ("psnr_vs_reference", "the baseline has an error against the reference, the run has none")
+            }
+            Source::Samples => ("shaded_percent", "the baseline has sample statistics, the run has none"),
+            Source::Sequence => {
+                ("sequence_psnr_vs_truth", "the baseline has a sequence of this mode, the run has none")
+            }
+        }
+    }
+}
+
+/// How the gate decides a metric's change against its tolerance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Rule {
+    /// A level in dB, higher better (PSNR): moved by more than the tolerance, in dB.
+    Decibels,
+    /// An error whose value for identical images is `perfect` (0 for MSE and FLIP, 1 for SSIM):
+    /// its distance from `perfect` moved by more than the tolerance, as a fraction of the
+    /// baseline's distance.
+    Relative { perfect: f64 },
+    /// A share in percent (samples shaded): moved by more than the tolerance in percentage
+    /// points, either way; more is worse.
+    Points,
+}
+
+impl Rule {
+    /// Which way is better: up for a level in dB, down for an error or a share of samples.
+    pub fn higher_is_better(self) -> bool {
+        self == Rule::Decibels
+    }
+
+    /// The unit a check of this rule gives its change in.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Rule::Decibels => "dB",
+            Rule::Relative { .. } => "relative",
+            Rule::Points => "percentage points",
+        }
+    }
+}
+
+/// How the gate compares a metric with its baseline.
+#[derive(Debug, Clone, Copy)]
+pub struct Gate {
+    pub rule: Rule,
+    /// The tolerance in force, from the scene's tolerances.
+    pub tolerance: fn(&QualityTolerances) -> f64,
+    /// A value as a check's detail shows it.
+    pub show: fn(f64) -> String,
+}
+
+/// The report's tables: the still's, and the one along the camera path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Table {
+    Still,
+    Path,
+}
+
+/// A metric's column in one of the report's tables.
+#[derive(Debug, Clone, Copy)]
+pub struct Column {
+    pub table: Table,
+    pub header: &'static str,
+    /// A value as its cell shows it.
+    pub cell: fn(f64) -> String,
+}
+
+/// One metric of a mode's record.
+#[derive(Debug, Clone, Copy)]
+pub struct Metric {
+    /// The id that checks carry: `psnr_vs_truth`.
+    pub id: &'static str,
+    /// What people call it, in a sentence: `PSNR against the truth`.
+    pub label: &'static str,
+    pub source: Source,
+    /// Its value in a mode's record, where the record has it.
+    pub read: fn(&ModeRecord) -> Option<f64>,
+    /// How the gate decides it; `None`: recorded and shown, not gated.
+    pub gate: Option<Gate>,
+    /// Its column in the report; `None`: gated, not tabled.
+    pub column: Option<Column>,
+}
+
+/// Every metric, in the order of the report's columns within each table (the gate checks them
+/// in this order too).
+pub const METRICS: [Metric; 13] = [
+    Metric {
+        id: "shaded_percent",
+        label: "samples shaded",
+        source: Source::Samples,
+        read: |mode| Some(mode.samples.as_ref()?.shaded_percent),
+        gate: Some(Gate { rule: Rule::Points, tolerance: |t| t.shaded_percent, show: percent }),
+        column: Some(Column { table: Table::Still, header: "samples %", cell: one_decimal }),
+    },
+    Metric {
+        id: "mse_vs_truth",
+        label: "MSE against the truth",
+        source: Source::Truth,
+        read: |mode| Some(mode.vs_ground_truth.as_ref()?.mse),
+        gate: Some(Gate { rule: ERROR, tolerance: |t| t.mse_relative, show: mse_e5 }),
+        column: Some(Column {
+            table: Table::Still,
+            header: "MSE ×1e-5 vs truth",
+            cell: |v| format!("{:.3}", v * 1e5),
+        }),
+    },
+    Metric {
+        id: "psnr_vs_reference",
+        label: "PSNR against the reference",
+        source: Source::Reference,
+        read: |mode| Some(mode.vs_reference.as_ref()?.psnr_db.value()),
+        gate: Some(Gate { rule: Rule::Decibels, tolerance: |t| t.psnr_db, show: decibels_3 }),
+        column: Some(Column { table: Table::Still, header: "PSNR vs ref", cell: decibels }),
+    },
+    Metric {
+        id: "psnr_vs_truth",
+        label: "PSNR against the truth",
+        source: Source::Truth,
+        read: |mode| Some(mode.vs_ground_truth.as_ref()?.psnr_db.value()),
+        gate: Some(Gate { rule: Rule::Decibels, tolerance: |t| t.psnr_db, show: decibels_3 }),
+        column: Some(Column { table: Table::Still, header: "PSNR vs truth", cell: decibels }),
+    },
+    Metric {
+        id: "flip_vs_truth",
+        label: "FLIP against the truth",
+        source: Source::Truth,
+        read: |mode| mode.vs_ground_truth.as_ref()?.flip,
+        gate: Some(Gate { rule: ERROR, tolerance: |t| t.flip_relative, show: five_decimals }),
+        column: Some(Column { table: Table::Still, header: "FLIP vs truth", cell: four_decimals }),
+    },
+    Metric {
+        id: "ssim_vs_truth",
+        label: "SSIM against the truth",
+        source: Source::Truth,
+        read: |mode| mode.vs_ground_truth.as_ref()?.ssim,
+        gate: Some(Gate {
+            rule: Rule::Relative { perfect: 1.0 },
+            tolerance: |t| t.ssim_relative,
+            show: five_decimals,
+        }),
+        column: Some(Column { table: Table::Still, header: "SSIM vs truth", cell: four_decimals }),
+    },
+    Metric {
+        id: "mse_vs_reference",
+        label: "MSE against the reference",
+        source: Source::Reference,
+        read: |mode| Some(mode.vs_reference.as_ref()?.mse),
+        gate: Some(Gate { rule: ERROR, tolerance: |t| t.mse_relative, show: mse_e5 }),
+        column: None,
+    },
+    Metric {
+        id: "sequence_shaded_percent",
+        label: "samples shaded along the path",
+        source: Source::Sequence,
+        read: |mode| mode.sequence.as_ref()?.shaded_percent,
+        gate: Some(Gate { rule: Rule::Points, tolerance: |t| t.shaded_percent, show: percent }),
+        column: Some(Column { table: Table::Path, header: "samples %", cell: one_decimal }),
+    },
+    Metric {
+        id: "sequence_psnr_vs_truth",
+        label: "mean PSNR against the truth's frames",
+        source: Source::Sequence,
+        read: |mode| Some(mode.sequence.as_ref()?.mean_psnr_db.value()),
+        gate: Some(Gate { rule: Rule::Decibels, tolerance: |t| t.psnr_db, show: decibels_3 }),
+        column: Some(Column { table: Table::Path, header: "PSNR along the path", cell: decibels }),
+    },
+    Metric {
+        id: "sequence_flip_vs_truth",
+        label: "mean FLIP against the truth's frames",
+        source: Source::Sequence,
+        read: |mode| mode.sequence.as_ref()?.mean_flip,
+        gate: Some(Gate { rule: ERROR, tolerance: |t| t.flip_relative, show: five_decimals }),
+        column: Some(Column { table: Table::Path, header: "FLIP along the path", cell: four_decimals }),
+    },
+    Metric {
+        // An error of squared code values, as MSE is: the MSE tolerance.
+        id: "instability",
+        label: "temporal instability",
+        source: Source::Sequence,
+        read: |mode| Some(mode.sequence.as_ref()?.instability),
+        gate: Some(Gate { rule: ERROR, tolerance: |t| t.mse_relative, show: |v| format!("{v:.4e}") }),
+        column: Some(Column {
+            table: Table::Path,
+            header: "instability ×1e-4",
+            cell: |v| format!("{:.3}", v * 1e4),
+        }),
+    },
+    Metric {
+        id: "change_ratio",
+        label: "the mode's own change from frame to frame over the truth's",
+        source: Source::Sequence,
+        read: |mode| mode.sequence.as_ref()?.change_ratio,
+        gate: None,
+        column: Some(Column { table: Table::Path, header: "change ratio", cell: two_decimals }),
+    },
+    Metric {
+        id: "count_changes",
+        label: "the share of pixels whose sample count changes from frame to frame",
+        source: Source::Sequence,
+        read: |mode| mode.sequence.as_ref()?.count_changes,
+        gate: None,
+        column: Some(Column {
+            table: Table::Path,
+            header: "count changes %",
+            cell: |v| format!("{:.2}", v * 100.0),
+        }),
+    },
+];
+
+/// The rule of an error that is 0 for identical images.
+const ERROR: Rule = Rule::Relative { perfect: 0.0 };
+
+/// The metric of id `id`.
+pub fn metric(id: &str) -> Option<&'static Metric> {
+    METRICS.iter().find(|metric| metric.id == id)
+}
+
+/// The metrics with a column in `table`, in column order.
+pub fn columns(table: Table) -> impl Iterator<Item = (&'static Metric, Column)> {
+    METRICS.iter().filter_map(move |m| m.column.filter(|c| c.table == table).map(|c| (m, c)))
+}
+
+/// A metric's cell for `mode`: its value as the column shows it, `–` where the mode has none.
+pub fn cell(metric: &Metric, column: Column, mode: &ModeRecord) -> String {
+    (metric.read)(mode).map_or_else(|| "–".into(), column.cell)
+}
+
+/// A PSNR to two decimals, `∞` for identical images.
+pub fn decibels(db: f64) -> String {
+    if db.is_finite() { format!("{db:.2}") } else { "∞".into() }
+}
+
+fn decibels_3(db: f64) -> String {
+    if db.is_finite() { format!("{db:.3} dB") } else { "∞ dB".into() }
+}
+
+fn mse_e5(mse: f64) -> String {
+    format!("{:.4} ×1e-5", mse * 1e5)
+}
+
+fn percent(value: f64) -> String {
+    format!("{value:.2}%")
+}
+
+fn one_decimal(value: f64) -> String {
+    format!("{value:.1}")
+}
+
+fn two_decimals(value: f64) -> String {
+    format!("{value:.2}")
+}
+
+fn four_decimals(value: f64) -> String {
+    format!("{value:.4}")
+}
+
+fn five_decimals(value: f64) -> String {
+    format!("{value:.5}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ids_are_unique_and_every_gated_source_names_a_gated_metric_of_its_own() {
+        for (i, metric) in METRICS.iter().enumerate() {
+            assert!(METRICS[..i].iter().all(|m| m.id != metric.id), "{} twice", metric.id);
+            assert!(
+                metric.gate.is_some() || metric.column.is_some(),
+                "{}: neither gated nor shown",
+                metric.id
+            );
+        }
+        for source in [Source::Truth, Source::Reference, Source::Samples, Source::Sequence] {
+            let (id, _) = source.missing();
+            let named = metric(id).unwrap_or_else(|| panic!("{source:?} names {id}, no metric"));
+            assert!(named.source == source && named.gate.is_some(), "{id}");
+        }
+    }
+
+    #[test]
+    fn cells_show_infinity_and_missing_values() {
+        assert_eq!(decibels(f64::INFINITY), "∞");
+        assert_eq!(decibels(31.256), "31.26");
+        assert_eq!(decibels_3(31.2564), "31.256 dB");
+        assert_eq!(mse_e5(1.23456e-5), "1.2346 ×1e-5");
+    }
+}

@@ -53,7 +53,8 @@ fn one_sample_row(page: &mut String, scene: &SceneRecord) {
             figure(page, image, &mode.mode);
         }
     }
-    for (technique, mode) in shown.iter().skip_while(|(technique, _)| *technique == Technique::Deferred) {
+    // deferred-1x1's own difference is against the truth; the others' show what they changed.
+    for (technique, mode) in shown.iter().filter(|(technique, _)| *technique != Technique::Deferred) {
         if let Some(image) = &mode.images.difference {
             let caption = format!(
                 "|{} − {deferred}|: the pixels {} changed (32 steps full scale)",
@@ -83,8 +84,7 @@ fn supersampled_row(
     let [adaptive, area, cells, coverage] = super::reconstructions(m).map(pick);
     let others: Vec<&ModeRecord> = Technique::COMPARED
         .into_iter()
-        .filter(|t| !matches!(t, Technique::Reference) && t.compared_with() == Some(Technique::Reference))
-        .filter(|t| t.sizes().contains(&m))
+        .filter(|t| t.compared_with() == Some(Technique::Reference) && t.sizes().contains(&m))
         .filter_map(|t| pick(Mode::new(t, m, false)))
         .collect();
     let adaptives: Vec<&ModeRecord> = [adaptive, area, cells, coverage].into_iter().flatten().collect();

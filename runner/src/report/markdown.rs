@@ -24,9 +24,10 @@ use crate::truth::TRUTH_ID;
 /// M = 4 of the reference and the paper's adaptive mode, and the variant nearest the truth.
 fn overview_modes() -> Vec<Mode> {
     let reference = |m| Mode::new(Technique::Reference, m, false);
-    let [adaptive_4, _, cells_4, _] = reconstructions(4);
+    let paper = |m| Mode::new(PAPER, m, false);
+    let [_, _, cells_4, _] = reconstructions(4);
     let mut modes = competitors();
-    modes.extend([reference(2), reconstructions(2)[0], reference(4), adaptive_4, cells_4]);
+    modes.extend([reference(2), paper(2), reference(4), paper(4), cells_4]);
     modes
 }
 

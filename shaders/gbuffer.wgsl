@@ -1,5 +1,5 @@
 // Rasterizes the scene into the (enlarged) G-buffer: UV, normal (the normal map's, where a
-// material has one), material, UV derivatives and depth. Opaque geometry uses `gbuffer_opaque`; alpha-masked geometry `gbuffer_masked`,
+// material has one), material, UV derivatives and depth. Opaque geometry uses `gbuffer_opaque`; alpha-masked geometry `gbuffer_masked` (under 4× MSAA `gbuffer_masked_samples`),
 // which discards and so loses early depth testing, is drawn after it.
 
 #include "lib/common.wgsl"
@@ -87,6 +87,41 @@ fn gbuffer_masked(v: VertexOut, @builtin(front_facing) front_facing: bool) -> GB
         discard;
     }
     return write_gbuffer(v, front_facing);
+}
+
+// The G-buffer of MSAA's alpha-masked geometry: the alpha test per sample, at pixel rate. The
+// texture is read at each of the four samples' positions (the standard 4× pattern), the UV moved
+// there from the pixel's centre along its screen derivatives, and the samples that fail leave the
+// coverage: a cut-out edge is resolved as finely as a triangle's edge, where one test at the
+// pixel's centre would keep or drop all four samples together.
+struct GBufferCovered {
+    @location(0) uv: vec2<f32>,
+    @location(1) normal_material: vec4<f32>,
+    @location(2) uv_grad: vec4<f32>,
+    @builtin(sample_mask) mask: u32,
+}
+
+@fragment
+fn gbuffer_masked_samples(v: VertexOut, @builtin(front_facing) front_facing: bool) -> GBufferCovered {
+    let g = write_gbuffer(v, front_facing);
+    let uv_dx = g.uv_grad.xy;
+    let uv_dy = g.uv_grad.zw;
+    // Offsets of the four samples from the pixel's centre, in pixels, y down.
+    var offsets = array<vec2<f32>, 4>(
+        vec2<f32>(-0.125, -0.375),
+        vec2<f32>(0.375, -0.125),
+        vec2<f32>(-0.375, 0.125),
+        vec2<f32>(0.125, 0.375),
+    );
+    var mask = 0u;
+    for (var i = 0u; i < 4u; i++) {
+        let uv = v.uv + uv_dx * offsets[i].x + uv_dy * offsets[i].y;
+        mask |= select(0u, 1u << i, passes_alpha_test(v.material, uv));
+    }
+    if mask == 0u {
+        discard;
+    }
+    return GBufferCovered(g.uv, g.normal_material, g.uv_grad, mask);
 }
 
 // The G-buffer of temporal modes: the same, and the motion of each sample's point.

@@ -88,6 +88,18 @@ pub(crate) fn frame_graph(
     Ok(frame.graph)
 }
 
+/// The graph of the scene's geometry probe: the G-buffer alone, one unjittered sample per pixel
+/// with the motion of each sample's point since the frame before. The truth has no G-buffer of
+/// its own at the display's resolution; a sequence follows the truth's pixels along this one.
+pub(crate) fn geometry_graph() -> FrameGraph {
+    let mut g = FrameGraph::new();
+    let gbuffer = add(&mut g, GBufferNode { samples: 1, motion: true });
+    g.retain(gbuffer, gbuffer::NORMAL, Output::GBufferNormal);
+    g.retain(gbuffer, gbuffer::DEPTH, Output::GBufferDepth);
+    g.retain(gbuffer, gbuffer::MOTION, Output::Motion);
+    g
+}
+
 /// A frame's first passes, which every technique shares: the shadow cubes and the G-buffer
 /// (multisampled for MSAA, with motion vectors under TAA).
 fn begin<'a>(

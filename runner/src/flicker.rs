@@ -1,9 +1,9 @@
 //! A sequence's worst-flickering region: the square of the frame where the modes' error changes
 //! most from one frame to the next, kept as an animated PNG per mode for the report.
 //!
-//! Each pixel's flicker is its squared change of error, ((A_f − A_{f−1}) − (T_f − T_{f−1}))²
-//! summed over channels, frame pairs and modes: the per-pixel terms of every mode's
-//! `instability` (`run/sequence.rs`), so the region is where the instabilities come from. Modes
+//! Each pixel's flicker is its squared change of error along the truth's motion (`temporal.rs`)
+//! summed over channels, frame pairs and modes: the per-pixel terms of every mode's `flicker`,
+//! so the region is where the flicker comes from. Modes
 //! flicker in the same places (edges, thin geometry, fine texture), and the sum is led by the
 //! modes that flicker most, which is where a reader should look. The region is known only at the
 //! last frame, so it is cut from the spooled frames (`spool.rs`).
@@ -34,7 +34,7 @@ pub const TRUTH_STREAM: &str = "truth";
 /// the way holds fewer) to `<out_dir>/<stream>.png`, paths in the record relative to `run_dir`.
 pub fn region(
     spool: &Spool,
-    map: &[u64],
+    map: &[f64],
     animated: &[usize],
     frames: usize,
     delay_s: f64,
@@ -48,8 +48,7 @@ pub fn region(
     }
     let [width, height] = spool.size();
     let side = SIDE.min(width).min(height);
-    let errors: Vec<f64> = map.iter().map(|&v| v as f64).collect();
-    let (x, y) = images::largest_window(&errors, width, height, side);
+    let (x, y) = images::largest_window(map, width, height, side);
     let square = Square { x, y, side };
     let crops =
         |stream: usize| (0..frames).map(|f| spool.crop(stream, f, square)).collect::<Result<Vec<_>, _>>();
@@ -151,8 +150,8 @@ mod tests {
         let names = [TRUTH_STREAM, "a", "b"].map(String::from).to_vec();
         let mut spool = Spool::create(dir.join("spool"), [width, height], names).unwrap();
         // The largest flicker sits at the bottom right corner.
-        let mut map = vec![0; (width * height) as usize];
-        map[(height * width - 1) as usize] = 5;
+        let mut map = vec![0.0; (width * height) as usize];
+        map[(height * width - 1) as usize] = 5.0;
         for f in 0..3 {
             spool.append(0, &frame(f)).unwrap();
             spool.append(1, &frame(f + 10)).unwrap();

@@ -25,6 +25,7 @@ pub mod run;
 pub mod scenes;
 pub mod spool;
 pub mod stats;
+pub mod temporal;
 pub mod truth;
 pub mod vocabulary;
 pub mod worker;

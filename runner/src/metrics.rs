@@ -305,11 +305,15 @@ pub const BLANK_MIN_PIXELS: usize = 16;
 /// background), or every display pixel the same code (an exposure or a transfer function that
 /// rounds everything to one code). Alpha is left out: it carries the stall's result.
 pub fn blank_frame(images: &FrameImages) -> Option<String> {
-    let pixels = images.width as usize * images.height as usize;
-    if pixels < BLANK_MIN_PIXELS {
+    blank_image(&images.hdr, &images.display)
+}
+
+/// [`blank_frame`] of a frame's HDR image (RGBA, flattened) and display image.
+pub fn blank_image(hdr: &[f32], display: &DisplayImage) -> Option<String> {
+    if display.rgba.len() / 4 < BLANK_MIN_PIXELS {
         return None;
     }
-    let hdr = flat(images.hdr.chunks_exact(4).map(|p| [p[0].to_bits(), p[1].to_bits(), p[2].to_bits()]));
+    let hdr = flat(hdr.chunks_exact(4).map(|p| [p[0].to_bits(), p[1].to_bits(), p[2].to_bits()]));
     if let Some([r, g, b]) = hdr {
         let [r, g, b] = [r, g, b].map(f32::from_bits);
         return Some(format!(
@@ -318,7 +322,7 @@ pub fn blank_frame(images: &FrameImages) -> Option<String> {
              if that is meant"
         ));
     }
-    let display = flat(images.display.rgba.chunks_exact(4).map(|p| [p[0], p[1], p[2]].map(u32::from)));
+    let display = flat(display.rgba.chunks_exact(4).map(|p| [p[0], p[1], p[2]].map(u32::from)));
     display.map(|[r, g, b]| {
         format!(
             "blank frame: every display pixel has the code ({r}, {g}, {b}): the exposure, tonemap or transfer \

@@ -5,8 +5,14 @@
 //! The target is the manifest camera's `target`; a camera from the file has only a direction,
 //! so its target is the point of the view ray nearest the centre of the scene's bounds.
 //! Presets move at a rate per second from the scene's camera at time 0 and frames are
-//! `time_step_s` apart, so the quick tier's sequence is the first frames of the nightly one. Keyframes give positions and targets at
-//! times and are interpolated linearly between them (held after the last).
+//! `time_step_s` apart, so at a rate the quick tier's sequence is the first frames of the
+//! nightly one. A preset's speed can instead be stated as the pixels a frame its image moves at
+//! the tier's resolution (`pixels_per_frame`, one sequence per speed): users turn and walk 4 to
+//! 20 pixels a frame, far faster than the default rate. A speed means the same motion on the
+//! screen in either tier, so a tier of fewer pixels turns faster. A turn's speed is its
+//! background's (what lies at the target barely moves in an orbit); a dolly's is its first
+//! frame's (a dolly's image moves faster as it nears the target, and stops at 90 % of the way). Keyframes give positions and targets at times and
+//! are interpolated linearly between them (held after the last).
 
 use aabench_renderer::scene::Camera;
 use glam::{DQuat, DVec3};
@@ -21,6 +27,9 @@ pub struct MotionSpec {
     /// The preset's speed: degrees per second for `orbit` and `pan`, the share of the distance
     /// to the target covered per second for `dolly`. Omitted: [`PathKind::default_rate`].
     pub rate: Option<f64>,
+    /// The preset's speeds instead, in pixels a frame at the tier's resolution, per tier: one
+    /// sequence each ([`MotionSpec::paces`]).
+    pub pixels_per_frame: Option<Speeds>,
     /// For `path: "keyframes"`: at least two, in increasing time.
     #[serde(default)]
     pub keyframes: Vec<Keyframe>,
@@ -80,6 +89,40 @@ pub struct Keyframe {
     pub target: [f64; 3],
 }
 
+/// A preset's speeds in pixels a frame, per tier.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Speeds {
+    pub quick: Vec<f64>,
+    pub nightly: Vec<f64>,
+}
+
+/// The most speeds a tier may list, and the fastest: a turn of 64 pixels a frame crosses a
+/// 256-pixel-wide frame in four.
+pub const MAX_SPEEDS: usize = 4;
+pub const MAX_PIXELS_PER_FRAME: f64 = 64.0;
+
+/// How one sequence of a path moves: the preset's rate (as `MotionSpec::rate`) and the pixels a
+/// frame that gives at the tier's resolution (absent for keyframes and the static path).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pace {
+    pub rate: f64,
+    pub pixels_per_frame: Option<f64>,
+}
+
+impl Pace {
+    /// `4 px a frame` (or `1.2 px a frame`), where it has a speed.
+    pub fn label(&self) -> Option<String> {
+        self.pixels_per_frame.map(|px| format!("{} px a frame", short(px)))
+    }
+}
+
+/// A number to at most two decimals, without trailing zeros: `4`, `0.5`, `0.13`.
+pub fn short(value: f64) -> String {
+    let text = format!("{value:.2}");
+    text.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
 /// Frames of the sequence per tier.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -123,6 +166,7 @@ impl MotionSpec {
         if !(self.time_step_s.is_finite() && self.time_step_s > 0.0 && self.time_step_s <= 1.0) {
             return fail("time_step_s", format!("{} must be within (0, 1] seconds", self.time_step_s));
         }
+        self.check_speeds()?;
         if let Some(rate) = self.rate {
             if matches!(self.path, PathKind::Static | PathKind::Keyframes) {
                 return fail("rate", format!("the {} path has no rate", self.path.name()));
@@ -140,6 +184,70 @@ impl MotionSpec {
             (_, 0) => Ok(()),
             (path, _) => {
                 fail("keyframes", format!("only the keyframes path takes keyframes, not {}", path.name()))
+            }
+        }
+    }
+
+    fn check_speeds(&self) -> Result<(), (String, String)> {
+        let Some(speeds) = &self.pixels_per_frame else { return Ok(()) };
+        let fail = |field: String, message: String| Err((field, message));
+        if matches!(self.path, PathKind::Static | PathKind::Keyframes) {
+            return fail("pixels_per_frame".into(), format!("the {} path has no speed", self.path.name()));
+        }
+        if self.rate.is_some() {
+            return fail(
+                "pixels_per_frame".into(),
+                "give a rate or speeds in pixels a frame, not both".into(),
+            );
+        }
+        for (tier, list) in [("quick", &speeds.quick), ("nightly", &speeds.nightly)] {
+            if !(1..=MAX_SPEEDS).contains(&list.len()) {
+                let message = format!("{} speeds: give 1 to {MAX_SPEEDS}", list.len());
+                return fail(format!("pixels_per_frame.{tier}"), message);
+            }
+            for (i, &px) in list.iter().enumerate() {
+                if !(px.is_finite() && px > 0.0 && px <= MAX_PIXELS_PER_FRAME) {
+                    let message = format!("{px} must be within (0, {MAX_PIXELS_PER_FRAME}] pixels a frame");
+                    return fail(format!("pixels_per_frame.{tier}[{i}]"), message);
+                }
+                if list[..i].contains(&px) {
+                    return fail(format!("pixels_per_frame.{tier}[{i}]"), format!("{px} is listed twice"));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The sequences of the path in a tier whose `speeds` the section lists (or none), for
+    /// frames `height` pixels tall through a camera of vertical field `fov_y` (radians): one per
+    /// speed, or one at the rate.
+    pub fn paces(&self, speeds: Option<&[f64]>, fov_y: f64, height: u32) -> Vec<Pace> {
+        let focal = f64::from(height) / (2.0 * (fov_y / 2.0).tan());
+        let step = self.time_step_s;
+        match (self.path, speeds) {
+            (PathKind::Static | PathKind::Keyframes, _) => vec![Pace { rate: 0.0, pixels_per_frame: None }],
+            (PathKind::Dolly, Some(speeds)) => speeds
+                .iter()
+                // A point at the target's depth at the frame's top edge moves h/2 · s / (1 − s)
+                // when the camera covers the share s of its distance.
+                .map(|&px| Pace {
+                    rate: px / (f64::from(height) / 2.0 + px) / step,
+                    pixels_per_frame: Some(px),
+                })
+                .collect(),
+            (_, Some(speeds)) => speeds
+                .iter()
+                // A turn of ω moves the middle of the frame by f · tan ω.
+                .map(|&px| Pace { rate: (px / focal).atan().to_degrees() / step, pixels_per_frame: Some(px) })
+                .collect(),
+            (PathKind::Dolly, None) => {
+                let share = (self.rate() * step).abs();
+                let pixels = (share < 1.0).then(|| f64::from(height) / 2.0 * share / (1.0 - share));
+                vec![Pace { rate: self.rate(), pixels_per_frame: pixels }]
+            }
+            (_, None) => {
+                let turn = (self.rate() * step).to_radians();
+                vec![Pace { rate: self.rate(), pixels_per_frame: Some(focal * turn.tan().abs()) }]
             }
         }
     }
@@ -169,25 +277,43 @@ impl MotionSpec {
     /// lies `pivot` along its view (near and far planes, field of view and up axis kept along
     /// the path), each checked by the renderer's rules: `Err` names the frame's field
     /// (`motion.keyframes` or the preset's `motion.rate`).
-    pub fn cameras(&self, base: &Camera, pivot: f64, frames: u32) -> Result<Vec<Camera>, (String, String)> {
+    pub fn cameras(
+        &self,
+        base: &Camera,
+        pivot: f64,
+        frames: u32,
+        rate: f64,
+    ) -> Result<Vec<Camera>, (String, String)> {
         (0..frames)
             .map(|frame| {
-                let camera = self.camera_at(base, pivot, f64::from(frame) * self.time_step_s);
+                let camera = self.camera_at(base, pivot, f64::from(frame) * self.time_step_s, rate);
                 camera.validate().map(|()| camera).map_err(|e| {
-                    let field =
-                        if self.path == PathKind::Keyframes { "motion.keyframes" } else { "motion.rate" };
-                    (field.to_string(), format!("frame {frame}: the camera's {}: {}", e.field, e.message))
+                    (
+                        self.field().to_string(),
+                        format!("frame {frame}: the camera's {}: {}", e.field, e.message),
+                    )
                 })
             })
             .collect()
     }
 
-    /// The camera at `time` seconds along the path. A preset's is the scene's camera itself at
-    /// time 0, so that its first frame is the still frame bit for bit.
-    pub fn camera_at(&self, base: &Camera, pivot: f64, time: f64) -> Camera {
+    /// The manifest field that decides where the path's cameras go: `motion.keyframes`,
+    /// `motion.pixels_per_frame` or `motion.rate`.
+    pub fn field(&self) -> &'static str {
+        match self.path {
+            PathKind::Keyframes => "motion.keyframes",
+            _ if self.pixels_per_frame.is_some() => "motion.pixels_per_frame",
+            _ => "motion.rate",
+        }
+    }
+
+    /// The camera at `time` seconds along the path, a preset moving at `rate` (as
+    /// [`MotionSpec::rate`]). A preset's is the scene's camera itself at time 0, so that its
+    /// first frame is the still frame bit for bit.
+    pub fn camera_at(&self, base: &Camera, pivot: f64, time: f64, rate: f64) -> Camera {
         let target = base.position + base.forward.normalize() * pivot;
         let up = base.up.normalize();
-        let turn = |seconds: f64| DQuat::from_axis_angle(up, (self.rate() * seconds).to_radians());
+        let turn = |seconds: f64| DQuat::from_axis_angle(up, (rate * seconds).to_radians());
         match self.path {
             PathKind::Static => *base,
             _ if time == 0.0 && self.path != PathKind::Keyframes => *base,
@@ -197,7 +323,7 @@ impl MotionSpec {
             }
             PathKind::Pan => Camera { forward: turn(time) * base.forward, ..*base },
             PathKind::Dolly => {
-                let position = base.position + (target - base.position) * (self.rate() * time).min(0.9);
+                let position = base.position + (target - base.position) * (rate * time).min(0.9);
                 Camera { position, forward: target - position, ..*base }
             }
             PathKind::Keyframes => {
@@ -241,7 +367,7 @@ mod tests {
     #[test]
     fn an_empty_section_orbits_the_target_slowly_and_starts_at_the_still() {
         let motion = spec("{}");
-        let cameras = motion.cameras(&base(), 10.0, 8).unwrap();
+        let cameras = motion.cameras(&base(), 10.0, 8, motion.rate()).unwrap();
         assert_eq!(cameras.len(), 8);
         assert_eq!(cameras[0], base(), "frame 0 is the still frame");
         let target = DVec3::new(0.0, 2.0, 0.0);
@@ -252,18 +378,60 @@ mod tests {
             let angle = (camera.position - target).angle_between(base().position - target).to_degrees();
             assert!((angle - i as f64 / 30.0).abs() < 1e-9, "frame {i}: {angle}°");
         }
-        assert_eq!(motion.cameras(&base(), 10.0, 32).unwrap().len(), 32);
+        assert_eq!(motion.cameras(&base(), 10.0, 32, motion.rate()).unwrap().len(), 32);
     }
 
     #[test]
     fn the_quick_sequence_is_the_start_of_the_nightly_one() {
         for path in ["orbit", "dolly", "pan"] {
             let motion = spec(&format!(r#"{{"path": "{path}"}}"#));
-            let quick = motion.cameras(&base(), 10.0, 8).unwrap();
-            let nightly = motion.cameras(&base(), 10.0, 32).unwrap();
+            let quick = motion.cameras(&base(), 10.0, 8, motion.rate()).unwrap();
+            let nightly = motion.cameras(&base(), 10.0, 32, motion.rate()).unwrap();
             assert_eq!(quick[..], nightly[..quick.len()], "{path}");
             assert_ne!(quick[0], quick[1], "{path} moves");
         }
+    }
+
+    /// Where a world point lands through `camera` in a frame `height` pixels tall (4:3), in
+    /// pixels from the top left.
+    fn project(camera: &Camera, height: f64, point: DVec3) -> glam::DVec2 {
+        let size = glam::DVec2::new(height * 4.0 / 3.0, height);
+        let clip = camera.projection(size.x / size.y) * camera.view() * point.extend(1.0);
+        let ndc = glam::DVec2::new(clip.x, clip.y) / clip.w;
+        glam::DVec2::new((ndc.x + 1.0) / 2.0 * size.x, (1.0 - ndc.y) / 2.0 * size.y)
+    }
+
+    #[test]
+    fn speeds_in_pixels_a_frame_move_the_image_by_that_much_at_the_tiers_resolution() {
+        let height = 192;
+        for path in ["pan", "orbit", "dolly"] {
+            let motion = spec(&format!(
+                r#"{{"path": "{path}", "pixels_per_frame": {{"quick": [4], "nightly": [0.5, 4, 16]}}}}"#
+            ));
+            let speeds = motion.pixels_per_frame.clone().unwrap();
+            assert_eq!(motion.paces(Some(&speeds.quick), base().fov_y, height).len(), 1);
+            for pace in motion.paces(Some(&speeds.nightly), base().fov_y, height) {
+                let px = pace.pixels_per_frame.unwrap();
+                let cameras = motion.cameras(&base(), 10.0, 2, pace.rate).unwrap();
+                // The pan and the orbit move the middle of the frame's far background (a point
+                // far along the view) and the dolly a point at the target's depth at the top edge.
+                let point = match path {
+                    "dolly" => {
+                        let top = (base().fov_y / 2.0).tan() * 10.0;
+                        DVec3::new(0.0, 2.0 + top, 0.0)
+                    }
+                    _ => base().position + base().forward.normalize() * 1e6,
+                };
+                let moved = project(&cameras[1], f64::from(height), point)
+                    - project(&cameras[0], f64::from(height), point);
+                assert!((moved.length() - px).abs() < 0.01 * px, "{path} at {px}: {moved}");
+            }
+        }
+        // A rate states its speed too: the default orbit's at 192 pixels tall.
+        let default = spec("{}").paces(None, base().fov_y, height);
+        let px = default[0].pixels_per_frame.unwrap();
+        assert!((px - 0.135).abs() < 0.01, "{px}");
+        assert_eq!(Pace { rate: 1.0, pixels_per_frame: Some(0.5) }.label().unwrap(), "0.5 px a frame");
     }
 
     #[test]
@@ -273,7 +441,7 @@ mod tests {
                 "keyframes": [{"time_s": 0, "position": [0, 0, 10], "target": [0, 0, 0]},
                               {"time_s": 1, "position": [2, 0, 10], "target": [2, 0, 0]}]}"#,
         );
-        let cameras = motion.cameras(&base(), 10.0, 4).unwrap();
+        let cameras = motion.cameras(&base(), 10.0, 4, 0.0).unwrap();
         let xs: Vec<f64> = cameras.iter().map(|c| c.position.x).collect();
         assert_eq!(xs, [0.0, 1.0, 2.0, 2.0]);
         assert!(cameras.iter().all(|c| c.forward == DVec3::new(0.0, 0.0, -10.0)));
@@ -281,7 +449,7 @@ mod tests {
 
     #[test]
     fn a_static_path_repeats_the_still_camera() {
-        let cameras = spec(r#"{"path": "static"}"#).cameras(&base(), 10.0, 32).unwrap();
+        let cameras = spec(r#"{"path": "static"}"#).cameras(&base(), 10.0, 32, 0.0).unwrap();
         assert!(cameras.iter().all(|c| *c == base()));
     }
 
@@ -301,6 +469,21 @@ mod tests {
             {"time_s": 1, "position": [0,0,1], "target": [0,0,0]},
             {"time_s": 1, "position": [0,0,2], "target": [0,0,0]}]}"#;
         assert_eq!(field(backwards), "keyframes[1].time_s");
+        let speeds = |quick: &str| {
+            format!(r#"{{"path": "pan", "pixels_per_frame": {{"quick": {quick}, "nightly": [4]}}}}"#)
+        };
+        assert_eq!(field(&speeds("[]")), "pixels_per_frame.quick");
+        assert_eq!(field(&speeds("[4, 0]")), "pixels_per_frame.quick[1]");
+        assert_eq!(field(&speeds("[4, 4]")), "pixels_per_frame.quick[1]");
+        assert_eq!(field(&speeds("[65]")), "pixels_per_frame.quick[0]");
+        assert_eq!(
+            field(r#"{"path": "pan", "rate": 2, "pixels_per_frame": {"quick": [4], "nightly": [4]}}"#),
+            "pixels_per_frame"
+        );
+        assert_eq!(
+            field(r#"{"path": "static", "pixels_per_frame": {"quick": [4], "nightly": [4]}}"#),
+            "pixels_per_frame"
+        );
     }
 
     #[test]
@@ -316,7 +499,7 @@ mod tests {
                 {"time_s": 0, "position": [0, 0, 1], "target": [0, 0, 0]},
                 {"time_s": 1, "position": [0, 0, -1], "target": [0, 0, 0]}]}"#,
         );
-        let (field, message) = motion.cameras(&base(), 10.0, 8).unwrap_err();
+        let (field, message) = motion.cameras(&base(), 10.0, 8, 0.0).unwrap_err();
         assert_eq!(field, "motion.keyframes");
         assert!(message.starts_with("frame 1: the camera's target"), "{message}");
     }

@@ -172,6 +172,21 @@ impl Tier {
         }
     }
 
+    /// The speeds in pixels a frame that a camera path lists for this tier, if it lists any.
+    pub fn speeds(self, motion: &crate::motion::MotionSpec) -> Option<&[f64]> {
+        let speeds = motion.pixels_per_frame.as_ref()?;
+        Some(match self {
+            Tier::Quick => &speeds.quick,
+            Tier::Nightly => &speeds.nightly,
+        })
+    }
+
+    /// The sequences of a camera path in this tier: one per speed it lists, or one at its rate.
+    pub fn paces(self, manifest: &crate::manifest::Manifest, fov_y: f64) -> Vec<crate::motion::Pace> {
+        let Some(motion) = &manifest.motion else { return Vec::new() };
+        motion.paces(self.speeds(motion), fov_y, self.resolution(manifest)[1])
+    }
+
     /// The frames of a camera path's sequence in this tier.
     pub fn sequence_frames(self, motion: &crate::motion::MotionSpec) -> u32 {
         match self {

@@ -142,9 +142,15 @@ pub struct SceneRecord {
     pub exposure: Option<ExposureRecord>,
     /// The ground truth every mode's `vs_ground_truth` is measured against.
     pub truth: Option<TruthRecord>,
-    /// The sequence along the manifest's camera path, where it has one.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sequence: Option<SequenceRecord>,
+    /// The sequences along the manifest's camera path, where it has one: one per speed of the
+    /// tier (runs from before hold one, as `sequence`).
+    #[serde(
+        default,
+        alias = "sequence",
+        deserialize_with = "one_or_many",
+        skip_serializing_if = "Vec::is_empty"
+    )]
+    pub sequences: Vec<SequenceRecord>,
     pub modes: Vec<ModeRecord>,
 }
 
@@ -157,6 +163,11 @@ pub struct ExposureRecord {
 }
 
 impl SceneRecord {
+    /// The scene's first (the gate's) sequence, where it has a camera path.
+    pub fn sequence(&self) -> Option<&SequenceRecord> {
+        self.sequences.first()
+    }
+
     pub fn mode(&self, id: &str) -> Option<&ModeRecord> {
         self.modes.iter().find(|m| m.mode == id)
     }
@@ -230,12 +241,29 @@ pub struct ModeRecord {
     /// every frame rendered (warm-up included); any fails the mode.
     #[serde(default)]
     pub checks: Option<FrameChecks>,
-    /// Its sequence against the truth's, where the scene has a camera path.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sequence: Option<ModeSequence>,
+    /// Its sequences against the truth's, where the scene has a camera path: one per scene
+    /// sequence, in its order, `null` where the mode has none of that one (runs from before
+    /// hold one, as `sequence`).
+    #[serde(
+        default,
+        alias = "sequence",
+        deserialize_with = "one_or_many",
+        skip_serializing_if = "Vec::is_empty"
+    )]
+    pub sequences: Vec<Option<ModeSequence>>,
 }
 
 impl ModeRecord {
+    /// Its sequence along the scene's first (the gate's) sequence, where it has one.
+    pub fn sequence(&self) -> Option<&ModeSequence> {
+        self.sequences.first()?.as_ref()
+    }
+
+    /// Its sequence along the scene's sequence `index`, where it has one.
+    pub fn sequence_at(&self, index: usize) -> Option<&ModeSequence> {
+        self.sequences.get(index)?.as_ref()
+    }
+
     /// The mode the record's id names; `None` for an id this build does not know (a record of
     /// another version of aabench).
     pub fn parsed(&self) -> Option<aabench_renderer::Mode> {
@@ -423,6 +451,13 @@ impl FrontPlace {
 pub struct SequenceRecord {
     /// The camera path: `orbit`, `dolly`, `pan`, `static` or `keyframes`.
     pub path: String,
+    /// A preset's rate (degrees a second, or for a dolly the share of the distance a second),
+    /// and the pixels a frame it moves the image at the tier's resolution (absent for keyframes,
+    /// the static path and runs from before).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rate: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pixels_per_frame: Option<f64>,
     /// Frames asked for, and frames rendered by every mode still running (fewer when the
     /// sequence stopped: `error` says why).
     pub frames: u32,
@@ -435,6 +470,11 @@ pub struct SequenceRecord {
     /// The truth's own mean squared frame-to-frame change: what every mode's `change_ratio`
     /// is relative to.
     pub truth_change: Option<f64>,
+    /// The truth's own mean squared change along its motion (`temporal.rs`): the flicker of a
+    /// steady image that shows none of the truth's moiré, the scale of the modes' `flicker`
+    /// (absent in runs from before).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub truth_flicker: Option<f64>,
     /// Wall seconds of the whole sequence.
     pub seconds: f64,
     pub error: Option<String>,
@@ -450,6 +490,14 @@ pub struct SequenceRecord {
     pub region: Option<FlickerRegion>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub region_error: Option<String>,
+}
+
+impl SequenceRecord {
+    /// How fast it moves: `4 px a frame`, or the path's name where it has no speed.
+    pub fn speed(&self) -> String {
+        self.pixels_per_frame
+            .map_or_else(|| self.path.clone(), |px| format!("{} px a frame", crate::motion::short(px)))
+    }
 }
 
 /// The square of the frame where the modes' error changes most from frame to frame
@@ -481,8 +529,14 @@ pub struct ModeSequence {
     pub flip: Vec<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mean_flip: Option<f64>,
-    /// Mean squared frame-to-frame change of the error image (module docs); 0 where the mode
-    /// changes exactly as the truth does.
+    /// Mean squared change of the error image along the truth's motion, over the pixels seen
+    /// in both frames of each pair (`temporal.rs`): what lag and blur cannot pass. Absent in
+    /// runs from before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flicker: Option<f64>,
+    /// Mean squared frame-to-frame change of the error image without motion compensation
+    /// (`run/sequence.rs`); 0 where the mode changes exactly as the truth does. It rewards lag
+    /// and blur: kept for the gate, not for ranking.
     pub instability: f64,
     /// The mode's own mean squared frame-to-frame change over the truth's (absent where the
     /// truth does not change).
@@ -501,16 +555,17 @@ pub struct ModeSequence {
     /// still's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub frame_ms: Option<Summary>,
-    /// Temporal modes (taa): the error where the history cannot hold the surface, the pixels
-    /// that the previous frame did not see (`run/sequence.rs`).
+    /// What lag costs: the error where the frame before did not see the surface, at moving
+    /// silhouettes and elsewhere, by the truth's motion (`temporal.rs`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ghosting: Option<Ghosting>,
     /// FNV-1a 64 of each frame's display image and sample counts, as `output_hash`.
     pub hashes: Vec<String>,
 }
 
-/// A temporal mode's error on disoccluded pixels: those whose surface point lay off-screen or
-/// hidden behind another surface in the frame before, over the frame pairs of a sequence.
+/// A mode's error where lag shows, over the frame pairs of a sequence: on the pixels whose
+/// surface point lay off screen or hidden behind another surface in the frame before
+/// (disoccluded), on those at or beside a silhouette that moved, and on the others.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Ghosting {
     /// The share of pixels disoccluded, averaged over the frame pairs.
@@ -518,6 +573,28 @@ pub struct Ghosting {
     /// The mode's MSE against the truth on those pixels (display code values in [0, 1]);
     /// absent where no pixel was disoccluded.
     pub mse: Option<f64>,
-    /// The same of the mode's image everywhere else, for scale.
+    /// The same at moving silhouettes, absent where none moved (absent in runs from before).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mse_edges: Option<f64>,
+    /// The same everywhere else, for scale.
     pub mse_elsewhere: Option<f64>,
+}
+
+/// A list, or (in runs from before) one value or nothing in its place.
+fn one_or_many<'de, D, T>(deserializer: D) -> Result<Vec<T>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum OneOrMany<T> {
+        Many(Vec<T>),
+        One(T),
+    }
+    Ok(match Option::<OneOrMany<T>>::deserialize(deserializer)? {
+        Some(OneOrMany::Many(values)) => values,
+        Some(OneOrMany::One(value)) => vec![value],
+        None => Vec::new(),
+    })
 }

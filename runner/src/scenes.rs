@@ -19,9 +19,9 @@ use crate::manifest::{FileLights, Manifest, check_shadows};
 pub struct LoadedScene {
     pub scene: Scene,
     pub camera: Camera,
-    /// The camera of each frame of the manifest's camera path, as many as the longer tier's
-    /// sequence (the shorter is its start); empty without `motion`.
-    pub path: Vec<Camera>,
+    /// How far along the camera's view a preset path's target lies: what an orbit turns about
+    /// (`motion.rs`). Every sequence's cameras in either tier were checked at load.
+    pub pivot: f64,
     pub lighting: Lighting,
     /// Seconds spent generating (if it had to) and importing.
     pub seconds: f64,
@@ -99,7 +99,7 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
         bail!("{}: gltf: {} holds no triangles", manifest.path.display(), path.display());
     }
     let camera = camera(manifest, &scene)?;
-    let path = camera_path(manifest, &scene, &camera)?;
+    let pivot = path_pivot(manifest, &scene, &camera)?;
     let lighting = Lighting {
         lights: lights(manifest, &scene)?,
         ambient: Vec3::from(manifest.ambient),
@@ -107,16 +107,18 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
         // Metered once the scene is uploaded where the manifest gives none.
         exposure: manifest.tonemap.exposure.unwrap_or(1.0),
     };
-    Ok(LoadedScene { scene, camera, path, lighting, seconds: start.elapsed().as_secs_f64() })
+    Ok(LoadedScene { scene, camera, pivot, lighting, seconds: start.elapsed().as_secs_f64() })
 }
 
-/// The cameras of the manifest's path (`motion.rs`), from `camera`. Its target is the
-/// manifest camera's; a camera from the file or the framing camera has only a direction, so
-/// its target is the point of the view ray nearest the centre of the scene's bounds (at least
-/// a hundredth of the bounds' radius ahead).
-fn camera_path(manifest: &Manifest, scene: &Scene, camera: &Camera) -> anyhow::Result<Vec<Camera>> {
+/// The pivot of the manifest's path (`motion.rs`) from `camera`, once the cameras of each of
+/// its sequences in either tier are checked: valid, and each with some of the scene's triangles
+/// in view unless the scene is declared empty. The target is the manifest camera's; a camera
+/// from the file or the framing camera has only a direction, so its target is the point of the
+/// view ray nearest the centre of the scene's bounds (at least a hundredth of the bounds'
+/// radius ahead). 0 without `motion`.
+fn path_pivot(manifest: &Manifest, scene: &Scene, camera: &Camera) -> anyhow::Result<f64> {
     let Some(motion) = &manifest.motion else {
-        return Ok(Vec::new());
+        return Ok(0.0);
     };
     let pivot = match &manifest.camera {
         Some(_) => camera.forward.length(),
@@ -127,10 +129,32 @@ fn camera_path(manifest: &Manifest, scene: &Scene, camera: &Camera) -> anyhow::R
             ahead.max((hi - lo).length() * 0.005)
         }
     };
-    let frames = motion.frames.quick.max(motion.frames.nightly);
-    motion
-        .cameras(camera, pivot, frames)
-        .map_err(|(field, message)| anyhow::anyhow!("{}: {field}: {message}", manifest.path.display()))
+    let speeds = motion.pixels_per_frame.as_ref();
+    let tiers = [
+        (motion.frames.quick, manifest.resolution.quick, speeds.map(|s| s.quick.as_slice())),
+        (motion.frames.nightly, manifest.resolution.nightly, speeds.map(|s| s.nightly.as_slice())),
+    ];
+    let fail =
+        |field: &str, message: String| anyhow::anyhow!("{}: {field}: {message}", manifest.path.display());
+    for (frames, [width, height], speeds) in tiers {
+        for pace in motion.paces(speeds, camera.fov_y, height) {
+            let cameras = motion.cameras(camera, pivot, frames, pace.rate).map_err(|(f, m)| fail(&f, m))?;
+            let aspect = f64::from(width) / f64::from(height);
+            let blind =
+                cameras.iter().position(|c| !manifest.empty && !any_triangle_in_view(scene, c, aspect));
+            if let Some(frame) = blind {
+                let speed = pace.label().map_or_else(String::new, |label| format!(" at {label}"));
+                let message = format!(
+                    "frame {frame} of the path{speed} at {width}×{height} has none of the scene's {} triangles \
+                     in view (it would show only background); keep the path on the scene, or declare \
+                     `\"empty\": true`",
+                    scene.triangle_count()
+                );
+                return Err(fail(motion.field(), message));
+            }
+        }
+    }
+    Ok(pivot)
 }
 
 /// The file's lights (unless the manifest replaces them; with `file_light_shadows`, its point

@@ -16,6 +16,8 @@ pub struct State {
     pub renderer: Option<SceneRenderer>,
     /// The current scene's modes, in the plan's order; `None` where preparing failed.
     pub modes: Vec<Option<PreparedMode>>,
+    /// The current scene's geometry probe, while a sequence follows the truth along it.
+    pub geometry: Option<PreparedMode>,
 }
 
 type Job = Box<dyn FnOnce(&mut State) + Send>;
@@ -71,7 +73,7 @@ impl Worker {
                     }
                 };
                 let _ = ready.send(Ok(gpu.platform.clone()));
-                let mut state = State { gpu, renderer: None, modes: Vec::new() };
+                let mut state = State { gpu, renderer: None, modes: Vec::new(), geometry: None };
                 while let Ok(job) = queue.recv() {
                     job(&mut state);
                 }

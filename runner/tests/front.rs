@@ -71,7 +71,7 @@ fn the_texture_scene_places_every_mode_on_or_behind_the_front_and_cells_recover_
     // Which technique for this scene: levels rise, each row's mode reaches its level and no
     // mode that reaches it is faster; the last row is the mode nearest the truth.
     let parsed: aabench::record::RunRecord = serde_json::from_value(record.clone()).unwrap();
-    let rows = aabench::report::fastest_by_level(&parsed.scenes[0]);
+    let rows = aabench::report::fastest_by_level(&parsed.scenes[0], aabench::report::Basis::Still);
     assert!(rows.len() >= 2, "{} levels", rows.len());
     let median = |m: &Value| m["frame_ms"]["median"].as_f64().unwrap();
     for pair in rows.windows(2) {

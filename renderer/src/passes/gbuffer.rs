@@ -82,6 +82,8 @@ impl Node for GBufferNode {
         for class in ctx.scene.draw_classes() {
             let fragment = match (class.masked, self.motion) {
                 (false, false) => "gbuffer_opaque",
+                // Under 4× MSAA the alpha test decides each sample's coverage.
+                (true, false) if self.samples == MSAA_SAMPLES => "gbuffer_masked_samples",
                 (true, false) => "gbuffer_masked",
                 (false, true) => "gbuffer_opaque_motion",
                 (true, true) => "gbuffer_masked_motion",

@@ -110,10 +110,31 @@ impl SceneRenderer {
     /// one are its own.
     pub fn prepare(&mut self, mode: Mode) -> Result<PreparedMode, RenderError> {
         let graph = frame_graph(&self.needs, mode, &self.settings, &self.gpu.device.limits())?;
+        let history = mode.carries_history().then_some(mode.is_jittered());
+        self.prepare_graph(mode, &graph, history)
+    }
+
+    /// Prepares the scene's geometry probe: the G-buffer alone, unjittered, with each pixel's
+    /// motion since the frame the probe rendered before (`read_motion`) and its depth
+    /// (`read_gbuffer`). It keeps the camera of its last frame, as a temporal mode does; its
+    /// first frame after a reset has no motion. A sequence follows the truth's pixels along it.
+    pub fn prepare_geometry(&mut self) -> Result<PreparedMode, RenderError> {
+        let probe = Mode::new(Technique::Deferred, 1, false);
+        self.prepare_graph(probe, &frame::geometry_graph(), Some(false))
+    }
+
+    /// Compiles `graph` for `mode`, allocates it and builds its passes; `history`, where the
+    /// mode carries one, says whether its frames are jittered.
+    fn prepare_graph(
+        &mut self,
+        mode: Mode,
+        graph: &FrameGraph,
+        history: Option<bool>,
+    ) -> Result<PreparedMode, RenderError> {
         let plan = graph.compile(frame::dims(&self.settings, mode))?;
         self.check_fits(mode, &plan)?;
         let allocated = self.pool.acquire(&self.gpu.device, &plan, mode)?;
-        let temporal = mode.carries_history().then(|| Temporal {
+        let temporal = history.map(|jittered| Temporal {
             frame: self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("temporal frame uniforms"),
                 size: size_of::<FrameUniforms>() as u64,
@@ -122,14 +143,15 @@ impl SceneRenderer {
             }),
             view: Arc::clone(&self.view),
             size: [self.settings.width, self.settings.height],
-            jittered: mode.is_jittered(),
+            jittered,
+            reprojected: true,
             history: Mutex::default(),
         });
         let scene = match &temporal {
             Some(temporal) => self.scene.with_frame(temporal.frame.clone()),
             None => self.scene.clone(),
         };
-        let (passes, color_end) = self.build(&scene, &graph, &plan, &allocated)?;
+        let (passes, color_end) = self.build(&scene, graph, &plan, &allocated)?;
         self.gpu.check()?;
         let camera = lock(&self.view).camera;
         Ok(PreparedMode {

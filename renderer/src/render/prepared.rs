@@ -29,6 +29,9 @@ pub(super) struct Temporal {
     pub(super) size: [u32; 2],
     /// Whether the frames are jittered (TAA); a `-stable` mode's are not.
     pub(super) jittered: bool,
+    /// Whether the history is taken from where each point was in the frame before: only a
+    /// test turns it off ([`PreparedMode::without_reprojection`]).
+    pub(super) reprojected: bool,
     pub(super) history: Mutex<History>,
 }
 
@@ -45,7 +48,7 @@ impl Temporal {
     fn next_frame(&self, queue: &wgpu::Queue) {
         let view = lock(&self.view);
         let mut history = lock(&self.history);
-        let previous = history.camera.unwrap_or(view.camera);
+        let previous = history.camera.filter(|_| self.reprojected).unwrap_or(view.camera);
         let [x, y] = self.jitter(history.frames).unwrap_or_default();
         let uniforms = FrameUniforms::temporal(
             &view.camera,
@@ -110,6 +113,16 @@ impl PreparedMode {
         let temporal = self.temporal.as_ref()?;
         let frames = lock(&temporal.history).frames;
         temporal.jitter(frames.checked_sub(1)?)
+    }
+
+    /// The mode with a history that does not follow motion: each frame takes it from the
+    /// pixel's own place, as if nothing had moved. A deliberately broken TAA, for the tests that
+    /// show a temporal measure tells it from the real one.
+    pub fn without_reprojection(mut self) -> PreparedMode {
+        if let Some(temporal) = &mut self.temporal {
+            temporal.reprojected = false;
+        }
+        self
     }
 
     /// Forgets the history: the next frame starts it again, unjittered by earlier frames.

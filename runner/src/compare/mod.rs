@@ -431,7 +431,7 @@ fn compare_scene(
         checks.extend(context.time_checks());
     }
     // Green means compared in full: a run without the sequence its baseline holds compared less.
-    if then.sequence.is_some() && scene.sequence.is_none() {
+    if then.sequence().is_some() && scene.sequence().is_none() {
         let detail = "the baseline holds the scene's sequence, the run rendered none (--sequences off?)";
         checks.push(status_check(scene, "*", Outcome::Missing, detail));
     }

@@ -109,7 +109,7 @@ pub struct Check {
     pub mode: String,
     /// `status`, `psnr_vs_truth`, `mse_vs_truth`, `flip_vs_truth`, `ssim_vs_truth`,
     /// `psnr_vs_reference`, `mse_vs_reference`, `shaded_percent`, `sample_histogram`, `output_hash`,
-    /// `sequence_psnr_vs_truth`, `sequence_flip_vs_truth`, `instability`, `sequence_shaded_percent`,
+    /// `sequence_psnr_vs_truth`, `sequence_flip_vs_truth`, `flicker`, `instability`, `sequence_shaded_percent`,
     /// `relative_time`, `time_vs_reference`, `frame_time`; `run` for the run as a whole.
     pub metric: String,
     /// What the check compares with: the committed baseline or the base build's processes.

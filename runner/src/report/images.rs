@@ -206,7 +206,7 @@ pub(super) fn flicker_region(
     scene: &SceneRecord,
     left_out: &mut Vec<String>,
 ) -> Result<(), String> {
-    let Some(sequence) = &scene.sequence else { return Ok(()) };
+    let Some(sequence) = scene.sequence() else { return Ok(()) };
     let Some(region) = &sequence.region else {
         if let Some(error) = &sequence.region_error {
             let _ = writeln!(page, "<p class=\"meta\">No flicker region: {}</p>", escape(error));

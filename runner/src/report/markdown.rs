@@ -1,6 +1,6 @@
 //! `aabench report --markdown`: a run's results as Markdown, so that documentation quotes a
 //! named run instead of numbers typed by hand. With `--figures DIR` it also writes, per scene,
-//! the error-against-run-time plots as SVG (MSE, FLIP, and instability where the scene has a
+//! the error-against-run-time plots as SVG (MSE, FLIP, and flicker where the scene has a
 //! camera path), a strip of crops (the truth and the main modes at the window where adaptive-4x4
 //! differs most from it) as PNG, and where the scene has a camera path, the truth and the main
 //! modes side by side at the square where they flicker most as an animated PNG.
@@ -13,9 +13,8 @@ use image::RgbaImage;
 use aabench_renderer::{Counts, Metrics, Mode, Reconstruction, Technique};
 
 use super::{
-    ErrorMetric, PAPER, competitors, decibels, error_points, fastest_by_level, mode_cells, mode_columns,
-    open_rgba, plots, reconstructions, sequence_cells, sequence_columns, sequence_summary, side_by_side,
-    technique_cell, worst_window,
+    ErrorMetric, PAPER, competitors, decibels, error_points, mode_cells, mode_columns, open_rgba, plots,
+    reconstructions, sequence_cells, sequence_columns, sequence_summary, side_by_side, worst_window,
 };
 use crate::record::{ModeRecord, RunRecord, SceneRecord};
 use crate::truth::TRUTH_ID;
@@ -60,7 +59,7 @@ pub fn document(run: &RunRecord) -> String {
     provenance(&mut out, run);
     out.push_str("\n### Overview\n\n");
     overview(&mut out, run);
-    techniques(&mut out, run);
+    super::choice::technique_markdown(&mut out, run, cell_text);
     variants(&mut out, run);
     passes(&mut out, run);
     for scene in &run.scenes {
@@ -119,27 +118,6 @@ pub fn overview(out: &mut String, run: &RunRecord) {
         "\nEach cell: frame ms / PSNR against the truth in dB; **bold** where the mode is on the \
          scene's error-against-run-time front.\n",
     );
-}
-
-/// Which technique for each scene: the fastest mode at each PSNR level its front reaches.
-fn techniques(out: &mut String, run: &RunRecord) {
-    let rows: Vec<(&str, Vec<String>)> = run
-        .scenes
-        .iter()
-        .map(|s| (s.name.as_str(), fastest_by_level(s).iter().map(|(l, m)| technique_cell(*l, m)).collect()))
-        .filter(|(_, cells): &(&str, Vec<String>)| !cells.is_empty())
-        .collect();
-    if rows.is_empty() {
-        return;
-    }
-    out.push_str(
-        "\n### Which technique for this scene\n\nFor each PSNR against the truth that a mode on the \
-         scene's front reaches, the fastest unstalled mode that reaches it (frame ms, mean FLIP).\n\n\
-         | scene | at least … dB: the fastest mode |\n|---|---|\n",
-    );
-    for (scene, cells) in rows {
-        let _ = writeln!(out, "| {} | {} |", cell_text(scene), cell_text(&cells.join(" · ")));
-    }
 }
 
 /// Per scene, M and stall: the reference, the paper's adaptive mode and its variants side by
@@ -267,12 +245,12 @@ fn scene_table(out: &mut String, scene: &SceneRecord) {
         let cells: Vec<String> = mode_cells(mode).iter().map(|c| cell_text(c)).collect();
         let _ = writeln!(out, "| {} |", cells.join(" | "));
     }
-    if let Some(sequence) = &scene.sequence {
+    for (index, sequence) in scene.sequences.iter().enumerate() {
         let _ = writeln!(out, "\nAlong the camera path: {}.\n", cell_text(&sequence_summary(sequence)));
         let columns = sequence_columns();
         let _ = writeln!(out, "| {} |", columns.join(" | "));
         let _ = writeln!(out, "|---|{}", "---:|".repeat(columns.len() - 1));
-        for cells in scene.modes.iter().filter_map(sequence_cells) {
+        for cells in scene.modes.iter().filter_map(|mode| sequence_cells(mode, index)) {
             let cells: Vec<String> = cells.iter().map(|c| cell_text(c)).collect();
             let _ = writeln!(out, "| {} |", cells.join(" | "));
         }
@@ -293,16 +271,17 @@ pub fn figures(run_dir: &Path, run: &RunRecord, dir: &Path) -> Result<(Vec<Strin
     for scene in &run.scenes {
         for metric in ErrorMetric::of_scene(scene) {
             let suffix = match metric {
-                ErrorMetric::Mse => "front",
-                ErrorMetric::Flip => "front-flip",
-                ErrorMetric::Instability => "instability",
+                ErrorMetric::Mse => "front".into(),
+                ErrorMetric::Flip => "front-flip".into(),
+                ErrorMetric::Flicker(0) => "front-flicker".into(),
+                ErrorMetric::Flicker(index) => format!("front-flicker-{}", index + 1),
             };
             let points = error_points(scene, metric);
             if points.is_empty() {
                 left_out.push(format!("{}: no mode has a {} to plot", scene.name, metric.axis()));
                 continue;
             }
-            let title = format!("{}: {}", scene.name, metric.title());
+            let title = format!("{}: {}", scene.name, metric.title(scene));
             let svg = plots::error_against_time(&title, [metric.time_axis(), metric.axis()], &points)?;
             let path = dir.join(format!("{}-{suffix}.svg", scene.name));
             crate::fs::write(&path, standalone(&svg).as_bytes())?;
@@ -320,7 +299,7 @@ pub fn figures(run_dir: &Path, run: &RunRecord, dir: &Path) -> Result<(Vec<Strin
             }
             Err(reason) => left_out.push(format!("{}: no strip: {reason}", scene.name)),
         }
-        if scene.sequence.is_some() {
+        if scene.sequence().is_some() {
             let path = dir.join(format!("{}-flicker.png", scene.name));
             match flicker_animation(run_dir, scene, &path) {
                 Ok(shows) => written.push(format!("{} ({shows})", path.display())),
@@ -335,7 +314,7 @@ pub fn figures(run_dir: &Path, run: &RunRecord, dir: &Path) -> Result<(Vec<Strin
 /// worst-flickering square side by side, frame for frame, enlarged: what it shows, or why the
 /// scene has none.
 fn flicker_animation(run_dir: &Path, scene: &SceneRecord, path: &Path) -> Result<String, String> {
-    let sequence = scene.sequence.as_ref().ok_or("no sequence")?;
+    let sequence = scene.sequence().ok_or("no sequence")?;
     let Some(region) = &sequence.region else {
         return Err(sequence.region_error.clone().unwrap_or_else(|| "no flicker region".into()));
     };

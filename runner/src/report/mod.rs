@@ -1,9 +1,10 @@
 //! `aabench report`: a static, self-contained `index.html` beside a run's run.json. It opens
 //! from disk with no server and loads nothing from the network: CSS inline, plots as inline
 //! SVG (drawn with plotters), images by relative paths into the run folder. The page is built
-//! here from its tables (`tables.rs`), plots (`points.rs`, `plots.rs`), images (`images.rs`)
+//! here from its tables (`tables.rs`, and which technique for each scene in `choice.rs`), plots (`points.rs`, `plots.rs`), images (`images.rs`)
 //! and history (`history.rs`); `markdown.rs` writes the same tables as Markdown.
 
+mod choice;
 mod history;
 pub mod html;
 mod images;
@@ -12,13 +13,11 @@ pub mod plots;
 mod points;
 mod tables;
 
+pub use choice::{Basis, fastest_by_level, technique_cell};
 pub use history::load_history;
 pub use images::{open_rgba, side_by_side, worst_window};
 pub use points::{ErrorMetric, error_points};
-pub use tables::{
-    decibels, fastest_by_level, mode_cells, mode_columns, sequence_cells, sequence_columns, sequence_summary,
-    technique_cell,
-};
+pub use tables::{decibels, mode_cells, mode_columns, sequence_cells, sequence_columns, sequence_summary};
 
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -136,7 +135,7 @@ fn summary(page: &mut String, run: &RunRecord, verdict: Option<&Verdict>) {
             verdict.notes.iter().map(|n| format!("<br>{}", escape(n))).collect::<String>()
         );
     }
-    tables::technique_table(page, run);
+    choice::technique_table(page, run);
     page.push_str("<nav>");
     for scene in &run.scenes {
         let _ = write!(page, "<a href=\"#{0}\">{0}</a> ", escape(&scene.name));
@@ -176,7 +175,9 @@ fn scene_section(
     let checks: Vec<&Check> =
         verdict.map_or_else(Vec::new, |v| v.checks.iter().filter(|c| c.scene == scene.name).collect());
     tables::mode_table(page, scene, &checks);
-    tables::sequence_table(page, scene);
+    for index in 0..scene.sequences.len() {
+        tables::sequence_table(page, scene, index);
+    }
     for metric in ErrorMetric::of_scene(scene) {
         let points = error_points(scene, metric);
         if points.is_empty() {
@@ -185,7 +186,7 @@ fn scene_section(
             }
             continue;
         }
-        let title = format!("{}: {}", scene.name, metric.title());
+        let title = format!("{}: {}", scene.name, metric.title(scene));
         let plot = plots::error_against_time(&title, [metric.time_axis(), metric.axis()], &points)?;
         let _ = writeln!(page, "<figure class=\"plot\">{plot}</figure>");
     }

@@ -1,5 +1,5 @@
 //! The points of the error-against-run-time plots: one per mode with an error against the
-//! truth (MSE, FLIP) or along the camera path (instability) and a frame time.
+//! truth (MSE, FLIP) or along the camera path (flicker) and a frame time.
 
 use super::plots::Point;
 use crate::record::{ModeRecord, SceneRecord};
@@ -13,9 +13,9 @@ pub enum ErrorMetric {
     /// Mean FLIP against the truth; its front is drawn by medians: no faster mode of the same
     /// stall has less FLIP.
     Flip,
-    /// Temporal instability along the scene's camera path (`run/sequence.rs`); its front is drawn
-    /// by medians as FLIP's.
-    Instability,
+    /// Flicker along the scene's sequence `index` (`temporal.rs`); its front is drawn by
+    /// medians as FLIP's.
+    Flicker(usize),
 }
 
 impl ErrorMetric {
@@ -23,24 +23,27 @@ impl ErrorMetric {
         match self {
             ErrorMetric::Mse => "MSE against the truth ×1e-5 (log)",
             ErrorMetric::Flip => "mean FLIP against the truth (log)",
-            ErrorMetric::Instability => "temporal instability along the camera path (log)",
+            ErrorMetric::Flicker(_) => "flicker along the camera path (log)",
         }
     }
 
-    /// What a plot of this metric is called, after the scene's name.
-    pub fn title(self) -> &'static str {
+    /// What a plot of this metric of `scene` is called, after the scene's name.
+    pub fn title(self, scene: &SceneRecord) -> String {
         match self {
-            ErrorMetric::Mse => "error against run time",
-            ErrorMetric::Flip => "FLIP against run time",
-            ErrorMetric::Instability => "instability against run time",
+            ErrorMetric::Mse => "error against run time".into(),
+            ErrorMetric::Flip => "FLIP against run time".into(),
+            ErrorMetric::Flicker(index) => match scene.sequences.get(index) {
+                Some(sequence) => format!("flicker against run time at {}", sequence.speed()),
+                None => "flicker against run time".into(),
+            },
         }
     }
 
-    /// The x axis: the still's frame time, or for instability the frame time along the path,
+    /// The x axis: the still's frame time, or for flicker the frame time along the path,
     /// where the mode's cost may differ from its still's (a `-stable` mode's counts).
     pub fn time_axis(self) -> &'static str {
         match self {
-            ErrorMetric::Instability => "frame time along the path, ms (median and interval; log)",
+            ErrorMetric::Flicker(_) => "frame time along the path, ms (median and interval; log)",
             ErrorMetric::Mse | ErrorMetric::Flip => "frame time, ms (median and interval; log)",
         }
     }
@@ -49,17 +52,17 @@ impl ErrorMetric {
     /// recorded no times along the path.
     fn time(self, mode: &ModeRecord) -> Option<&crate::stats::Summary> {
         match self {
-            ErrorMetric::Instability => {
-                mode.sequence.as_ref().and_then(|s| s.frame_ms.as_ref()).or(mode.frame_ms.as_ref())
+            ErrorMetric::Flicker(index) => {
+                mode.sequence_at(index).and_then(|s| s.frame_ms.as_ref()).or(mode.frame_ms.as_ref())
             }
             ErrorMetric::Mse | ErrorMetric::Flip => mode.frame_ms.as_ref(),
         }
     }
 
-    /// The plots a scene has: instability only where it has a camera path.
+    /// The plots a scene has: flicker only where it has a camera path.
     pub fn of_scene(scene: &SceneRecord) -> Vec<ErrorMetric> {
         let mut metrics = vec![ErrorMetric::Mse, ErrorMetric::Flip];
-        metrics.extend(scene.sequence.as_ref().map(|_| ErrorMetric::Instability));
+        metrics.extend((0..scene.sequences.len()).map(ErrorMetric::Flicker));
         metrics
     }
 
@@ -68,14 +71,15 @@ impl ErrorMetric {
         let (id, scale) = match self {
             ErrorMetric::Mse => ("mse_vs_truth", 1e5),
             ErrorMetric::Flip => ("flip_vs_truth", 1.0),
-            ErrorMetric::Instability => ("instability", 1.0),
+            ErrorMetric::Flicker(_) => ("flicker", 1.0),
         };
         (vocabulary::metric(id).expect("a plotted metric is in the vocabulary"), scale)
     }
 
     fn of(self, mode: &ModeRecord) -> Option<f64> {
         let (metric, scale) = self.metric();
-        Some((metric.read)(mode)? * scale)
+        let index = if let ErrorMetric::Flicker(index) = self { index } else { 0 };
+        Some(metric.value_at(mode, index)? * scale)
     }
 }
 

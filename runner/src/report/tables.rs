@@ -1,6 +1,6 @@
 //! The report's tables: each scene's modes (their still, and along the camera path), the gate's
-//! checks, which technique for each scene, and the cost of the adaptive modes. The Markdown
-//! report takes its columns and cells from here too.
+//! checks, and the cost of the adaptive modes. The Markdown report takes its columns and cells
+//! from here too.
 
 use std::fmt::Write;
 
@@ -27,7 +27,7 @@ pub fn mode_cells(mode: &ModeRecord) -> Vec<String> {
     let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
     let frame = mode.frame_ms.as_ref();
     let metrics =
-        vocabulary::columns(Table::Still).map(|(metric, column)| vocabulary::cell(metric, column, mode));
+        vocabulary::columns(Table::Still).map(|(metric, column)| vocabulary::cell(metric, column, mode, 0));
     [
         mode.mode.clone(),
         cell(frame.map(|f| format!("{:.1}", f.median))),
@@ -45,26 +45,27 @@ pub fn mode_cells(mode: &ModeRecord) -> Vec<String> {
 }
 
 /// The columns of a scene's table along its camera path ([`sequence_cells`]): the mode and its
-/// time per frame, the metrics with a column in the path's table, and TAA's ghosting.
+/// time per frame, the metrics with a column in the path's table, and what lag costs.
 pub fn sequence_columns() -> Vec<&'static str> {
     let metrics = vocabulary::columns(Table::Path).map(|(_, column)| column.header);
     ["mode", "ms per frame along the path"]
         .into_iter()
         .chain(metrics)
-        .chain(["ghosting: disoccluded % · MSE there / elsewhere ×1e-3"])
+        .chain(["disoccluded % · MSE there / at moving edges / elsewhere ×1e-3"])
         .collect()
 }
 
-/// A mode's row along the scene's camera path, where it has one.
-pub fn sequence_cells(mode: &ModeRecord) -> Option<Vec<String>> {
-    let sequence = mode.sequence.as_ref()?;
+/// A mode's row along the scene's sequence `index`, where it has one.
+pub fn sequence_cells(mode: &ModeRecord, index: usize) -> Option<Vec<String>> {
+    let sequence = mode.sequence_at(index)?;
     let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
     let ghosting = sequence.ghosting.as_ref().map(|g| {
         let mse = |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.2}", v * 1e3));
-        format!("{:.2} · {} / {}", g.disoccluded * 100.0, mse(g.mse), mse(g.mse_elsewhere))
+        let mses = [g.mse, g.mse_edges, g.mse_elsewhere].map(mse).join(" / ");
+        format!("{:.2} · {mses}", g.disoccluded * 100.0)
     });
-    let metrics =
-        vocabulary::columns(Table::Path).map(|(metric, column)| vocabulary::cell(metric, column, mode));
+    let metrics = vocabulary::columns(Table::Path)
+        .map(|(metric, column)| vocabulary::cell(metric, column, mode, index));
     Some(
         [mode.mode.clone(), cell(sequence.frame_ms.as_ref().map(|f| format!("{:.1}", f.median)))]
             .into_iter()
@@ -74,12 +75,13 @@ pub fn sequence_cells(mode: &ModeRecord) -> Option<Vec<String>> {
     )
 }
 
-/// The scene's modes along its camera path, where it has one.
-pub(super) fn sequence_table(page: &mut String, scene: &SceneRecord) {
-    let Some(sequence) = &scene.sequence else { return };
-    let rows: Vec<Vec<String>> = scene.modes.iter().filter_map(sequence_cells).collect();
+/// The scene's modes along its sequence `index`.
+pub(super) fn sequence_table(page: &mut String, scene: &SceneRecord, index: usize) {
+    let Some(sequence) = scene.sequences.get(index) else { return };
+    let rows: Vec<Vec<String>> = scene.modes.iter().filter_map(|mode| sequence_cells(mode, index)).collect();
     let summary = escape(&sequence_summary(sequence));
-    let _ = writeln!(page, "<h3>Along the camera path</h3>\n<p class=\"meta\">{summary}</p>");
+    let speed = escape(&sequence.speed());
+    let _ = writeln!(page, "<h3>Along the camera path: {speed}</h3>\n<p class=\"meta\">{summary}</p>");
     if rows.is_empty() {
         return;
     }
@@ -98,12 +100,19 @@ pub(super) fn sequence_table(page: &mut String, scene: &SceneRecord) {
     page.push_str("</tbody></table>\n");
 }
 
-/// One line on a scene's sequence: its path, frames and the truth's own change.
+/// One line on a scene's sequence: its path, frames and the truth's own change along its
+/// motion, the flicker of a steady image.
 pub fn sequence_summary(sequence: &SequenceRecord) -> String {
-    let truth = sequence.truth_change.map_or("–".into(), |c| format!("{c:.3e}"));
+    let steady = sequence.truth_flicker.map_or("–".into(), |c| format!("{:.3}", c * 1e4));
     let mut line = format!(
-        "{} path, {} of {} frames of {:.4} s; the truth's own mean squared change per frame {truth}",
-        sequence.path, sequence.frames_done, sequence.frames, sequence.time_step_s
+        "{} path at {}, {} of {} frames of {:.4} s. Flicker is the mean squared change of a mode's \
+         error along the truth's motion; a steady image that shows none of the truth's moiré scores \
+         {steady} ×1e-4 here",
+        sequence.path,
+        sequence.speed(),
+        sequence.frames_done,
+        sequence.frames,
+        sequence.time_step_s
     );
     if let Some(error) = &sequence.error {
         let _ = write!(line, "; stopped: {error}");
@@ -233,69 +242,4 @@ pub(super) fn adaptive_costs(page: &mut String, run: &RunRecord) {
         );
     }
     page.push_str("</tbody></table>\n</section>\n");
-}
-
-/// Which technique for this scene: for each PSNR against the truth that an unstalled mode on
-/// the scene's front reaches, lowest first, the fastest unstalled mode (by median) that
-/// reaches it, once per mode.
-pub fn fastest_by_level(scene: &SceneRecord) -> Vec<(f64, &ModeRecord)> {
-    let measured: Vec<(f64, f64, &ModeRecord)> = scene
-        .modes
-        .iter()
-        .filter(|m| !m.stalled)
-        .filter_map(|m| Some((m.vs_ground_truth.as_ref()?.psnr_db.value(), m.frame_ms.as_ref()?.median, m)))
-        .collect();
-    let mut levels: Vec<f64> = measured
-        .iter()
-        .filter(|(_, _, m)| m.front.as_ref().is_some_and(|place| place.on_front))
-        .map(|&(psnr, _, _)| psnr)
-        .collect();
-    levels.sort_by(f64::total_cmp);
-    let mut rows: Vec<(f64, &ModeRecord)> = Vec::new();
-    for level in levels {
-        let fastest =
-            measured.iter().filter(|(psnr, _, _)| *psnr >= level).min_by(|a, b| a.1.total_cmp(&b.1));
-        if let Some(&(_, _, mode)) = fastest
-            && rows.last().is_none_or(|(_, last)| last.mode != mode.mode)
-        {
-            rows.push((level, mode));
-        }
-    }
-    rows
-}
-
-/// `fastest_by_level` of every scene as one table: a row per scene, its levels in a cell.
-pub(super) fn technique_table(page: &mut String, run: &RunRecord) {
-    let rows: Vec<(&SceneRecord, Vec<(f64, &ModeRecord)>)> =
-        run.scenes.iter().map(|s| (s, fastest_by_level(s))).filter(|(_, r)| !r.is_empty()).collect();
-    if rows.is_empty() {
-        return;
-    }
-    page.push_str(
-        "<h2>Which technique for this scene</h2>\n<p>For each PSNR against the truth that a mode on the \
-         scene's front reaches, the fastest unstalled mode that reaches it (frame ms, FLIP).</p>\n\
-         <table><thead><tr><th>scene</th><th>at least … dB: the fastest mode</th></tr></thead><tbody>\n",
-    );
-    for (scene, levels) in rows {
-        let cells: Vec<String> = levels.iter().map(|(level, mode)| technique_cell(*level, mode)).collect();
-        let _ = writeln!(
-            page,
-            "<tr><td>{}</td><td>{}</td></tr>",
-            escape(&scene.name),
-            escape(&cells.join(" · "))
-        );
-    }
-    page.push_str("</tbody></table>\n");
-}
-
-/// `36.00 dB: reference-2x2 (280.7 ms, FLIP 0.0196)`.
-pub fn technique_cell(level: f64, mode: &ModeRecord) -> String {
-    let level = if level.is_finite() { format!("{level:.2} dB") } else { "∞ dB".into() };
-    let ms = mode.frame_ms.as_ref().map_or(0.0, |f| f.median);
-    let flip = mode
-        .vs_ground_truth
-        .as_ref()
-        .and_then(|q| q.flip)
-        .map_or(String::new(), |f| format!(", FLIP {f:.4}"));
-    format!("{level}: {} ({ms:.1} ms{flip})", mode.mode)
 }

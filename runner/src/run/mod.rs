@@ -168,7 +168,7 @@ fn empty_scene_at(manifest: &Path) -> SceneRecord {
         gate: Default::default(),
         exposure: None,
         truth: None,
-        sequence: None,
+        sequences: Vec::new(),
         modes: Vec::new(),
     }
 }

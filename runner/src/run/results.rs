@@ -252,7 +252,7 @@ fn timing_record(
         front: None,
         graph: run.graph.clone(),
         checks: (run.checks.frames > 0).then_some(run.checks),
-        sequence: run.sequence.clone(),
+        sequences: run.sequences.clone(),
     }
 }
 

@@ -17,8 +17,8 @@ pub(super) struct ModeRun {
     pub(super) hashes: Vec<String>,
     pub(super) images: Option<FrameImages>,
     pub(super) checks: FrameChecks,
-    /// Its sequence, where the scene has a camera path.
-    pub(super) sequence: Option<ModeSequence>,
+    /// Its sequences, one per scene sequence, where the scene has a camera path.
+    pub(super) sequences: Vec<Option<ModeSequence>>,
     pub(super) error: Option<String>,
 }
 

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
+use aabench_renderer::scene::Camera;
 use aabench_renderer::{DisplayImage, Mode, color};
 
 use super::results::finish_modes;
@@ -76,7 +77,7 @@ impl<'a> SceneRun<'a> {
             Ok(loaded) => loaded,
             Err(error) => return fail(record, error),
         };
-        let (still_camera, path) = (loaded.camera, loaded.path.clone());
+        let (still_camera, pivot) = (loaded.camera, loaded.pivot);
         match self.upload(loaded).await {
             Ok((budget, exposure)) => {
                 record.memory_limit_bytes = budget;
@@ -103,7 +104,7 @@ impl<'a> SceneRun<'a> {
         };
         self.timed_rounds(&mut runs).await;
         self.temporal_stills(&mut runs).await;
-        self.sequence(&mut record, &mut runs, &still_camera, &path, truth_image.as_ref()).await;
+        self.sequences(&mut record, &mut runs, (&still_camera, pivot), truth_image.as_ref()).await;
         // Free the scene's device memory before the CPU work below.
         self.free_scene().await;
         self.status("writing images and metrics");
@@ -116,40 +117,58 @@ impl<'a> SceneRun<'a> {
         conclude(record, self.worker.is_stuck(), interrupted)
     }
 
-    /// The scene's sequence along its camera path, where it has one and the plan renders
-    /// sequences: each mode's outcome joins its run (a sequence frame is a frame of the mode
-    /// like any other: NaN in it fails the mode).
-    async fn sequence(
+    /// The scene's sequences along its camera path, where it has one and the plan renders
+    /// sequences: one per speed of the tier, from the still camera whose path turns about a
+    /// target `pivot` along its view. Each mode's outcome joins its run (a sequence frame is a
+    /// frame of the mode like any other: NaN in it fails the mode).
+    async fn sequences(
         &mut self,
         record: &mut SceneRecord,
         runs: &mut [ModeRun],
-        still_camera: &aabench_renderer::scene::Camera,
-        path: &[aabench_renderer::scene::Camera],
+        (still_camera, pivot): (&Camera, f64),
         still_truth: Option<&DisplayImage>,
     ) {
         let Some(motion) = self.manifest.motion.as_ref().filter(|_| self.plan.sequences) else { return };
-        if self.cancelled() || self.worker.is_stuck() {
-            return;
-        }
-        let modes: Vec<(Mode, bool)> =
-            self.plan.modes.iter().zip(runs.iter()).map(|(mode, run)| (*mode, run.error.is_none())).collect();
+        let paces = self.plan.tier.paces(self.manifest, still_camera.fov_y);
+        let frames = self.plan.tier.sequence_frames(motion);
         let still_key = record.truth.as_ref().map(|truth| truth.key.clone()).unwrap_or_default();
-        let along = sequence::Along {
-            motion,
-            cameras: &path[..self.plan.tier.sequence_frames(motion) as usize],
-            still_camera,
-            still_truth,
-            still_key: &still_key,
-        };
-        let (sequence, outcomes) = sequence::run(self, along, &modes).await;
-        for (run, outcome) in runs.iter_mut().zip(outcomes) {
-            run.checks.add(outcome.checks);
-            run.sequence = outcome.sequence;
-            if let Some(error) = outcome.error {
-                run.error.get_or_insert(format!("sequence: {error}"));
+        for (index, pace) in paces.iter().enumerate() {
+            if self.cancelled() || self.worker.is_stuck() {
+                return;
             }
+            // Checked when the scene loaded.
+            let cameras = match motion.cameras(still_camera, pivot, frames, pace.rate) {
+                Ok(cameras) => cameras,
+                Err((field, message)) => return self.warn(&format!("no sequence: {field}: {message}")),
+            };
+            let modes: Vec<(Mode, bool)> = self
+                .plan
+                .modes
+                .iter()
+                .zip(runs.iter())
+                .map(|(mode, run)| (*mode, run.error.is_none()))
+                .collect();
+            // The first speed's animations in `path/`, the others' in `path-2/`, `path-3/`, ….
+            let folder = if index == 0 { "path".into() } else { format!("path-{}", index + 1) };
+            let along = sequence::Along {
+                motion,
+                pace: *pace,
+                cameras: &cameras,
+                folder: &folder,
+                still_camera,
+                still_truth,
+                still_key: &still_key,
+            };
+            let (sequence, outcomes) = sequence::run(self, along, &modes).await;
+            for (run, outcome) in runs.iter_mut().zip(outcomes) {
+                run.checks.add(outcome.checks);
+                run.sequences.push(outcome.sequence);
+                if let Some(error) = outcome.error {
+                    run.error.get_or_insert(format!("sequence ({}): {error}", sequence.speed()));
+                }
+            }
+            record.sequences.push(sequence);
         }
-        record.sequence = Some(sequence);
     }
 
     /// Reads the manifest's glTF file and hashes the scene's inputs, off the async threads; records
@@ -189,6 +208,7 @@ impl<'a> SceneRun<'a> {
             .call(plan.frame_timeout, move |state| {
                 let scenes::LoadedScene { scene, camera, lighting, .. } = loaded;
                 state.modes.clear();
+                state.geometry = None;
                 state.renderer = None;
                 let mut renderer = aabench_renderer::SceneRenderer::new(
                     state.gpu.clone(),
@@ -331,6 +351,7 @@ impl<'a> SceneRun<'a> {
             .worker
             .call(self.plan.frame_timeout, |state| {
                 state.modes.clear();
+                state.geometry = None;
                 state.renderer = None;
             })
             .await;

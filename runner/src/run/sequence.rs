@@ -2,15 +2,17 @@
 //! manifest's camera path (`motion.rs`) once, untimed, and is measured against the truth's frame
 //! at the same camera.
 //!
-//! **Temporal instability** is how much more (or less) a mode's image changes from one frame to
-//! the next than the truth's does: with A and T the mode's and the truth's display images (code
-//! values scaled to [0, 1]), the mean over pixels, channels and consecutive frame pairs of
-//! ((A_f − A_{f−1}) − (T_f − T_{f−1}))², which is the mean squared change of the error image
-//! A − T from frame to frame. A mode whose error stays put scores 0 however large the error;
-//! aliasing that shimmers or crawls, which flips the error from frame to frame, scores high.
-//! No motion compensation is applied: the default paths move the image by a fraction of a pixel
-//! per frame, so an error that travels with the geometry changes little between frames, and an
-//! exact reprojection of a display image does not exist (disocclusions, sub-pixel detail).
+//! **Flicker** is measured along the truth's own motion (`temporal.rs`): each pixel followed
+//! back to where its surface point lay in the frame before, by the scene's geometry probe
+//! rendered at every frame, and the mode's error compared there. An error that travels with the
+//! surface does not count; one that crawls, shimmers or stays put while the scene moves does.
+//! Beside it, what lag costs: the error on the pixels the frame before did not see
+//! (disoccluded), at silhouettes that moved, and elsewhere.
+//!
+//! **Temporal instability** is kept for the gate: the mean over pixels, channels and
+//! consecutive frame pairs of ((A_f − A_{f−1}) − (T_f − T_{f−1}))², with A and T the mode's and
+//! the truth's display images (code values scaled to [0, 1]), without motion compensation. It
+//! rewards lag and blur: an image that never changes scores the truth's own change.
 //! `change_ratio` sets the mode's own mean squared frame-to-frame change against the truth's.
 //!
 //! Every frame is spooled to disk as it renders (`spool.rs`). Once the last is done, every frame
@@ -19,10 +21,6 @@
 //! (`flicker.rs`).
 //!
 //! A temporal mode (TAA) starts the path from a still: its warm-up frames at the first camera.
-//! Its **ghosting** is its error on the pixels that its history cannot hold: those whose point
-//! lay outside the previous frame, or behind the surfaces seen around where it lay (deeper
-//! than each of the four nearest pixels' depths by more than [`HIDDEN_DEPTH`]), found from the
-//! mode's own motion vectors and depths.
 
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
@@ -35,9 +33,10 @@ use aabench_renderer::{DisplayImage, Mode};
 use super::scene::SceneRun;
 use crate::flicker::{self, TRUTH_STREAM, pixel_changes_of_error};
 use crate::metrics::{self, Decibels, FrameChecks};
-use crate::motion::MotionSpec;
+use crate::motion::{MotionSpec, Pace, PathKind};
 use crate::record::{Ghosting, ModeSequence, SequenceRecord, fingerprint};
 use crate::spool::Spool;
+use crate::temporal::{self, Flow, Geometry, PairError};
 use crate::truth;
 
 /// What the sequence is measured along and against: the path and its cameras in this tier, and
@@ -45,7 +44,10 @@ use crate::truth;
 #[derive(Debug)]
 pub struct Along<'a> {
     pub motion: &'a MotionSpec,
+    pub pace: Pace,
     pub cameras: &'a [Camera],
+    /// The folder under the scene's that holds the sequence's animations.
+    pub folder: &'a str,
     pub still_camera: &'a Camera,
     pub still_truth: Option<&'a DisplayImage>,
     pub still_key: &'a str,
@@ -60,29 +62,21 @@ pub struct ModeOutcome {
     pub error: Option<String>,
 }
 
-/// A mode's frame: its time, display image, sample counts and checks, and a temporal mode's
-/// geometry.
+/// A mode's frame: its time, display image, sample counts and checks.
 struct ModeFrame {
     seconds: f64,
     display: DisplayImage,
     counts: Option<Vec<u8>>,
     checks: FrameChecks,
-    geometry: Option<Geometry>,
 }
 
-/// Where a temporal mode's pixels were in the frame before, and how deep they are now.
-struct Geometry {
-    width: usize,
-    /// Per pixel: the pixels its point moved since the frame before, and its depth then.
-    motion: Vec<[f32; 4]>,
-    /// Per pixel, linear view depth at its sample, which lay `jitter` pixels off its centre.
-    depth: Vec<f64>,
-    jitter: [f64; 2],
+/// The truth's frame and the frame before, and how the pixels of one follow back into the
+/// other.
+struct TruthPair<'a> {
+    now: &'a DisplayImage,
+    then: Option<&'a DisplayImage>,
+    flow: Option<&'a Flow>,
 }
-
-/// How much deeper than every surface seen around its place in the frame before a point must
-/// have been, relatively, to count as hidden then.
-pub(super) const HIDDEN_DEPTH: f64 = 0.01;
 
 /// What the sequence keeps of a mode between frames, and its sums so far.
 #[derive(Default)]
@@ -100,9 +94,9 @@ struct ModeState {
     /// time (every frame but the first, which is rendered as a still).
     shaded_percent: Vec<f64>,
     frame_seconds: Vec<f64>,
-    /// Squared error in code steps and values, on disoccluded pixels and elsewhere; the share
-    /// of pixels disoccluded per frame pair.
-    ghosting: [(u64, u64); 2],
+    /// The error along the truth's motion, summed over the frame pairs; the share of pixels
+    /// disoccluded per pair.
+    followed: PairError,
     disoccluded: Vec<f64>,
     checks: FrameChecks,
     error: Option<String>,
@@ -117,14 +111,18 @@ pub(super) async fn run(
     modes: &[(Mode, bool)],
 ) -> (SequenceRecord, Vec<ModeOutcome>) {
     let start = Instant::now();
+    let fixed = matches!(along.motion.path, PathKind::Static | PathKind::Keyframes);
     let mut record = SequenceRecord {
         path: along.motion.path.name().to_string(),
+        rate: (!fixed).then_some(along.pace.rate),
+        pixels_per_frame: along.pace.pixels_per_frame,
         frames: along.cameras.len() as u32,
         frames_done: 0,
         time_step_s: along.motion.time_step_s,
         truth_rendered: 0,
         truth_render_s: 0.0,
         truth_change: None,
+        truth_flicker: None,
         seconds: 0.0,
         error: None,
         flip_s: 0.0,
@@ -134,12 +132,12 @@ pub(super) async fn run(
     };
     let mut states: Vec<ModeState> = modes.iter().map(|_| ModeState::default()).collect();
     // Every mode's frames are spooled, to stream `index + 1`; the truth's to stream 0.
-    let out_dir = scene.dir.join("path");
+    let out_dir = scene.dir.join(along.folder);
     let size = scene.resolution;
     let names =
         std::iter::once(TRUTH_STREAM.to_string()).chain(modes.iter().map(|(mode, _)| mode.to_string()));
     let mut spool = Spool::create(out_dir.join(".spool"), size, names.collect());
-    let mut flicker = vec![0u64; size[0] as usize * size[1] as usize];
+    let mut flicker = vec![0.0; size[0] as usize * size[1] as usize];
     let rendered = render_frames(scene, &along, modes, &mut record, &mut states, (&mut spool, &mut flicker));
     if let Err(error) = rendered.await {
         scene.warn(&format!("the sequence stopped: {error}"));
@@ -195,7 +193,7 @@ async fn render_frames(
     modes: &[(Mode, bool)],
     record: &mut SequenceRecord,
     states: &mut [ModeState],
-    (spool, flicker): (&mut Result<Spool, String>, &mut [u64]),
+    (spool, flicker): (&mut Result<Spool, String>, &mut [f64]),
 ) -> Result<(), String> {
     let frames = along.cameras.len();
     // A frame that cannot be spooled (a full disk) ends the spooling: the sequence goes on
@@ -207,8 +205,8 @@ async fn render_frames(
             *spool = Err(error);
         }
     };
-    let mut previous_truth: Option<DisplayImage> = None;
-    let mut truth_change = 0u64;
+    let mut track = TruthTrack::default();
+    prepare_geometry(scene).await?;
     for (frame, &camera) in along.cameras.iter().enumerate() {
         if scene.cancelled() {
             return Err(format!("interrupted after {frame} of {frames} frames"));
@@ -219,14 +217,7 @@ async fn render_frames(
         let status = |scene: &SceneRun, what: &str| {
             scene.status(&format!("sequence frame {}/{frames}: {what}", frame + 1))
         };
-        scene
-            .worker
-            .call(scene.plan.frame_timeout, move |state| {
-                state.renderer.as_mut().expect("an uploaded scene").set_camera(&camera)
-            })
-            .await
-            .map_err(|e| e.to_string())?
-            .map_err(|e| e.to_string())?;
+        set_camera(scene, camera).await?;
         let truth = match along.still_truth {
             Some(still) if camera == *along.still_camera => still.clone(),
             _ => {
@@ -235,16 +226,22 @@ async fn render_frames(
             }
         };
         keep(0, &truth);
+        status(scene, "the geometry");
+        let then = &along.cameras[frame.saturating_sub(1)];
+        let geometry = geometry(scene, [&camera, then], frame == 0).await?;
+        let (truth_then, geometry_then) = track.previous.as_ref().map(|(t, g)| (t, g)).unzip();
+        let flow = geometry_then.map(|then| Flow::between(&geometry, then));
+        let pair = TruthPair { now: &truth, then: truth_then, flow: flow.as_ref() };
         for (index, (mode, prepared)) in modes.iter().enumerate() {
             let state = &mut states[index];
             if !prepared || state.error.is_some() {
                 continue;
             }
             status(scene, &mode.to_string());
-            match render(scene, index, mode.m, frame == 0).await {
+            match render(scene, index, mode.m, frame).await {
                 Ok(Ok(rendered)) => {
                     keep(index + 1, &rendered.display);
-                    state.add(*mode, rendered, &truth, previous_truth.as_ref(), flicker);
+                    state.add(*mode, rendered, &pair, flicker);
                 }
                 Ok(Err(error)) => state.error = Some(error),
                 // The worker is gone or stuck: no later frame can render.
@@ -254,55 +251,130 @@ async fn render_frames(
                 }
             }
         }
-        if let Some(previous) = &previous_truth {
-            truth_change += squared_difference(&truth, previous);
-        }
-        previous_truth = Some(truth);
+        track.advance(truth, geometry, flow.as_ref(), record);
         record.frames_done = frame as u32 + 1;
-        if frame > 0 {
-            record.truth_change =
-                Some(per_value(truth_change, previous_truth.as_ref().expect("set above"), frame));
-        }
     }
     Ok(())
 }
 
-/// Renders prepared mode `index` once at the current camera and reads back its frame; the
-/// `first` frame of the path as a still, so that a temporal mode starts the path with the
-/// history of its warm-up frames at the first camera. The outer error is the worker's (it can
-/// render nothing more), the inner the mode's.
+/// The truth's side of a sequence: its frame and geometry before, and its own changes so far.
+#[derive(Default)]
+struct TruthTrack {
+    previous: Option<(DisplayImage, Geometry)>,
+    /// Σ of the squared frame-to-frame change, in squared code steps, over the pairs so far.
+    change: u64,
+    pairs: usize,
+    /// Σ of the squared change along the motion, and its count of values.
+    along_motion: (f64, u64),
+}
+
+impl TruthTrack {
+    /// Takes the next frame's truth and geometry, followed back into the frame before by
+    /// `flow`, and records the truth's own changes so far.
+    fn advance(
+        &mut self,
+        truth: DisplayImage,
+        geometry: Geometry,
+        flow: Option<&Flow>,
+        record: &mut SequenceRecord,
+    ) {
+        if let Some((before, _)) = &self.previous {
+            self.change += squared_difference(&truth, before);
+            self.pairs += 1;
+            record.truth_change = Some(per_value(self.change, &truth, self.pairs));
+            if let Some(flow) = flow {
+                let (sum, count) = flow.own_change(&truth, before);
+                self.along_motion = (self.along_motion.0 + sum, self.along_motion.1 + count);
+                record.truth_flicker = temporal::mean(self.along_motion);
+            }
+        }
+        self.previous = Some((truth, geometry));
+    }
+}
+
+/// Moves the renderer's camera: every frame rendered after sees the scene through `camera`.
+async fn set_camera(scene: &mut SceneRun<'_>, camera: Camera) -> Result<(), String> {
+    scene
+        .worker
+        .call(scene.plan.frame_timeout, move |state| {
+            state.renderer.as_mut().expect("an uploaded scene").set_camera(&camera)
+        })
+        .await
+        .map_err(|e| e.to_string())?
+        .map_err(|e| e.to_string())
+}
+
+/// Renders prepared mode `index` once at the current camera and reads back its frame `frame`;
+/// the path's first as a still, so that a temporal mode starts the path with the history of its
+/// warm-up frames at the first camera. The outer error is the worker's (it can render nothing
+/// more), the inner the mode's: a frame that shows nothing fails the mode, naming the frame,
+/// unless the scene is declared empty.
 async fn render(
     scene: &mut SceneRun<'_>,
     index: usize,
     m: u32,
-    first: bool,
+    frame: usize,
 ) -> Result<Result<ModeFrame, String>, String> {
+    let (first, declared_empty) = (frame == 0, scene.manifest.empty);
     let frame_timeout = scene.plan.frame_timeout;
     let timeout = if first { frame_timeout.saturating_mul(WARMUP_FRAMES) } else { frame_timeout };
-    let frame = scene
+    let rendered = scene
         .worker
         .call(timeout, move |state| {
             let prepared = state.modes[index].as_ref().expect("prepared mode");
             let timing = if first { prepared.render_still()? } else { prepared.render()? };
             let display = prepared.read_display()?;
             let counts = prepared.read_sample_counts()?;
-            let checks = FrameChecks::of(prepared.read_hdr()?.as_flattened(), counts.as_deref(), m);
-            let geometry = match prepared.read_motion()? {
-                Some(motion) => {
-                    let gbuffer = prepared.read_gbuffer()?;
-                    let jitter = prepared.last_jitter().unwrap_or_default();
-                    Some(Geometry { width: gbuffer.width as usize, motion, depth: gbuffer.depth, jitter })
-                }
-                None => None,
-            };
+            let hdr = prepared.read_hdr()?;
+            let checks = FrameChecks::of(hdr.as_flattened(), counts.as_deref(), m);
+            let blank = metrics::blank_image(hdr.as_flattened(), &display).filter(|_| !declared_empty);
             let seconds = timing.seconds();
-            Ok::<_, aabench_renderer::RenderError>(ModeFrame { seconds, display, counts, checks, geometry })
+            Ok::<_, aabench_renderer::RenderError>((ModeFrame { seconds, display, counts, checks }, blank))
         })
-        .await;
-    match frame {
-        Ok(frame) => Ok(frame.map_err(|e| e.to_string())),
+        .await
+        .map_err(|error| error.to_string())?;
+    Ok(match rendered {
+        Ok((_, Some(blank))) => Err(format!("frame {frame}: {blank}")),
+        Ok((rendered, None)) => Ok(rendered),
         Err(error) => Err(error.to_string()),
-    }
+    })
+}
+
+/// Prepares the scene's geometry probe on the worker, which the truth's frames follow.
+async fn prepare_geometry(scene: &mut SceneRun<'_>) -> Result<(), String> {
+    scene
+        .worker
+        .call(scene.plan.frame_timeout, |state| {
+            let renderer = state.renderer.as_mut().expect("an uploaded scene");
+            state.geometry = Some(renderer.prepare_geometry()?);
+            Ok::<_, aabench_renderer::RenderError>(())
+        })
+        .await
+        .map_err(|e| e.to_string())?
+        .map_err(|e| format!("the geometry probe: {e}"))
+}
+
+/// Renders the geometry probe at the current camera, `cameras[0]`, and reads it back; the frame
+/// before was seen through `cameras[1]`. The `first` frame of the path renders from a reset, so
+/// that it has no motion.
+async fn geometry(scene: &mut SceneRun<'_>, cameras: [&Camera; 2], first: bool) -> Result<Geometry, String> {
+    let [now, then] = cameras.map(|camera| *camera);
+    scene
+        .worker
+        .call(scene.plan.frame_timeout, move |state| {
+            let probe = state.geometry.as_ref().expect("a prepared geometry probe");
+            if first {
+                probe.render_still()?;
+            } else {
+                probe.render()?;
+            }
+            let motion = probe.read_motion()?.expect("the probe writes motion");
+            let gbuffer = probe.read_gbuffer()?;
+            Ok::<_, aabench_renderer::RenderError>(Geometry::from_probe(&gbuffer, &motion, [&now, &then]))
+        })
+        .await
+        .map_err(|e| e.to_string())?
+        .map_err(|e| format!("the geometry probe: {e}"))
 }
 
 /// The truth at frame `frame` of the path: from the cache, or rendered now and cached. Its key
@@ -339,16 +411,10 @@ async fn truth_frame(
 }
 
 impl ModeState {
-    /// Adds a frame: its error against the truth's frame and, from the frame before, the change
-    /// of its error (also added per pixel to `flicker`), of its image and of its sample counts.
-    fn add(
-        &mut self,
-        mode: Mode,
-        frame: ModeFrame,
-        truth: &DisplayImage,
-        previous_truth: Option<&DisplayImage>,
-        flicker: &mut [u64],
-    ) {
+    /// Adds a frame: its error against the truth's frame and, from the frame before, its error
+    /// along the truth's motion (each pixel's flicker also added to `flicker`), and the change
+    /// of its error, of its image and of its sample counts.
+    fn add(&mut self, mode: Mode, frame: ModeFrame, truth: &TruthPair, flicker: &mut [f64]) {
         self.checks.add(frame.checks);
         // Counts outside the window are reported by the frame's checks.
         if let Some(stats) =
@@ -360,24 +426,18 @@ impl ModeState {
             self.frame_seconds.push(frame.seconds);
         }
         self.hashes.push(fingerprint(&frame.display, frame.counts.as_deref()));
-        self.mse.push(metrics::quality(&frame.display, truth, "truth").mse);
-        if let (Some(before), Some(truth_before)) = (&self.previous, previous_truth) {
-            self.error_change +=
-                change_of_error(&frame.display, &before.display, truth, truth_before, flicker);
+        self.mse.push(metrics::quality(&frame.display, truth.now, "truth").mse);
+        if let (Some(before), Some(truth_before)) = (&self.previous, truth.then) {
+            self.error_change += change_of_error(&frame.display, &before.display, truth.now, truth_before);
             self.own_change += squared_difference(&frame.display, &before.display);
             if let (Some(now), Some(then)) = (&frame.counts, &before.counts) {
                 let changed = now.iter().zip(then).filter(|(a, b)| a != b).count();
                 self.count_changes.push(changed as f64 / now.len().max(1) as f64);
             }
-            if let (Some(now), Some(then)) = (&frame.geometry, &before.geometry) {
-                let hidden = now.disoccluded(then);
-                let share = hidden.iter().filter(|&&h| h).count() as f64 / hidden.len().max(1) as f64;
-                self.disoccluded.push(share);
-                let pixels = frame.display.rgba.chunks_exact(4).zip(truth.rgba.chunks_exact(4));
-                for ((p, t), &hidden) in pixels.zip(&hidden) {
-                    let sums = &mut self.ghosting[usize::from(!hidden)];
-                    *sums = (sums.0 + pixel_squares(p, t), sums.1 + 3);
-                }
+            if let Some(flow) = truth.flow {
+                let pair = [&frame.display, truth.now];
+                self.followed.add(&flow.error(pair, [&before.display, truth_before], flicker));
+                self.disoccluded.push(flow.disoccluded_share());
             }
         }
         self.previous = Some(frame);
@@ -397,7 +457,7 @@ impl ModeState {
             count_changes,
             shaded_percent,
             frame_seconds,
-            ghosting,
+            followed,
             disoccluded,
             checks,
             error,
@@ -419,55 +479,16 @@ impl ModeState {
             count_changes: mean(&count_changes),
             shaded_percent: mean(&shaded_percent),
             frame_ms: crate::stats::Summary::new(frame_seconds.iter().map(|s| s * 1e3).collect()),
-            ghosting: (!disoccluded.is_empty()).then(|| {
-                let scale = f64::from(last.display.max_code()).powi(2);
-                let mse =
-                    |(sum, values): (u64, u64)| (values > 0).then(|| sum as f64 / scale / values as f64);
-                Ghosting {
-                    disoccluded: disoccluded.iter().sum::<f64>() / disoccluded.len() as f64,
-                    mse: mse(ghosting[0]),
-                    mse_elsewhere: mse(ghosting[1]),
-                }
+            flicker: temporal::mean(followed.flicker),
+            ghosting: mean(&disoccluded).map(|disoccluded| Ghosting {
+                disoccluded,
+                mse: temporal::mean(followed.disoccluded),
+                mse_edges: temporal::mean(followed.edges),
+                mse_elsewhere: temporal::mean(followed.elsewhere),
             }),
             hashes,
         };
         ModeOutcome { sequence: Some(sequence), checks, error: None }
-    }
-}
-
-impl Geometry {
-    /// Per pixel, whether the frame before (`then`) could not have seen its point: it lay
-    /// outside that frame, or deeper than each of the four samples around where it lay by more
-    /// than [`HIDDEN_DEPTH`]. Pixels without geometry (depth 0 then) are never disoccluded.
-    fn disoccluded(&self, then: &Geometry) -> Vec<bool> {
-        let width = self.width as f64;
-        let height = (self.motion.len() / self.width.max(1)) as f64;
-        self.motion
-            .iter()
-            .enumerate()
-            .map(|(i, &[dx, dy, depth_then, _])| {
-                let depth_then = f64::from(depth_then);
-                if depth_then <= 0.0 {
-                    return false;
-                }
-                // The motion is the sample's, which lay `jitter` off the pixel's centre.
-                let [sx, sy] = self.jitter;
-                let x = (i % self.width) as f64 + 0.5 + sx - f64::from(dx);
-                let y = (i / self.width) as f64 + 0.5 + sy - f64::from(dy);
-                if !(0.0..width).contains(&x) || !(0.0..height).contains(&y) {
-                    return true;
-                }
-                // The four pixels whose samples surround the point, clamped to the frame.
-                let [jx, jy] = then.jitter;
-                let (x0, y0) = ((x - 0.5 - jx).floor(), (y - 0.5 - jy).floor());
-                let around = [(x0, y0), (x0 + 1.0, y0), (x0, y0 + 1.0), (x0 + 1.0, y0 + 1.0)];
-                around.iter().all(|&(ax, ay)| {
-                    let ax = ax.clamp(0.0, width - 1.0) as usize;
-                    let ay = ay.clamp(0.0, height - 1.0) as usize;
-                    depth_then > then.depth[ay * self.width + ax] * (1.0 + HIDDEN_DEPTH)
-                })
-            })
-            .collect()
     }
 }
 
@@ -518,21 +539,9 @@ fn squared_difference(a: &DisplayImage, b: &DisplayImage) -> u64 {
 }
 
 /// Σ over pixels and colour channels of ((a − b) − (t − u))², the squared change of the error
-/// image from (b, u) to (a, t), in squared code steps; each pixel's share is also added to
-/// `per_pixel`.
-fn change_of_error(
-    a: &DisplayImage,
-    b: &DisplayImage,
-    t: &DisplayImage,
-    u: &DisplayImage,
-    per_pixel: &mut [u64],
-) -> u64 {
-    let mut sum = 0;
-    for (change, out) in pixel_changes_of_error(&a.rgba, &b.rgba, &t.rgba, &u.rgba).zip(per_pixel) {
-        *out += change;
-        sum += change;
-    }
-    sum
+/// image from (b, u) to (a, t), in squared code steps.
+fn change_of_error(a: &DisplayImage, b: &DisplayImage, t: &DisplayImage, u: &DisplayImage) -> u64 {
+    pixel_changes_of_error(&a.rgba, &b.rgba, &t.rgba, &u.rgba).sum()
 }
 
 /// Σ over a pixel's colour channels (RGBA, alpha left out) of (p − q)², in squared code steps.

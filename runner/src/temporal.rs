@@ -1,0 +1,430 @@
+//! Temporal error along the truth's motion: each pixel of a frame followed back to where its
+//! surface point lay in the frame before, and the mode's error compared there.
+//!
+//! **Flicker** is the mean, over the pixels seen in both frames of each consecutive pair, their
+//! colour channels and the pairs, of (E_f(x) − E_{f−1}(x − v(x)))², where E = A − T is the
+//! mode's error image (display code values scaled to [0, 1]), v(x) the motion of the point that
+//! pixel x sees in the truth's geometry (camera and objects), and E_{f−1} is fetched bilinearly
+//! between pixel centres. An error that travels with the surface — blur, a frozen texture
+//! filter, a steady edge — cancels out; aliasing that crawls or shimmers, and an image that
+//! stays put while the scene moves under it (lag, a frozen frame), do not.
+//!
+//! What lag costs is measured apart: the mode's squared error on the pixels whose point the
+//! frame before could not see (off screen, or hidden behind another surface: disoccluded), on
+//! the pixels at or beside a silhouette that moved (where ghosting trails), and elsewhere.
+//!
+//! The geometry is the renderer's probe (`SceneRenderer::prepare_geometry`): per pixel, one
+//! unjittered sample's linear view depth and motion. Pixels without geometry see the background,
+//! which lies at infinity: they follow the direction they look in from one camera to the other,
+//! and were hidden where the frame before had geometry all around that place.
+
+use aabench_renderer::scene::Camera;
+use aabench_renderer::{DisplayImage, GBufferImages};
+use glam::{DVec2, DVec3, DVec4};
+
+/// How much deeper than every surface seen around its place in the frame before a point must
+/// have been, relatively, to count as hidden then.
+pub const HIDDEN_DEPTH: f64 = 0.01;
+
+/// How far apart in relative depth two neighbouring pixels must be for a silhouette to lie
+/// between them.
+const SILHOUETTE_DEPTH: f64 = 0.05;
+
+/// How many pixels a silhouette must move between two frames for its pixels to count as a
+/// moving edge: TAA's threshold between a still pixel and a moving one.
+const MOVING: f32 = 0.01;
+
+/// Motion is kept to this fraction of a pixel: the probe's motion is f16, whose rounding leaves
+/// a still camera's motion a hair off 0 (its step is 1/1024 pixel below a pixel, 1/256 at 4 to 8
+/// pixels, 1/64 at 16 to 32), and a 1/256 pixel is far finer than any error an interpolation
+/// between pixel centres could show.
+const MOTION_STEP: f32 = 1.0 / 256.0;
+
+/// One frame's geometry, from the probe: per pixel, the pixels its point moved since the frame
+/// before (x right, y down) and its linear view depth then, and its depth now; both depths
+/// infinite where no geometry covers the pixel.
+#[derive(Debug, Clone)]
+pub struct Geometry {
+    pub width: usize,
+    pub motion: Vec<[f32; 2]>,
+    pub depth_then: Vec<f64>,
+    pub depth: Vec<f64>,
+}
+
+/// Where a pixel's point lay in the frame before: the pixel centres around it, left and above,
+/// and its offsets from them, in pixels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Source {
+    x: u32,
+    y: u32,
+    fx: f32,
+    fy: f32,
+}
+
+/// How each pixel of a frame follows back into the frame before, by the truth's geometry.
+#[derive(Debug, Clone)]
+pub struct Flow {
+    width: usize,
+    height: usize,
+    /// Per pixel, where its point lay, or `None` where the frame before did not see it.
+    from: Vec<Option<Source>>,
+    /// Per pixel, whether it lies at or beside a silhouette that moved.
+    edge: Vec<bool>,
+}
+
+/// One mode's error over one frame pair, in sums of squared display values and their counts.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PairError {
+    /// Σ (E_f(x) − E_{f−1}(x − v))² over the followed pixels' colour channels, and their number.
+    pub flicker: (f64, u64),
+    /// Σ (A − T)² of frame f over the colour channels of the disoccluded pixels, of the pixels
+    /// at moving edges (followed ones), and of the other followed pixels; each with its count.
+    pub disoccluded: (f64, u64),
+    pub edges: (f64, u64),
+    pub elsewhere: (f64, u64),
+}
+
+impl PairError {
+    /// Adds another pair's sums.
+    pub fn add(&mut self, other: &PairError) {
+        for (sum, more) in [
+            (&mut self.flicker, other.flicker),
+            (&mut self.disoccluded, other.disoccluded),
+            (&mut self.edges, other.edges),
+            (&mut self.elsewhere, other.elsewhere),
+        ] {
+            *sum = (sum.0 + more.0, sum.1 + more.1);
+        }
+    }
+}
+
+/// A sum over a count, where there is a count.
+pub fn mean((sum, count): (f64, u64)) -> Option<f64> {
+    (count > 0).then(|| sum / count as f64)
+}
+
+impl Geometry {
+    /// From the probe's G-buffer and motion (`read_gbuffer`, `read_motion`) of the frame seen
+    /// through `now`, whose frame before was seen through `then`.
+    pub fn from_probe(gbuffer: &GBufferImages, motion: &[[f32; 4]], [now, then]: [&Camera; 2]) -> Geometry {
+        let width = gbuffer.width as usize;
+        let size = DVec2::new(f64::from(gbuffer.width), f64::from(gbuffer.height));
+        let mut geometry = Geometry { width, motion: Vec::new(), depth_then: Vec::new(), depth: Vec::new() };
+        for (i, (sample, &[dx, dy, depth_then, _])) in gbuffer.normal_material.iter().zip(motion).enumerate()
+        {
+            // The background's material index is negative (`BACKGROUND_MATERIAL`).
+            let (motion, depth_then, depth) = if sample[3] < 0.0 {
+                let pixel = DVec2::new((i % width) as f64 + 0.5, (i / width) as f64 + 0.5);
+                let moved = pixel - direction_then(now, then, size, pixel);
+                ([moved.x as f32, moved.y as f32], f64::INFINITY, f64::INFINITY)
+            } else {
+                ([dx, dy], f64::from(depth_then), gbuffer.depth[i])
+            };
+            let motion = motion.map(|v| (v / MOTION_STEP).round() * MOTION_STEP);
+            geometry.motion.push(motion);
+            geometry.depth_then.push(depth_then);
+            geometry.depth.push(depth);
+        }
+        geometry
+    }
+
+    fn height(&self) -> usize {
+        self.motion.len() / self.width.max(1)
+    }
+
+    fn covered(&self, i: usize) -> bool {
+        self.depth[i].is_finite()
+    }
+
+    /// Where pixel `i`'s point lay in the frame `then`, where `then` saw it: inside the frame
+    /// and no deeper than the surfaces around that place by more than [`HIDDEN_DEPTH`].
+    fn source(&self, i: usize, then: &Geometry) -> Option<Source> {
+        let (width, height) = (self.width as f64, self.height() as f64);
+        let [dx, dy] = self.motion[i];
+        let x = (i % self.width) as f64 + 0.5 - f64::from(dx);
+        let y = (i / self.width) as f64 + 0.5 - f64::from(dy);
+        if !(0.0..width).contains(&x) || !(0.0..height).contains(&y) {
+            return None;
+        }
+        // The pixel centres around the point, clamped to the frame.
+        let (cx, cy) = ((x - 0.5).clamp(0.0, width - 1.0), (y - 0.5).clamp(0.0, height - 1.0));
+        let (x0, y0) = (cx.floor().min(width - 2.0).max(0.0), cy.floor().min(height - 2.0).max(0.0));
+        let source = Source { x: x0 as u32, y: y0 as u32, fx: (cx - x0) as f32, fy: (cy - y0) as f32 };
+        // Corners of no weight are left out: a point on a pixel's centre is that pixel's. The
+        // background (infinitely deep) was hidden where geometry covered every corner.
+        let depth_then = self.depth_then[i];
+        if depth_then <= 0.0 {
+            // The point lay behind the camera of the frame before.
+            return None;
+        }
+        let corners = source.corners(self.width, self.height());
+        let mut around = corners.iter().filter(|&&(_, weight)| weight > 0.0);
+        let hidden =
+            around.all(|&(j, _)| then.covered(j) && depth_then > then.depth[j] * (1.0 + HIDDEN_DEPTH));
+        (!hidden).then_some(source)
+    }
+
+    /// Per pixel, whether a silhouette lies between it and its right or lower neighbour: one of
+    /// the two has no geometry and the other has, or their depths differ by more than
+    /// [`SILHOUETTE_DEPTH`] relatively.
+    fn silhouettes(&self) -> Vec<bool> {
+        let (width, height) = (self.width, self.height());
+        let apart = |i: usize, j: usize| match (self.covered(i), self.covered(j)) {
+            (true, true) => {
+                (self.depth[i] - self.depth[j]).abs() > SILHOUETTE_DEPTH * self.depth[i].min(self.depth[j])
+            }
+            (covered_i, covered_j) => covered_i != covered_j,
+        };
+        (0..width * height)
+            .map(|i| {
+                let (x, y) = (i % width, i / width);
+                (x + 1 < width && apart(i, i + 1)) || (y + 1 < height && apart(i, i + width))
+            })
+            .collect()
+    }
+
+    /// Per pixel, whether it lies at or beside (within one pixel of) a silhouette, and the
+    /// points there moved by at least [`MOVING`] pixels. The silhouette is marked on the left or
+    /// upper pixel of its pair, and its motion read there.
+    fn moving_edges(&self) -> Vec<bool> {
+        let (width, height) = (self.width, self.height());
+        let silhouette = self.silhouettes();
+        let moved = |i: usize| {
+            let [dx, dy] = self.motion[i];
+            dx.hypot(dy) >= MOVING
+        };
+        (0..width * height)
+            .map(|i| {
+                let (x, y) = (i % width, i / width);
+                let near = |j: usize| silhouette[j] && moved(j);
+                let rows = y.saturating_sub(1)..(y + 2).min(height);
+                rows.flat_map(|ny| (x.saturating_sub(1)..(x + 2).min(width)).map(move |nx| ny * width + nx))
+                    .any(near)
+            })
+            .collect()
+    }
+}
+
+/// Where the direction seen at `pixel` through `now` (in a frame of `size` pixels) lay in the
+/// frame seen through `then`: the motion of the background, which lies at infinity.
+fn direction_then(now: &Camera, then: &Camera, size: DVec2, pixel: DVec2) -> DVec2 {
+    let ndc = DVec2::new(pixel.x / size.x * 2.0 - 1.0, 1.0 - pixel.y / size.y * 2.0);
+    let tan_y = (now.fov_y * 0.5).tan();
+    let ray = DVec3::new(ndc.x * tan_y * size.x / size.y, ndc.y * tan_y, -1.0);
+    let direction = now.view().inverse() * DVec4::from((ray, 0.0));
+    let clip = then.projection(size.x / size.y) * then.view() * direction;
+    let ndc = DVec2::new(clip.x, clip.y) / clip.w;
+    DVec2::new((ndc.x + 1.0) / 2.0 * size.x, (1.0 - ndc.y) / 2.0 * size.y)
+}
+
+/// An image's display values, per pixel and channel, scaled to [0, 1].
+fn values(image: &DisplayImage) -> impl Fn(usize, usize) -> f32 + '_ {
+    let scale = 1.0 / f32::from(image.max_code().max(1));
+    move |j, c| f32::from(image.rgba[4 * j + c]) * scale
+}
+
+impl Source {
+    /// The four pixels around the point and their bilinear weights.
+    fn corners(self, width: usize, height: usize) -> [(usize, f32); 4] {
+        let (x0, y0) = (self.x as usize, self.y as usize);
+        let (x1, y1) = ((x0 + 1).min(width - 1), (y0 + 1).min(height - 1));
+        let (fx, fy) = (self.fx, self.fy);
+        [
+            (y0 * width + x0, (1.0 - fx) * (1.0 - fy)),
+            (y0 * width + x1, fx * (1.0 - fy)),
+            (y1 * width + x0, (1.0 - fx) * fy),
+            (y1 * width + x1, fx * fy),
+        ]
+    }
+}
+
+impl Flow {
+    /// How the frame of geometry `now` follows back into the frame of geometry `then`.
+    pub fn between(now: &Geometry, then: &Geometry) -> Flow {
+        assert_eq!(now.motion.len(), then.motion.len(), "geometries of different sizes");
+        let from = (0..now.motion.len()).map(|i| now.source(i, then)).collect();
+        Flow { width: now.width, height: now.height(), from, edge: now.moving_edges() }
+    }
+
+    /// The share of pixels whose point the frame before did not see.
+    pub fn disoccluded_share(&self) -> f64 {
+        self.from.iter().filter(|from| from.is_none()).count() as f64 / self.from.len().max(1) as f64
+    }
+
+    /// A mode's error over the frame pair: its image and the truth's now (`a`, `t`) and in the
+    /// frame before (`a_then`, `t_then`). Each followed pixel's squared change of error is also
+    /// added to `per_pixel`.
+    pub fn error(
+        &self,
+        [a, t]: [&DisplayImage; 2],
+        [a_then, t_then]: [&DisplayImage; 2],
+        per_pixel: &mut [f64],
+    ) -> PairError {
+        let (mode, truth) = (values(a), values(t));
+        let (mode_then, truth_then) = (values(a_then), values(t_then));
+        let error = |j: usize, c: usize| mode(j, c) - truth(j, c);
+        let error_then = |j: usize, c: usize| mode_then(j, c) - truth_then(j, c);
+        self.follow(error, error_then, Some(per_pixel))
+    }
+
+    /// The truth's own change along the motion, from `t_then` to `t`: the flicker of an image
+    /// that shows none of the truth's detail, and so the scale of a steady image's flicker
+    /// where the truth's fine detail aliases into moiré that no interpolation predicts.
+    pub fn own_change(&self, t: &DisplayImage, t_then: &DisplayImage) -> (f64, u64) {
+        self.follow(values(t), values(t_then), None).flicker
+    }
+
+    /// Follows an error image from the frame before (`then`, per pixel and channel) into this
+    /// one (`now`).
+    fn follow(
+        &self,
+        now: impl Fn(usize, usize) -> f32,
+        then: impl Fn(usize, usize) -> f32,
+        mut per_pixel: Option<&mut [f64]>,
+    ) -> PairError {
+        let mut sums = PairError::default();
+        for (i, from) in self.from.iter().enumerate() {
+            let error = [0, 1, 2].map(|c| now(i, c));
+            let squared = error.iter().map(|e| f64::from(e * e)).sum::<f64>();
+            let Some(from) = from else {
+                sums.disoccluded = (sums.disoccluded.0 + squared, sums.disoccluded.1 + 3);
+                continue;
+            };
+            let corners = from.corners(self.width, self.height);
+            let change: f64 = (0..3)
+                .map(|c| {
+                    let before: f32 = corners.iter().map(|&(j, w)| w * then(j, c)).sum();
+                    f64::from(error[c] - before).powi(2)
+                })
+                .sum();
+            if let Some(map) = per_pixel.as_deref_mut() {
+                map[i] += change;
+            }
+            sums.flicker = (sums.flicker.0 + change, sums.flicker.1 + 3);
+            let place = if self.edge[i] { &mut sums.edges } else { &mut sums.elsewhere };
+            *place = (place.0 + squared, place.1 + 3);
+        }
+        sums
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A geometry of `width` × `height` pixels at depth `depth` (infinite: none), every point moved by
+    /// `motion` pixels and as deep before.
+    fn flat(width: usize, height: usize, depth: f64, motion: [f32; 2]) -> Geometry {
+        let pixels = width * height;
+        Geometry {
+            width,
+            motion: vec![motion; pixels],
+            depth_then: vec![depth; pixels],
+            depth: vec![depth; pixels],
+        }
+    }
+
+    /// A grey image whose pixel (x, y) is `value(x, y)`.
+    fn image(width: usize, height: usize, value: impl Fn(usize, usize) -> u16) -> DisplayImage {
+        let rgba = (0..width * height)
+            .flat_map(|i| {
+                let v = value(i % width, i / width);
+                [v, v, v, 255]
+            })
+            .collect();
+        DisplayImage { bits: 8, rgba }
+    }
+
+    #[test]
+    fn an_error_that_moves_with_the_surface_does_not_flicker_and_one_that_stays_does() {
+        let (w, h) = (12, 6);
+        // The scene moves 2 pixels right; the truth is a ramp that moves with it.
+        let geometry = flat(w, h, 5.0, [2.0, 0.0]);
+        let flow = Flow::between(&geometry, &geometry);
+        let truth = |shift: usize| image(w, h, move |x, _| (10 * (x + 10 - shift)) as u16);
+        let (t_then, t_now) = (truth(0), truth(2));
+        // A mode whose error (+8 where x + 10 − shift is even) travels with the ramp.
+        let moving = |shift: usize| {
+            image(w, h, move |x, _| (10 * (x + 10 - shift) + 8 * ((x + 10 - shift) % 2)) as u16)
+        };
+        let mut map = vec![0.0; w * h];
+        let travelling = flow.error([&moving(2), &t_now], [&moving(0), &t_then], &mut map);
+        // Its frame before, kept: the frozen frame.
+        let frozen = flow.error([&moving(0), &t_now], [&moving(0), &t_then], &mut map);
+        // Pixels 0 and 1 of each row came from outside the frame.
+        assert_eq!(travelling.disoccluded.1, 2 * h as u64 * 3);
+        assert_eq!(travelling.flicker.1, (w - 2) as u64 * h as u64 * 3);
+        assert_eq!(mean(travelling.flicker), Some(0.0), "the error went with the surface");
+        let frozen_flicker = mean(frozen.flicker).unwrap();
+        assert!(frozen_flicker > 0.005, "a frozen frame's error changes along the motion: {frozen_flicker}");
+        assert!(map.iter().any(|&v| v > 0.0));
+    }
+
+    #[test]
+    fn the_background_follows_the_cameras_turn_and_is_hidden_where_geometry_covered_it() {
+        use glam::{DQuat, DVec3};
+        let (w, h) = (64usize, 48usize);
+        let then = Camera::look_at(DVec3::ZERO, DVec3::new(0.0, 0.0, -1.0), 60.0);
+        // The view turns left by a twelfth of its vertical field: the background moves right.
+        let turn = DQuat::from_rotation_y(5f64.to_radians());
+        let now = Camera { forward: turn * then.forward, ..then };
+        let sky = GBufferImages {
+            width: w as u32,
+            height: h as u32,
+            normal_material: vec![[0.0, 0.0, 0.0, -1.0]; w * h],
+            depth: vec![1.0; w * h],
+        };
+        let geometry = Geometry::from_probe(&sky, &vec![[0.0; 4]; w * h], [&now, &then]);
+        let [dx, dy] = geometry.motion[h / 2 * w + w / 2];
+        // tan(5°) / tan(30°) of half the height, to the motion's step.
+        let expected = (5f64.to_radians().tan() / 30f64.to_radians().tan() * h as f64 / 2.0) as f32;
+        assert!((dx - expected).abs() < 0.01 && dy.abs() < 0.01, "({dx}, {dy}) against {expected}");
+        assert!(geometry.depth.iter().all(|d| d.is_infinite()));
+        // Where the frame before had geometry all around, the background was hidden.
+        let covered = flat(w, h, 3.0, [0.0, 0.0]);
+        let flow = Flow::between(&geometry, &covered);
+        assert_eq!(flow.disoccluded_share(), 1.0);
+        // Against itself, only what came in at the left edge was unseen (off screen), and at
+        // the top and bottom rows, where the turn also moves the view's corners vertically.
+        let flow = Flow::between(&geometry, &geometry);
+        let unseen: Vec<usize> = (0..w * h).filter(|&i| flow.from[i].is_none()).collect();
+        let at_an_edge = |i: &usize| i % w < 6 || i / w == 0 || i / w == h - 1;
+        assert!(unseen.len() >= 2 * h && unseen.iter().all(at_an_edge), "{unseen:?}");
+    }
+
+    #[test]
+    fn a_point_behind_a_nearer_surface_then_is_disoccluded_and_silhouettes_that_move_are_edges() {
+        let (w, h) = (8, 4);
+        // Now: every pixel at depth 10, moved one pixel right since the frame before.
+        let now = flat(w, h, 10.0, [1.0, 0.0]);
+        // Then: a nearer surface covered columns 2–4.
+        let mut then = flat(w, h, 10.0, [0.0, 0.0]);
+        for y in 0..h {
+            for x in 2..5 {
+                then.depth[y * w + x] = 4.0;
+            }
+        }
+        let flow = Flow::between(&now, &then);
+        let hidden: Vec<usize> = (0..w).filter(|&x| flow.from[x].is_none()).collect();
+        // Column 0 came from off screen; columns 3–5 from the centres of columns 2–4, behind
+        // the nearer surface.
+        assert_eq!(hidden, [0, 3, 4, 5], "{:?}", flow.from[..w].to_vec());
+        assert_eq!(flow.disoccluded_share(), 4.0 / 8.0);
+        // A point that lay behind the camera then (its depth then negative) was not seen.
+        let mut behind = now.clone();
+        behind.depth_then[7] = -3.0;
+        assert!(Flow::between(&behind, &then).from[7].is_none());
+        // A silhouette between columns 3 and 4 that moved, marked on column 3: columns 2–4 lie
+        // at or beside it.
+        let mut edge = flat(w, h, 10.0, [1.0, 0.0]);
+        for y in 0..h {
+            for x in 0..4 {
+                edge.depth[y * w + x] = 4.0;
+            }
+        }
+        let edges: Vec<usize> = (0..w).filter(|&x| edge.moving_edges()[x]).collect();
+        assert_eq!(edges, [2, 3, 4]);
+        let still = Geometry { motion: vec![[0.0; 2]; w * h], ..edge.clone() };
+        assert!(still.moving_edges().iter().all(|&e| !e), "a silhouette that did not move");
+    }
+}

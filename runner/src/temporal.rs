@@ -20,7 +20,7 @@
 
 use aabench_renderer::scene::Camera;
 use aabench_renderer::{DisplayImage, GBufferImages};
-use glam::{DVec2, DVec3, DVec4};
+use glam::{DMat4, DVec2, DVec3, DVec4};
 
 /// How much deeper than every surface seen around its place in the frame before a point must
 /// have been, relatively, to count as hidden then.
@@ -70,6 +70,8 @@ pub struct Flow {
     from: Vec<Option<Source>>,
     /// Per pixel, whether it lies at or beside a silhouette that moved.
     edge: Vec<bool>,
+    /// The share of pixels whose point the frame before did not see.
+    disoccluded: f64,
 }
 
 /// One mode's error over one frame pair, in sums of squared display values and their counts.
@@ -109,13 +111,14 @@ impl Geometry {
     pub fn from_probe(gbuffer: &GBufferImages, motion: &[[f32; 4]], [now, then]: [&Camera; 2]) -> Geometry {
         let width = gbuffer.width as usize;
         let size = DVec2::new(f64::from(gbuffer.width), f64::from(gbuffer.height));
+        let turn = Turn::new(now, then, size);
         let mut geometry = Geometry { width, motion: Vec::new(), depth_then: Vec::new(), depth: Vec::new() };
         for (i, (sample, &[dx, dy, depth_then, _])) in gbuffer.normal_material.iter().zip(motion).enumerate()
         {
             // The background's material index is negative (`BACKGROUND_MATERIAL`).
             let (motion, depth_then, depth) = if sample[3] < 0.0 {
                 let pixel = DVec2::new((i % width) as f64 + 0.5, (i / width) as f64 + 0.5);
-                let moved = pixel - direction_then(now, then, size, pixel);
+                let moved = pixel - turn.then(pixel);
                 ([moved.x as f32, moved.y as f32], f64::INFINITY, f64::INFINITY)
             } else {
                 ([dx, dy], f64::from(depth_then), gbuffer.depth[i])
@@ -207,14 +210,34 @@ impl Geometry {
 
 /// Where the direction seen at `pixel` through `now` (in a frame of `size` pixels) lay in the
 /// frame seen through `then`: the motion of the background, which lies at infinity.
-fn direction_then(now: &Camera, then: &Camera, size: DVec2, pixel: DVec2) -> DVec2 {
-    let ndc = DVec2::new(pixel.x / size.x * 2.0 - 1.0, 1.0 - pixel.y / size.y * 2.0);
-    let tan_y = (now.fov_y * 0.5).tan();
-    let ray = DVec3::new(ndc.x * tan_y * size.x / size.y, ndc.y * tan_y, -1.0);
-    let direction = now.view().inverse() * DVec4::from((ray, 0.0));
-    let clip = then.projection(size.x / size.y) * then.view() * direction;
-    let ndc = DVec2::new(clip.x, clip.y) / clip.w;
-    DVec2::new((ndc.x + 1.0) / 2.0 * size.x, (1.0 - ndc.y) / 2.0 * size.y)
+/// Where a direction seen through one camera shows through another, in a frame of `size`
+/// pixels: how the background, which lies at infinity, moved. Its matrices are made once a frame.
+struct Turn {
+    size: DVec2,
+    tan_y: f64,
+    world_from_now: DMat4,
+    clip_then: DMat4,
+}
+
+impl Turn {
+    fn new(now: &Camera, then: &Camera, size: DVec2) -> Turn {
+        Turn {
+            size,
+            tan_y: (now.fov_y * 0.5).tan(),
+            world_from_now: now.view().inverse(),
+            clip_then: then.projection(size.x / size.y) * then.view(),
+        }
+    }
+
+    /// Where the direction seen at `pixel` now lay in the frame before, in pixels.
+    fn then(&self, pixel: DVec2) -> DVec2 {
+        let (size, tan_y) = (self.size, self.tan_y);
+        let ndc = DVec2::new(pixel.x / size.x * 2.0 - 1.0, 1.0 - pixel.y / size.y * 2.0);
+        let ray = DVec3::new(ndc.x * tan_y * size.x / size.y, ndc.y * tan_y, -1.0);
+        let clip = self.clip_then * (self.world_from_now * DVec4::from((ray, 0.0)));
+        let ndc = DVec2::new(clip.x, clip.y) / clip.w;
+        DVec2::new((ndc.x + 1.0) / 2.0 * size.x, (1.0 - ndc.y) / 2.0 * size.y)
+    }
 }
 
 /// An image's display values, per pixel and channel, scaled to [0, 1].
@@ -242,13 +265,14 @@ impl Flow {
     /// How the frame of geometry `now` follows back into the frame of geometry `then`.
     pub fn between(now: &Geometry, then: &Geometry) -> Flow {
         assert_eq!(now.motion.len(), then.motion.len(), "geometries of different sizes");
-        let from = (0..now.motion.len()).map(|i| now.source(i, then)).collect();
-        Flow { width: now.width, height: now.height(), from, edge: now.moving_edges() }
+        let from: Vec<Option<Source>> = (0..now.motion.len()).map(|i| now.source(i, then)).collect();
+        let disoccluded = from.iter().filter(|from| from.is_none()).count() as f64 / from.len().max(1) as f64;
+        Flow { width: now.width, height: now.height(), from, edge: now.moving_edges(), disoccluded }
     }
 
     /// The share of pixels whose point the frame before did not see.
     pub fn disoccluded_share(&self) -> f64 {
-        self.from.iter().filter(|from| from.is_none()).count() as f64 / self.from.len().max(1) as f64
+        self.disoccluded
     }
 
     /// A mode's error over the frame pair: its image and the truth's now (`a`, `t`) and in the

@@ -14,6 +14,12 @@ struct VertexOut {
 #ifdef NORMAL_MAPS
     @location(3) tangent: vec4<f32>,
 #endif
+#ifdef MOVING
+    // The point's clip position now (as `clip`, which the fragment stage reads as pixels) and
+    // where it lay in the frame before, in that frame's unjittered clip space.
+    @location(4) now: vec4<f32>,
+    @location(5) then: vec4<f32>,
+#endif
 }
 
 // 24 bytes per sample plus depth; see lib/gbuffer.wgsl for the layout.
@@ -27,12 +33,6 @@ struct GBuffer {
 // Tangents come from a second vertex buffer (scene::Scene::tangents).
 struct TangentIn {
     @location(4) tangent: vec4<f32>,
-}
-
-@vertex
-fn vertex(v: VertexIn, t: TangentIn) -> VertexOut {
-    let world = vec4<f32>(v.position, 1.0);
-    return VertexOut(frame.view_proj * world, v.normal, v.uv, v.material, t.tangent);
 }
 
 // The normal map's normal in world space, or `n` where the material has no normal map or the
@@ -54,13 +54,41 @@ fn mapped_normal(n: vec3<f32>, tangent: vec4<f32>, material_index: u32, uv: vec2
     let length2 = dot(mapped, mapped);
     return select(n, mapped * inverseSqrt(length2), length2 > 1e-12);
 }
-#else
-@vertex
-fn vertex(v: VertexIn) -> VertexOut {
-    let world = vec4<f32>(v.position, 1.0);
-    return VertexOut(frame.view_proj * world, v.normal, v.uv, v.material);
+#endif
+
+#ifdef MOVING
+// Each vertex's position in the frame before, from the last vertex buffer (scene/pose.rs).
+struct PreviousIn {
+    @location(5) position: vec3<f32>,
 }
 #endif
+
+@vertex
+fn vertex(
+    v: VertexIn,
+#ifdef NORMAL_MAPS
+    t: TangentIn,
+#endif
+#ifdef MOVING
+    previous: PreviousIn,
+#endif
+) -> VertexOut {
+    var out: VertexOut;
+    out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
+    out.normal = v.normal;
+    out.uv = v.uv;
+    out.material = v.material;
+#ifdef NORMAL_MAPS
+    out.tangent = t.tangent;
+#endif
+#ifdef MOVING
+    // The reprojection takes this frame's clip space to the frame before's: a point's place
+    // then through this frame's camera, taken back, is where the frame before saw it.
+    out.now = out.clip;
+    out.then = frame.reprojection * (frame.view_proj * vec4<f32>(previous.position, 1.0));
+#endif
+    return out;
+}
 
 fn write_gbuffer(v: VertexOut, front_facing: bool) -> GBuffer {
     let uv_dx = dpdx(v.uv);
@@ -134,19 +162,34 @@ struct GBufferMotion {
     @location(3) motion: vec4<f32>,
 }
 
-// The motion of the point that the fragment at `position` sees. The scenes are static, so a
-// point moves with the camera alone: the fragment's clip position (NDC and depth; `position.w`
-// is 1 / its clip w) goes through the previous frame's camera in one matrix.
-fn motion(position: vec4<f32>) -> vec4<f32> {
+// The motion of the point that the fragment `v` sees: where it lies now (unjittered) minus where
+// it lay then, in pixels, and its linear view depth then.
+#ifdef MOVING
+// Objects move: the vertex stage carried each point's place in the frame before. Both places
+// are taken from clip space to the frame's pixels, so the motion is in the frame's pixels
+// whatever the G-buffer's size.
+fn motion(v: VertexOut) -> vec4<f32> {
+    let size = frame.jitter.zw;
+    let now = (v.now.xy / v.now.w * vec2<f32>(0.5, -0.5) + 0.5) * size + frame.jitter.xy;
+    let then = (v.then.xy / v.then.w * vec2<f32>(0.5, -0.5) + 0.5) * size;
+    return vec4<f32>(now - then, v.then.w, 0.0);
+}
+#else
+// The scene stands still, so a point moves with the camera alone: the fragment's clip position
+// (NDC and depth; `position.w` is 1 / its clip w) goes through the previous frame's camera in
+// one matrix.
+fn motion(v: VertexOut) -> vec4<f32> {
+    let position = v.clip;
     let size = frame.jitter.zw;
     let ndc = position.xy / size * vec2<f32>(2.0, -2.0) + vec2<f32>(-1.0, 1.0);
     let before = frame.reprojection * vec4<f32>(ndc, position.z, 1.0);
     let then = (before.xy / before.w * vec2<f32>(0.5, -0.5) + 0.5) * size;
     return vec4<f32>(position.xy + frame.jitter.xy - then, before.w / position.w, 0.0);
 }
+#endif
 
-fn with_motion(g: GBuffer, position: vec4<f32>) -> GBufferMotion {
-    return GBufferMotion(g.uv, g.normal_material, g.uv_grad, motion(position));
+fn with_motion(g: GBuffer, v: VertexOut) -> GBufferMotion {
+    return GBufferMotion(g.uv, g.normal_material, g.uv_grad, motion(v));
 }
 
 @fragment
@@ -154,7 +197,7 @@ fn gbuffer_opaque_motion(
     v: VertexOut,
     @builtin(front_facing) front_facing: bool,
 ) -> GBufferMotion {
-    return with_motion(write_gbuffer(v, front_facing), v.clip);
+    return with_motion(write_gbuffer(v, front_facing), v);
 }
 
 @fragment
@@ -165,5 +208,5 @@ fn gbuffer_masked_motion(
     if !passes_alpha_test(v.material, v.uv) {
         discard;
     }
-    return with_motion(write_gbuffer(v, front_facing), v.clip);
+    return with_motion(write_gbuffer(v, front_facing), v);
 }

@@ -428,27 +428,67 @@ pub const EXPOSURE_KEY: f64 = 0.18;
 /// candle, still comes out seen).
 pub const METERED_EXPOSURE_RANGE: [f32; 2] = [1.0 / 1_048_576.0, 1_048_576.0];
 
-/// The exposure that maps the log-average luminance exp(mean(ln L)) of a linear HDR image
-/// (RGBA, sanitized first) to `key`, clamped to `range`: Reinhard et al.'s key value, the
-/// auto-exposure of a camera that meters the whole frame. Black pixels are left out: no
-/// exposure shows them, and counting them with a floor (Reinhard's δ) would tie the result to
-/// the light's unit, where leaving them out makes it follow the light level exactly (a scene
-/// at 1000 times the light meters a thousandth of the exposure). An image with no light at all
-/// meters 1.
-pub fn metered_exposure(hdr: &[[f32; 4]], key: f64, range: [f32; 2]) -> f32 {
-    let (log_sum, lit) = hdr
+/// The share of the scene's pixels that may display white under automatic exposure.
+pub const METERED_WHITE_SHARE: f64 = 0.02;
+
+/// The share of the scene's pixels at the HDR target's limit that fails metering.
+pub const METERED_SATURATED_SHARE: f64 = 0.01;
+
+/// The exposure for a linear HDR image (RGBA, sanitized first) of which `scene` says which
+/// pixels show the scene (the others, the background, are left out unless nothing shows it):
+/// the one that maps the log-average luminance exp(mean(ln L)) of those pixels to `key`
+/// (Reinhard et al.'s key value), unless that would display more than [`METERED_WHITE_SHARE`]
+/// of them above `white` (the HDR value that displays white: the tonemap's `hdr_max`, or 1 where
+/// the image is exposed and clamped); then the one that maps that share's brightest pixel to
+/// `white`. Clamped to `range`. Black pixels are left out: no exposure shows them, and counting
+/// them with a floor (Reinhard's δ) would tie the result to the light's unit, where leaving
+/// them out makes it follow the light level exactly (a scene at 1000 times the light meters a
+/// thousandth of the exposure). An image with no light at all meters 1. An image whose scene
+/// reaches the f16 target's limit on more than [`METERED_SATURATED_SHARE`] of its pixels has
+/// lost its light above that limit, which no exposure brings back: that is an error.
+pub fn metered_exposure(
+    hdr: &[[f32; 4]],
+    scene: Option<&[bool]>,
+    key: f64,
+    white: f64,
+    range: [f32; 2],
+) -> Result<f32, String> {
+    let shows = |i: usize| scene.is_none_or(|covered| covered.get(i).copied().unwrap_or(false));
+    let any_scene = (0..hdr.len()).any(shows);
+    let metered: Vec<[f64; 3]> = hdr
         .iter()
-        .map(|p| {
-            let [r, g, b] = [p[0], p[1], p[2]].map(|c| sanitize(f64::from(c)));
-            0.2126 * r + 0.7152 * g + 0.0722 * b
-        })
-        .filter(|&luminance| luminance > 0.0)
-        .fold((0.0, 0usize), |(sum, count), luminance| (sum + luminance.ln(), count + 1));
-    if lit == 0 {
-        return 1.0;
+        .enumerate()
+        .filter(|&(i, _)| !any_scene || shows(i))
+        .map(|(_, p)| [p[0], p[1], p[2]].map(|c| sanitize(f64::from(c))))
+        .collect();
+    let saturated = metered.iter().filter(|p| p.iter().any(|&c| c >= HALF_MAX)).count();
+    let share = saturated as f64 / metered.len().max(1) as f64;
+    if share > METERED_SATURATED_SHARE {
+        return Err(format!(
+            "{:.1} % of the scene's pixels reach the HDR target's limit of 65 504 at exposure 1: light \
+             above it is lost, and no exposure shows it; scale the lights' intensities down",
+            100.0 * share
+        ));
     }
-    let average = (log_sum / lit as f64).exp();
-    ((key / average) as f32).clamp(range[0], range[1])
+    let mut lit: Vec<f64> = metered
+        .iter()
+        .map(|[r, g, b]| 0.2126 * r + 0.7152 * g + 0.0722 * b)
+        .filter(|&luminance| luminance > 0.0)
+        .collect();
+    if lit.is_empty() {
+        return Ok(1.0);
+    }
+    let average = (lit.iter().map(|l| l.ln()).sum::<f64>() / lit.len() as f64).exp();
+    lit.sort_by(f64::total_cmp);
+    // The brightest pixel that may still display below white, counted among every metered
+    // pixel (the black ones first); none where it is black.
+    let rank = ((1.0 - METERED_WHITE_SHARE) * metered.len() as f64).ceil() as usize;
+    let blacks = metered.len() - lit.len();
+    let exposure = match rank.checked_sub(1 + blacks) {
+        Some(i) => (key / average).min(white / lit[i.min(lit.len() - 1)]),
+        None => key / average,
+    };
+    Ok((exposure as f32).clamp(range[0], range[1]))
 }
 
 #[cfg(test)]
@@ -545,22 +585,47 @@ mod tests {
 
     #[test]
     fn metering_maps_the_log_average_to_the_key_and_follows_the_light_level() {
+        let meter =
+            |image: &[[f32; 4]], range| metered_exposure(image, None, EXPOSURE_KEY, 64.0, range).unwrap();
         // Half black, half grey 2 and 8: the black half is left out, the rest averages to 4.
         let mut image = vec![[0.0, 0.0, 0.0, 0.0]; 8];
         image.extend([[2.0, 2.0, 2.0, 0.0], [8.0, 8.0, 8.0, 0.0]].repeat(4));
-        let exposure = metered_exposure(&image, EXPOSURE_KEY, METERED_EXPOSURE_RANGE);
+        let exposure = meter(&image, METERED_EXPOSURE_RANGE);
         assert!((f64::from(exposure) - 0.18 / 4.0).abs() < 1e-6, "{exposure}");
         // A thousand times the light: a thousandth of the exposure.
         let bright: Vec<[f32; 4]> = image.iter().map(|p| p.map(|c| c * 1000.0)).collect();
-        let ratio =
-            f64::from(exposure) / f64::from(metered_exposure(&bright, EXPOSURE_KEY, METERED_EXPOSURE_RANGE));
+        let ratio = f64::from(exposure) / f64::from(meter(&bright, METERED_EXPOSURE_RANGE));
         assert!((ratio - 1000.0).abs() < 1e-3, "{ratio}");
         // No light meters 1; non-finite pixels stay finite; the range holds.
         let dark = [[0.0, f32::NAN, -1.0, 0.0]; 4];
-        assert_eq!(metered_exposure(&dark, EXPOSURE_KEY, METERED_EXPOSURE_RANGE), 1.0);
-        let infinite = metered_exposure(&[[f32::INFINITY; 4]], EXPOSURE_KEY, METERED_EXPOSURE_RANGE);
-        assert!((f64::from(infinite) - 0.18 / HALF_MAX).abs() < 1e-9, "{infinite}");
-        assert_eq!(metered_exposure(&[[1e30; 4]], EXPOSURE_KEY, [1e-3, 1e3]), 1e-3);
-        assert_eq!(metered_exposure(&[[1e-30; 4]], EXPOSURE_KEY, [1e-3, 1e3]), 1e3);
+        assert_eq!(meter(&dark, METERED_EXPOSURE_RANGE), 1.0);
+        assert_eq!(meter(&[[1e4; 4]], [1e-3, 1e3]), 1e-3);
+        assert_eq!(meter(&[[1e-30; 4]], METERED_EXPOSURE_RANGE), METERED_EXPOSURE_RANGE[1]);
+    }
+
+    #[test]
+    fn metering_reads_the_scene_not_the_background_and_keeps_its_highlights() {
+        // A dim sky behind a sunlit floor: metered with the sky, the log average sinks and the
+        // floor (half the frame) would display six times above white; metered on the scene,
+        // the floor sits at the key.
+        let mut image = vec![[1e-4, 1e-4, 1e-4, 0.0]; 50];
+        image.extend(vec![[500.0, 500.0, 500.0, 0.0]; 50]);
+        let scene: Vec<bool> = (0..100).map(|i| i >= 50).collect();
+        let on_scene =
+            metered_exposure(&image, Some(&scene), EXPOSURE_KEY, 64.0, METERED_EXPOSURE_RANGE).unwrap();
+        assert!((f64::from(on_scene) - 0.18 / 500.0).abs() < 1e-9, "{on_scene}");
+        // Without knowing the scene, the highlight guard still keeps the floor at white.
+        let blind = metered_exposure(&image, None, EXPOSURE_KEY, 64.0, METERED_EXPOSURE_RANGE).unwrap();
+        assert!((f64::from(blind) * 500.0 - 64.0).abs() < 1e-3, "{blind}");
+        // A few bright pixels (a lamp, 1 % of the scene) do not darken the rest.
+        let mut lamp = vec![[1.0f32, 1.0, 1.0, 0.0]; 99];
+        lamp.push([1e4, 1e4, 1e4, 0.0]);
+        let exposure = metered_exposure(&lamp, None, EXPOSURE_KEY, 64.0, METERED_EXPOSURE_RANGE).unwrap();
+        let expected = 0.18 / (1e4f64.ln() / 100.0).exp();
+        assert!((f64::from(exposure) - expected).abs() < 1e-6, "{exposure}");
+        // A scene whose light reached the f16 limit is refused: no exposure brings it back.
+        let clipped = vec![[f32::INFINITY; 4]; 10];
+        let error = metered_exposure(&clipped, None, EXPOSURE_KEY, 64.0, METERED_EXPOSURE_RANGE).unwrap_err();
+        assert!(error.contains("65 504"), "{error}");
     }
 }

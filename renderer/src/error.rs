@@ -33,6 +33,9 @@ pub enum RenderError {
     /// A camera the renderer cannot draw through, or cannot move to.
     #[error("camera: {0}")]
     Camera(String),
+    /// A pose the renderer cannot take: no animation plays, or a time is not finite.
+    #[error("pose: {0}")]
+    Pose(String),
     /// A shader's bindings do not match the resources offered for them.
     #[error("bindings: {0}")]
     Binding(String),

@@ -41,6 +41,7 @@ impl SceneNeeds {
             texture_transform: any(&|m| m.textures().any(|t| !t.transform.is_identity())),
             texture_pages: scene.is_textured()
                 && crate::scene::textures::Layout::of(&scene.textures).is_packed(),
+            moving: scene.playing_tracks().is_some(),
         };
         SceneNeeds { features, shadows }
     }
@@ -62,6 +63,7 @@ impl std::fmt::Display for SceneNeeds {
             (features.texture_transform, ", texture transforms"),
             (features.texture_pages, ", textures packed in pages"),
             (features.metallic_roughness, ", metallic-roughness textures"),
+            (features.moving, ", moving objects"),
         ] {
             f.write_str(if used { what } else { "" })?;
         }
@@ -116,7 +118,11 @@ fn begin<'a>(
     if let Some(shadow) = shadow {
         g.retain(shadow, shadow::CUBES, Output::ShadowCubes);
     }
-    let (samples, motion) = (technique.gbuffer_samples(), technique.is_jittered());
+    // TAA reprojects by motion vectors always; a `-stable` mode where objects move (a camera's
+    // motion alone it follows through the frame uniforms).
+    let moving = needs.features.moving;
+    let motion = technique.is_jittered() || (moving && technique.carries_history());
+    let samples = technique.gbuffer_samples();
     let gbuffer = add(&mut g, GBufferNode { samples, motion });
     if samples == 1 {
         g.retain(gbuffer, gbuffer::NORMAL, Output::GBufferNormal);
@@ -132,6 +138,7 @@ fn begin<'a>(
         width: settings.width,
         height: settings.height,
         textured: needs.features.textured,
+        moving,
         color: &settings.color,
         adaptive: &settings.adaptive,
         limits,

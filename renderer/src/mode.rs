@@ -191,6 +191,9 @@ impl FromStr for Mode {
             Some(plain) => (plain, true),
             None => (id, false),
         };
+        if plain.split('-').any(|word| word == "stalled") {
+            return Err(fail("`-stalled` comes once, at the end"));
+        }
         let mut words = plain.split('-');
         let name = words.next().unwrap_or_default();
         // A technique of one size is its own id, plain or stalled, and nothing else.
@@ -325,6 +328,7 @@ mod tests {
         check("reference-2x2-stable", "unexpected suffix");
         check("adaptive-4x4-coverage-stable", "no `-stable` variant");
         check("supersample-2x2", "technique must be deferred, fxaa, smaa, msaa, taa, reference or adaptive");
-        check("taa-stalled-stalled", "TAA has no size: `taa` or `taa-stalled`");
+        check("taa-stalled-stalled", "`-stalled` comes once, at the end");
+        check("adaptive-2x2-stalled-area", "`-stalled` comes once, at the end");
     }
 }

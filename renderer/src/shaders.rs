@@ -64,6 +64,10 @@ pub struct Features {
     pub texture_pages: bool,
     /// `METALLIC_ROUGHNESS`: metallic-roughness textures in shading. Needs `textured`.
     pub metallic_roughness: bool,
+    /// `MOVING`: an animation plays. The G-buffer pass reads each vertex's position in the
+    /// frame before (the last vertex buffer) and takes motion vectors from it; a `-stable`
+    /// mode follows them.
+    pub moving: bool,
 }
 
 impl Features {
@@ -77,12 +81,13 @@ impl Features {
         texture_transform: true,
         texture_pages: true,
         metallic_roughness: true,
+        moving: true,
     };
 
     /// Every consistent combination (the texture features need `textured`), for tests that
     /// validate each variant of a shader.
     pub fn combinations() -> impl Iterator<Item = Features> {
-        (0..512)
+        (0..1024)
             .map(|bits: u32| Features {
                 textured: bits & 1 != 0,
                 shadows: bits & 2 != 0,
@@ -93,6 +98,7 @@ impl Features {
                 texture_transform: bits & 64 != 0,
                 texture_pages: bits & 128 != 0,
                 metallic_roughness: bits & 256 != 0,
+                moving: bits & 512 != 0,
             })
             .filter(|f| f.is_consistent())
     }
@@ -119,6 +125,7 @@ impl Features {
             "TEXTURE_TRANSFORM" => Some(self.texture_transform),
             "TEXTURE_PAGES" => Some(self.texture_pages),
             "METALLIC_ROUGHNESS" => Some(self.metallic_roughness),
+            "MOVING" => Some(self.moving),
             _ => None,
         }
     }

@@ -13,63 +13,11 @@
 //! encodings, JPEG textures, and 16-bit and grey PNGs. Extensions aabench does not read are a
 //! warning when optional and an error naming them when required.
 
-use std::path::{Path, PathBuf};
+mod support;
 
 use aabench_renderer::scene::load_gltf;
 use serde_json::{Value, json};
-
-/// A folder with one triangle's positions in `tri.bin` (36 bytes) and glTF files written into it.
-struct Folder {
-    dir: PathBuf,
-}
-
-impl Folder {
-    fn new(name: &str) -> Folder {
-        let dir = std::env::temp_dir().join(format!("aabench-import-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
-        std::fs::write(dir.join("tri.bin"), bytemuck::cast_slice(&positions)).unwrap();
-        Folder { dir }
-    }
-
-    /// A document of one triangle mesh and `nodes`, with `edit` applied; returns its path.
-    fn gltf(&self, name: &str, nodes: Value, edit: impl Fn(&mut Value)) -> PathBuf {
-        let mut document = json!({
-            "asset": { "version": "2.0" },
-            "buffers": [{ "uri": "tri.bin", "byteLength": 36 }],
-            "bufferViews": [{ "buffer": 0, "byteLength": 36 }],
-            "accessors": [{
-                "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
-                "min": [0, 0, 0], "max": [1, 1, 0]
-            }],
-            "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
-            "nodes": nodes,
-            "scenes": [{ "nodes": [0] }],
-            "scene": 0
-        });
-        edit(&mut document);
-        let path = self.dir.join(name);
-        std::fs::write(&path, serde_json::to_vec(&document).unwrap()).unwrap();
-        path
-    }
-
-    fn one_node(&self, name: &str, edit: impl Fn(&mut Value)) -> PathBuf {
-        self.gltf(name, json!([{ "mesh": 0 }]), edit)
-    }
-}
-
-impl Drop for Folder {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
-}
-
-fn error(path: &Path) -> String {
-    let message = load_gltf(path).expect_err("the file is broken").to_string();
-    assert!(message.contains(&path.display().to_string()), "the error names the file: {message}");
-    message
-}
+use support::{Folder, error};
 
 #[test]
 fn the_test_triangle_loads() {
@@ -658,5 +606,41 @@ fn position_accessors_without_bounds_load_with_a_warning() {
         scene.warnings.iter().any(|w| w.starts_with("accessors[0]: a POSITION accessor without")),
         "{:?}",
         scene.warnings
+    );
+}
+
+/// A `data:` URI's scheme is read in any case (RFC 3986 schemes are case-insensitive), for
+/// buffers and images alike. A URI of megabytes is never quoted whole: a buffer's bad base64
+/// names the buffer, and a refused scheme shows the URI's start and its length.
+#[test]
+fn data_uris_are_read_in_any_case_and_quoted_short() {
+    let folder = Folder::new("data-uri");
+    let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    let payload = base64::encode(bytemuck::cast_slice(&positions));
+    let mut png = Vec::new();
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([200, 100, 50, 255]))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let image = format!("Data:image/png;base64,{}", base64::encode(&png));
+    let path = folder.one_node("upper.gltf", |d| {
+        d["buffers"][0]["uri"] = json!(format!("DATA:application/octet-stream;base64,{payload}"));
+        d["images"] = json!([{ "uri": image }]);
+        d["textures"] = json!([{ "source": 0 }]);
+        d["materials"] = json!([{ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }]);
+        d["meshes"][0]["primitives"][0]["material"] = json!(0);
+    });
+    let scene = load_gltf(&path).unwrap_or_else(|e| panic!("upper-case data URIs load: {e}"));
+    assert_eq!((scene.triangle_count(), scene.textures.len()), (1, 1));
+    let huge = "!".repeat(2 << 20);
+    let bad = folder.one_node("bad-base64.gltf", |d| {
+        d["buffers"][0]["uri"] = json!(format!("data:application/octet-stream;base64,{huge}"));
+    });
+    let message = error(&bad);
+    assert!(message.contains("buffers[0] (data URI): bad base64") && message.len() < 1000, "{message}");
+    let scheme = folder.one_node("scheme.gltf", |d| d["buffers"][0]["uri"] = json!(format!("http://{huge}")));
+    let message = error(&scheme);
+    assert!(
+        message.contains("has a scheme") && message.contains("bytes)") && message.len() < 1000,
+        "{message}"
     );
 }

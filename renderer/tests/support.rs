@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
 use aabench_renderer::scene::generate::Generator;
@@ -12,6 +12,7 @@ use aabench_renderer::{
     AdaptiveSettings, ColorSettings, FrameImages, Gpu, Mode, RenderSettings, SceneRenderer,
 };
 use glam::{DVec2, DVec3, DVec4, Vec3};
+use serde_json::{Value, json};
 
 /// One device for the whole test binary, and a lock so that tests render one at a time:
 /// lavapipe already uses every core.
@@ -133,4 +134,58 @@ pub fn thin_renderer(width: u32, height: u32) -> (SceneRenderer, Camera, MutexGu
     let renderer =
         SceneRenderer::new(gpu, &scene, &camera, &lit(), settings(width, height)).expect("scene upload");
     (renderer, camera, guard)
+}
+
+/// A folder with one triangle's positions in `tri.bin` (36 bytes) and glTF files written into it.
+#[derive(Debug)]
+pub struct Folder {
+    pub dir: PathBuf,
+}
+
+impl Folder {
+    pub fn new(name: &str) -> Folder {
+        let dir = std::env::temp_dir().join(format!("aabench-import-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let positions: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+        std::fs::write(dir.join("tri.bin"), bytemuck::cast_slice(&positions)).unwrap();
+        Folder { dir }
+    }
+
+    /// A document of one triangle mesh and `nodes`, with `edit` applied; returns its path.
+    pub fn gltf(&self, name: &str, nodes: Value, edit: impl Fn(&mut Value)) -> PathBuf {
+        let mut document = json!({
+            "asset": { "version": "2.0" },
+            "buffers": [{ "uri": "tri.bin", "byteLength": 36 }],
+            "bufferViews": [{ "buffer": 0, "byteLength": 36 }],
+            "accessors": [{
+                "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                "min": [0, 0, 0], "max": [1, 1, 0]
+            }],
+            "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
+            "nodes": nodes,
+            "scenes": [{ "nodes": [0] }],
+            "scene": 0
+        });
+        edit(&mut document);
+        let path = self.dir.join(name);
+        std::fs::write(&path, serde_json::to_vec(&document).unwrap()).unwrap();
+        path
+    }
+
+    pub fn one_node(&self, name: &str, edit: impl Fn(&mut Value)) -> PathBuf {
+        self.gltf(name, json!([{ "mesh": 0 }]), edit)
+    }
+}
+
+impl Drop for Folder {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+pub fn error(path: &Path) -> String {
+    let message = load_gltf(path).expect_err("the file is broken").to_string();
+    assert!(message.contains(&path.display().to_string()), "the error names the file: {message}");
+    message
 }

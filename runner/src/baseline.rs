@@ -44,9 +44,17 @@ pub fn path(root: &Path, platform_key: &str, tier: Tier, scene: &str) -> PathBuf
     root.join(platform_key).join(tier.name()).join(format!("{scene}.json"))
 }
 
-/// Reads a baseline file; errors name the file and what is wrong with it.
+/// Reads a baseline file; errors name the file and what is wrong with it, a tolerance out of
+/// range among it (a negative one would call identical values improved).
 pub fn load(path: &Path) -> Result<Baseline, String> {
-    json::read_versioned(path, BASELINE_SCHEMA)
+    let baseline: Baseline = json::read_versioned(path, BASELINE_SCHEMA)?;
+    for (index, scene) in baseline.scenes.iter().enumerate() {
+        scene
+            .gate
+            .validate()
+            .map_err(|(field, why)| format!("{}: scenes[{index}].{field}: {why}", path.display()))?;
+    }
+    Ok(baseline)
 }
 
 /// What `bless` did.
@@ -86,9 +94,14 @@ pub fn bless(runs: &[RunRecord], root: &Path, force: bool, now: &str) -> Result<
         }
         same_images(&measured)?;
         let target = path(root, &run.platform.key, run.tier, &scene.name);
-        if !force && let Some(reason) = refusal(&target, run) {
-            refusals.push(format!("{}: {reason}", target.display()));
-            continue;
+        match refusal(&target, run) {
+            // A place no bless can write to: `--force` would not help.
+            Err(error) => return Err(format!("{}: {error}; nothing was written", target.display())),
+            Ok(Some(reason)) if !force => {
+                refusals.push(format!("{}: {reason}", target.display()));
+                continue;
+            }
+            Ok(_) => {}
         }
         blessed.warnings.extend(short_records(&measured));
         planned.push((target, measured));
@@ -135,12 +148,11 @@ fn write_together(dir: &Path, baselines: &[(PathBuf, Baseline)]) -> Result<(), S
     let staging = parent.join(staging);
     let error = |path: &Path, e: std::io::Error| format!("{}: {e}", path.display());
     let assemble = || -> Result<(), String> {
+        let kept = if dir.is_dir() { kept_files(dir)? } else { Vec::new() };
         std::fs::create_dir_all(&staging).map_err(|e| error(&staging, e))?;
-        if dir.is_dir() {
-            for file in fs::files_in(dir)? {
-                let copy = staging.join(file.file_name().unwrap_or_default());
-                std::fs::copy(&file, &copy).map_err(|e| error(&file, e))?;
-            }
+        for file in kept {
+            let copy = staging.join(file.file_name().unwrap_or_default());
+            std::fs::copy(&file, &copy).map_err(|e| error(&file, e))?;
         }
         for (target, baseline) in baselines {
             fs::write_json(&staging.join(target.file_name().unwrap_or_default()), baseline)?;
@@ -152,6 +164,29 @@ fn write_together(dir: &Path, baselines: &[(PathBuf, Baseline)]) -> Result<(), S
     // After the swap the staging path holds the old baselines; before it, the unused new ones.
     let _ = std::fs::remove_dir_all(&staging);
     result
+}
+
+/// The files of a tier's folder that a bless carries over: every regular file, baselines and
+/// the user's own (notes, a README). Anything else there (a folder, a link, a FIFO) could not
+/// be carried over whole and would go with the old folder, so it is refused by name.
+fn kept_files(dir: &Path) -> Result<Vec<PathBuf>, String> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))? {
+        let entry = entry.map_err(|e| format!("{}: {e}", dir.display()))?;
+        match entry.file_type() {
+            Ok(kind) if kind.is_file() => files.push(entry.path()),
+            _ => {
+                return Err(format!(
+                    "{}: is no file: bless writes the tier's folder anew and could not keep it; move it \
+                     out of {} and bless again",
+                    entry.path().display(),
+                    dir.display()
+                ));
+            }
+        }
+    }
+    files.sort();
+    Ok(files)
 }
 
 /// Moves the folder `from` to `to` atomically: a plain rename when `to` does not exist, else an
@@ -232,6 +267,9 @@ fn check_alike(runs: &[RunRecord]) -> Result<(), String> {
         if run.aabench_version != first.aabench_version {
             return differs("aabench version");
         }
+        if let Some(why) = crate::record::different_builds(first, run) {
+            return Err(why);
+        }
         // Repetitions may differ, and whether sequences were rendered (the gate renders them in
         // one process of several); how frames were made may not.
         let settings = RunSettings {
@@ -266,21 +304,28 @@ fn same_images(measured: &[&SceneRecord]) -> Result<(), String> {
     Ok(())
 }
 
-/// Why an existing file at `target` must not be replaced by a baseline of `run`, if it must not.
-fn refusal(target: &Path, run: &RunRecord) -> Option<String> {
+/// Why an existing file at `target` must not be replaced by a baseline of `run` without
+/// `--force`, if it must not; an error where nothing can be written there at all (a path
+/// through a file, a folder in the baseline's place).
+fn refusal(target: &Path, run: &RunRecord) -> Result<Option<String>, String> {
     let text = match fs::read_regular(target) {
         Ok(text) => text,
-        Err(error) if error.kind() == std::io::ErrorKind::NotFound => return None,
-        Err(error) => return Some(format!("the existing file cannot be read ({error})")),
+        Err(error) if error.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(error) => return Err(format!("cannot be read or written ({error})")),
     };
-    let schema = match json::schema_of(&text) {
+    Ok(replaced(&text, run))
+}
+
+/// Why the existing file `text` must not be replaced by a baseline of `run` without `--force`.
+fn replaced(text: &[u8], run: &RunRecord) -> Option<String> {
+    let schema = match json::schema_of(text) {
         Ok(schema) => schema,
         Err(error) => return Some(format!("the existing file is not a baseline ({error})")),
     };
     if schema != BASELINE_SCHEMA {
         return Some(format!("the existing baseline has schema `{schema}`, not `{BASELINE_SCHEMA}`"));
     }
-    let existing: Baseline = match json::parse(&text) {
+    let existing: Baseline = match json::parse(text) {
         Ok(existing) => existing,
         Err(error) => return Some(format!("the existing baseline does not parse ({error})")),
     };

@@ -62,7 +62,7 @@ fn external_resources(path: &Path, bytes: &[u8]) -> anyhow::Result<Vec<PathBuf>>
     let uris = ["buffers", "images"].into_iter().flat_map(|list| {
         document[list].as_array().into_iter().flatten().filter_map(|item| item["uri"].as_str())
     });
-    uris.filter(|uri| !uri.starts_with("data:"))
+    uris.filter(|uri| !aabench_renderer::scene::is_data_uri(uri))
         .map(|uri| percent_decode(uri).map(|relative| folder.join(relative)))
         .collect::<Result<_, _>>()
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))

@@ -32,7 +32,8 @@ pub mod worker;
 
 /// Exit codes, one meaning each: 0 success; 1 `compare` found a regression; 2 the command could
 /// not do its work (bad arguments, as clap also reports them, unreadable input, no device); 3 a
-/// run finished, but some scene or mode failed (run.json says which and why); 130 interrupted
+/// run finished, but some scene or mode failed (run.json says which and why), or a bless wrote
+/// the ok scenes and skipped the failed ones; 130 interrupted
 /// by SIGINT, SIGTERM or SIGHUP (what was measured is recorded).
 pub mod exit {
     pub const OK: u8 = 0;

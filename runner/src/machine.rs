@@ -11,9 +11,17 @@
 use serde::{Deserialize, Serialize};
 
 /// How far a probe may differ from the blessed machine's and still count as the same machine:
-/// repeated probes of one machine agree within a few percent (each is the fastest of several
+/// repeated probes of one machine agree within a few percent (each is the fastest of many short
 /// trials), different CPU generations differ by more.
 pub const PROBE_TOLERANCE: f64 = 0.12;
+
+/// The ALU probe's values that can be measurements, in nanoseconds a step: a dependent
+/// multiply-add takes a few cycles on any CPU this runs on. A value outside (a run.json edited
+/// or written by a broken clock: 0, −1, 10³⁰⁸) is no measurement and matches nothing.
+pub const PLAUSIBLE_ALU_NS: std::ops::RangeInclusive<f64> = 0.05..=100.0;
+
+/// Trials of the ALU probe (see `alu_probe`).
+const ALU_TRIALS: usize = 60;
 
 /// The CPU's identity and its calibration, recorded in every run's platform.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -29,7 +37,7 @@ pub struct Machine {
 impl Machine {
     /// Reads the CPU's identity and runs the probes (about a quarter of a second).
     pub fn measure() -> Machine {
-        Machine { cpu: cpu_identity(), alu_ns: alu_probe(5), memory_ns: memory_probe(3) }
+        Machine { cpu: cpu_identity(), alu_ns: alu_probe(ALU_TRIALS), memory_ns: memory_probe(3) }
     }
 
     /// `Ok` when `self` and `blessed` look like the same machine; otherwise why not.
@@ -39,6 +47,16 @@ impl Machine {
         }
         // Only the ALU probe decides: the memory probe's latency depends on how the kernel backs
         // its buffer (huge pages or not) and varied 67–150 ns between processes of one machine.
+        for (whose, probe) in [("the run's", self.alu_ns), ("the baseline's", blessed.alu_ns)] {
+            if !PLAUSIBLE_ALU_NS.contains(&probe) {
+                return Err(format!(
+                    "{whose} ALU probe, {} ns a step, is no measurement (a real one lies within {}–{} ns)",
+                    aabench_renderer::scene::number(probe),
+                    PLAUSIBLE_ALU_NS.start(),
+                    PLAUSIBLE_ALU_NS.end()
+                ));
+            }
+        }
         let change = self.alu_ns / blessed.alu_ns - 1.0;
         // A NaN probe (a broken clock) is never a match.
         if change.is_nan() || change.abs() > PROBE_TOLERANCE {
@@ -82,9 +100,12 @@ fn cpu_identity() -> String {
 }
 
 /// Nanoseconds per step of a dependent multiply-add chain that the compiler cannot shorten,
-/// the fastest of `trials`: interference only ever adds time.
+/// the fastest of `trials` short chains (about half a millisecond each) a millisecond apart:
+/// interference only ever adds time, and beside another job a few long chains could all be
+/// slowed (they measured up to three times the quiet value), where among many short ones
+/// spread over time some run undisturbed.
 fn alu_probe(trials: usize) -> f64 {
-    const STEPS: u32 = 4_000_000;
+    const STEPS: u32 = 250_000;
     let chain = || {
         let mut x = std::hint::black_box(1.000_000_1f64);
         let start = std::time::Instant::now();
@@ -94,7 +115,12 @@ fn alu_probe(trials: usize) -> f64 {
         std::hint::black_box(x);
         start.elapsed().as_secs_f64() * 1e9 / f64::from(STEPS)
     };
-    (0..trials).map(|_| chain()).fold(f64::INFINITY, f64::min)
+    (0..trials)
+        .map(|_| {
+            std::thread::sleep(std::time::Duration::from_millis(1));
+            chain()
+        })
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// Nanoseconds per step of a pointer chase through 64 MiB, the fastest of `trials`: each load
@@ -137,5 +163,11 @@ mod tests {
         assert!(reason.contains("ALU") && reason.contains("-23%"), "{reason}");
         let nan = Machine { alu_ns: f64::NAN, ..here.clone() };
         assert!(here.same_as(&nan).is_err(), "a broken probe is never a match");
+        // Values no probe measures are no measurement, on either side.
+        for bogus in [0.0, -1.0, 1e308] {
+            let edited = Machine { alu_ns: bogus, ..here.clone() };
+            assert!(edited.same_as(&edited).unwrap_err().contains("is no measurement"), "{bogus}");
+            assert!(here.same_as(&edited).unwrap_err().contains("the baseline's ALU probe"), "{bogus}");
+        }
     }
 }

@@ -355,15 +355,24 @@ fn bless(runs: &[PathBuf], root: &Path, force: bool) -> u8 {
             for warning in &blessed.warnings {
                 tell!("aabench: warning: {warning}");
             }
-            if blessed.skipped.is_empty() { exit::OK } else { exit::ERROR }
+            // Some scenes were written, others were not: done, with failures, as a run is.
+            if blessed.skipped.is_empty() { exit::OK } else { exit::SCENE_FAILED }
         }
         Err(message) => fail(message),
     }
 }
 
+/// A run read back, after removing what killed processes left in its folder (a sequence's
+/// spool of a killed run, temporaries of a killed report).
+fn load_run_tidied(path: &Path) -> Result<(RunRecord, PathBuf), String> {
+    let (record, dir) = aabench::record::load_run(path)?;
+    plan::remove_stale_temporaries(&dir, plan::RUN_DEPTH);
+    Ok((record, dir))
+}
+
 fn compare(args: &CompareArgs) -> u8 {
     let load = |paths: &[PathBuf]| -> Result<Vec<RunRecord>, String> {
-        paths.iter().map(|path| aabench::record::load_run(path).map(|(record, _)| record)).collect()
+        paths.iter().map(|path| load_run_tidied(path).map(|(record, _)| record)).collect()
     };
     let loaded = (|| {
         Ok::<_, String>([
@@ -452,7 +461,7 @@ fn report(runs: &[PathBuf], history: Option<&Path>, verdict: Option<&Path>) -> u
         Err(message) => return fail(message),
     };
     for run in runs {
-        let (record, dir) = match aabench::record::load_run(run) {
+        let (record, dir) = match load_run_tidied(run) {
             Ok(run) => run,
             Err(message) => return fail(message),
         };
@@ -482,7 +491,7 @@ fn merge(runs: &[PathBuf], out: &Path) -> u8 {
     // A killed merge's staging folder sits beside `out`.
     let beside = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     plan::remove_stale_temporaries(beside, 0);
-    let shards: Result<Vec<_>, String> = runs.iter().map(|run| aabench::record::load_run(run)).collect();
+    let shards: Result<Vec<_>, String> = runs.iter().map(|run| load_run_tidied(run)).collect();
     match shards.and_then(|shards| aabench::merge::merge(&shards, out)) {
         Ok(merged) => {
             say!(

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::record::{RUN_SCHEMA, RunRecord, Status};
+use crate::record::{Platform, RUN_SCHEMA, RunRecord, Status};
 
 /// Merges `shards` (each a record and its folder) into `out`, a new or empty folder: images
 /// copied, run.json written last, so a merge that fails midway leaves no run. The shards must
@@ -40,6 +40,14 @@ pub fn merge(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecord, S
 }
 
 /// The merged record, or why the shards do not belong together.
+/// The shards' machine where they all ran on one (by the calibration `Machine::same_as`
+/// compares); none where they did not, so that no machine's times are taken for another's.
+fn common_machine(shards: &[(RunRecord, PathBuf)]) -> Option<crate::machine::Machine> {
+    let first = shards.first()?.0.platform.machine.clone()?;
+    let same = |run: &RunRecord| run.platform.machine.as_ref().is_some_and(|m| m.same_as(&first).is_ok());
+    shards.iter().all(|(run, _)| same(run)).then_some(first)
+}
+
 fn merged_record(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecord, String> {
     let name = |dir: &PathBuf| dir.join("run.json").display().to_string();
     let (first, first_dir) = shards.first().ok_or("no runs to merge")?;
@@ -75,6 +83,9 @@ fn merged_record(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecor
         if run.aabench_version != first.aabench_version {
             return Err(differs("aabench version"));
         }
+        if let Some(why) = crate::record::different_builds(first, run) {
+            return Err(why);
+        }
     }
     let missing: Vec<String> =
         seen.iter().enumerate().filter(|(_, s)| !**s).map(|(i, _)| format!("{}/{count}", i + 1)).collect();
@@ -101,7 +112,8 @@ fn merged_record(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecor
         status,
         tier: first.tier,
         aabench_version: first.aabench_version.clone(),
-        platform: first.platform.clone(),
+        build: first.build.clone(),
+        platform: Platform { machine: common_machine(shards), ..first.platform.clone() },
         settings: first.settings.clone(),
         shard: None,
         merged_from: shards.iter().map(|(run, _)| run.run_id.clone()).collect(),

@@ -190,6 +190,19 @@ mod tests {
     use aabench_renderer::{Counts, Metrics, Reconstruction, Technique};
     use proptest::prelude::*;
 
+    #[test]
+    fn a_black_frame_is_told_it_may_be_unlit_and_a_coloured_one_is_not() {
+        let display = DisplayImage::from_rgba8(&[0; 64]);
+        let black = blank_image(&[0.0; 64], &display).unwrap();
+        assert!(black.contains("nothing in view is lit") && black.contains("no sample hit"), "{black}");
+        let sky: Vec<f32> = [0.2, 0.3, 0.5, 1.0].repeat(16);
+        let background = blank_image(&sky, &display).unwrap();
+        assert!(
+            !background.contains("nothing in view is lit") && background.contains("no sample hit"),
+            "{background}"
+        );
+    }
+
     /// MSE over a 4096² image equals an exact integer computation within a relative 10⁻¹², at 8
     /// and at 10 bits. A running f64 sum had drifted by 3·10⁻¹⁰ here; squared code steps are
     /// now summed in integers.
@@ -316,10 +329,16 @@ pub fn blank_image(hdr: &[f32], display: &DisplayImage) -> Option<String> {
     let hdr = flat(hdr.chunks_exact(4).map(|p| [p[0].to_bits(), p[1].to_bits(), p[2].to_bits()]));
     if let Some([r, g, b]) = hdr {
         let [r, g, b] = [r, g, b].map(f32::from_bits);
+        // Black everywhere: geometry in view that no light reaches looks like no geometry.
+        let unlit = if [r, g, b] == [0.0; 3] {
+            "nothing in view is lit (no light and no ambient reach it), or "
+        } else {
+            ""
+        };
         return Some(format!(
-            "blank frame: every pixel has the same HDR colour ({r}, {g}, {b}): no sample hit visible geometry \
-             (only back faces, geometry far below a pixel, or nothing in view); declare the scene `\"empty\": true` \
-             if that is meant"
+            "blank frame: every pixel has the same HDR colour ({r}, {g}, {b}): {unlit}no sample hit visible \
+             geometry (only back faces, geometry far below a pixel, or nothing in view); declare the scene \
+             `\"empty\": true` if that is meant"
         ));
     }
     let display = flat(display.rgba.chunks_exact(4).map(|p| [p[0], p[1], p[2]].map(u32::from)));

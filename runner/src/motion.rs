@@ -14,7 +14,7 @@
 //! frame's (a dolly's image moves faster as it nears the target, and stops at 90 % of the way). Keyframes give positions and targets at times and
 //! are interpolated linearly between them (held after the last).
 
-use aabench_renderer::scene::Camera;
+use aabench_renderer::scene::{Camera, number};
 use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
@@ -38,7 +38,25 @@ pub struct MotionSpec {
     /// Seconds between frames.
     #[serde(default = "default_time_step")]
     pub time_step_s: f64,
+    /// The file's animation that plays along the path, and from when.
+    pub animation: Option<AnimationPick>,
 }
+
+/// Which of the glTF file's animations plays (by `name` or by `index`, one of them), from
+/// `start_s` seconds into it: frame f shows it at `start_s + f · time_step_s`, and the still is
+/// its pose at `start_s`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnimationPick {
+    pub name: Option<String>,
+    pub index: Option<usize>,
+    #[serde(default)]
+    pub start_s: f64,
+}
+
+/// The latest start an animation may be given, in seconds (a day: past it, an f32 keyframe time
+/// no longer resolves a frame).
+pub const MAX_ANIMATION_START_S: f64 = 86_400.0;
 
 /// How the camera moves.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
@@ -164,16 +182,20 @@ impl MotionSpec {
             }
         }
         if !(self.time_step_s.is_finite() && self.time_step_s > 0.0 && self.time_step_s <= 1.0) {
-            return fail("time_step_s", format!("{} must be within (0, 1] seconds", self.time_step_s));
+            return fail(
+                "time_step_s",
+                format!("{} must be within (0, 1] seconds", number(self.time_step_s)),
+            );
         }
         self.check_speeds()?;
+        self.check_animation()?;
         if let Some(rate) = self.rate {
             if matches!(self.path, PathKind::Static | PathKind::Keyframes) {
                 return fail("rate", format!("the {} path has no rate", self.path.name()));
             }
             let limit = if self.path == PathKind::Dolly { 1.0 } else { 360.0 };
             if !(rate.is_finite() && rate.abs() <= limit) {
-                return fail("rate", format!("{rate} must be finite and within ±{limit}"));
+                return fail("rate", format!("{} must be finite and within ±{limit}", number(rate)));
             }
         }
         match (self.path, self.keyframes.len()) {
@@ -186,6 +208,28 @@ impl MotionSpec {
                 fail("keyframes", format!("only the keyframes path takes keyframes, not {}", path.name()))
             }
         }
+    }
+
+    fn check_animation(&self) -> Result<(), (String, String)> {
+        let Some(pick) = &self.animation else { return Ok(()) };
+        let fail = |field: &str, message: String| Err((format!("animation.{field}"), message));
+        match (&pick.name, pick.index) {
+            (Some(_), Some(_)) => return fail("index", "give a name or an index, not both".into()),
+            (None, None) => return fail("name", "give the animation's name or its index".into()),
+            _ => {}
+        }
+        if !(pick.start_s.is_finite() && (0.0..=MAX_ANIMATION_START_S).contains(&pick.start_s)) {
+            return fail(
+                "start_s",
+                format!("{} must be within [0, {MAX_ANIMATION_START_S}] seconds", number(pick.start_s)),
+            );
+        }
+        Ok(())
+    }
+
+    /// The animation's time at frame `frame` of a sequence, where one plays.
+    pub fn animation_time(&self, frame: usize) -> Option<f64> {
+        Some(self.animation.as_ref()?.start_s + frame as f64 * self.time_step_s)
     }
 
     fn check_speeds(&self) -> Result<(), (String, String)> {
@@ -207,7 +251,8 @@ impl MotionSpec {
             }
             for (i, &px) in list.iter().enumerate() {
                 if !(px.is_finite() && px > 0.0 && px <= MAX_PIXELS_PER_FRAME) {
-                    let message = format!("{px} must be within (0, {MAX_PIXELS_PER_FRAME}] pixels a frame");
+                    let message =
+                        format!("{} must be within (0, {MAX_PIXELS_PER_FRAME}] pixels a frame", number(px));
                     return fail(format!("pixels_per_frame.{tier}[{i}]"), message);
                 }
                 if list[..i].contains(&px) {

@@ -123,8 +123,9 @@ impl RunArgs {
             .transpose()?;
         let shard = args.shard.as_deref().map(parse_shard).transpose()?;
         let manifests = find_manifests(&args.paths)?;
-        // Temporaries of killed runs (run folder, scene folders) go before this run adds its own.
-        let stale = remove_stale_temporaries(&args.out, 2);
+        // Temporaries of killed runs (run folder, scene folders, sequence spools) go before this
+        // run adds its own.
+        let stale = remove_stale_temporaries(&args.out, RUN_DEPTH + 1);
         let (run_id, run_dir) = create_run_dir(&args.out, &new_run_id(args.tier, shard))?;
         Ok((
             RunPlan {
@@ -383,6 +384,9 @@ pub fn create_run_dir(out: &Path, id: &str) -> Result<(String, PathBuf), String>
     Err(format!("--out {}: 10 000 runs named {id} already", out.display()))
 }
 
+/// How deep under a run's folder its temporaries lie: `<scene>/path/.spool.tmp-<pid>`.
+pub const RUN_DEPTH: u32 = 2;
+
 /// A temporary file written to this recently is left alone even when its owner looks dead: a
 /// writer in another PID namespace (a container sharing the folder) is not in our /proc.
 const STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(60);
@@ -459,7 +463,23 @@ mod tests {
         let fresh = dir_b.join("other.json.tmp-4294967295");
         std::fs::write(&fresh, "x").unwrap();
         std::fs::write(dir_b.join("run.json"), "{}").unwrap();
-        assert_eq!(remove_stale_temporaries(&out, 2), 2);
+        // A killed sequence's spool, three folders down: a folder named as a dead process's
+        // temporary, untouched for a while.
+        let path = dir_a.join("thin").join("path");
+        let spool = crate::spool::folder(&path).with_file_name(".spool.tmp-4294967295");
+        std::fs::create_dir_all(&spool).unwrap();
+        std::fs::write(spool.join("0.rgba"), "x").unwrap();
+        std::fs::File::open(&spool)
+            .unwrap()
+            .set_modified(std::time::SystemTime::now() - 2 * STALE_AFTER)
+            .unwrap();
+        assert_eq!(remove_stale_temporaries(&out, 2), 2, "a spool lies deeper than a run's own temporaries");
+        assert_eq!(
+            remove_stale_temporaries(&dir_a, RUN_DEPTH),
+            1,
+            "a report or compare of the run removes it"
+        );
+        assert!(!spool.exists() && path.exists());
         assert!(ours.exists() && fresh.exists() && dir_b.join("run.json").exists());
         std::fs::remove_dir_all(&out).unwrap();
     }

@@ -56,6 +56,11 @@ pub struct RunRecord {
     pub status: Status,
     pub tier: Tier,
     pub aabench_version: String,
+    /// The build that made it: the first 16 hex digits of a SHA-256 of everything that renders
+    /// and measures (both crates' source, the shaders, the lock file). Runs of one build pool
+    /// (bless, a compare's processes, merge); absent in runs from before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub build: Option<String>,
     pub platform: Platform,
     pub settings: RunSettings,
     /// Set when the run rendered one slice of the scenes (`--shard I/N`).
@@ -375,6 +380,27 @@ pub struct SampleCost {
 
 /// Reads a run: its folder or its run.json. Returns the record and the run folder (image
 /// paths in the record are relative to it). Errors name the file.
+/// This binary's build (see [`RunRecord::build`]).
+pub fn this_build() -> String {
+    env!("AABENCH_BUILD_SHA256")[..16].to_string()
+}
+
+/// Why runs of different builds cannot be taken together, where they are of different builds:
+/// each names its build (`none recorded` for a run from before builds were).
+pub fn different_builds(a: &RunRecord, b: &RunRecord) -> Option<String> {
+    let build = |run: &RunRecord| run.build.clone().unwrap_or_else(|| "none recorded".into());
+    (a.build != b.build).then(|| {
+        format!(
+            "run {} (build {}) and run {} (build {}) are of different builds: their images and times are \
+             not one build's",
+            a.run_id,
+            build(a),
+            b.run_id,
+            build(b)
+        )
+    })
+}
+
 pub fn load_run(path: &std::path::Path) -> Result<(RunRecord, std::path::PathBuf), String> {
     let record = crate::json::read_versioned(&run_file(path), RUN_SCHEMA)?;
     Ok((record, run_folder(path)))
@@ -458,6 +484,9 @@ pub struct SequenceRecord {
     pub rate: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pixels_per_frame: Option<f64>,
+    /// The glTF animation that played along the path (its name, or `animations[i]`), if one did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub animation: Option<String>,
     /// Frames asked for, and frames rendered by every mode still running (fewer when the
     /// sequence stopped: `error` says why).
     pub frames: u32,
@@ -493,10 +522,16 @@ pub struct SequenceRecord {
 }
 
 impl SequenceRecord {
-    /// How fast it moves: `4 px a frame`, or the path's name where it has no speed.
+    /// How fast it moves: `4 px a frame`, or the path's name where it has no speed; and the
+    /// animation that plays (`static, animation crossing`).
     pub fn speed(&self) -> String {
-        self.pixels_per_frame
-            .map_or_else(|| self.path.clone(), |px| format!("{} px a frame", crate::motion::short(px)))
+        let speed = self
+            .pixels_per_frame
+            .map_or_else(|| self.path.clone(), |px| format!("{} px a frame", crate::motion::short(px)));
+        match &self.animation {
+            Some(animation) => format!("{speed}, animation {animation}"),
+            None => speed,
+        }
     }
 }
 
@@ -578,6 +613,17 @@ pub struct Ghosting {
     pub mse_edges: Option<f64>,
     /// The same everywhere else, for scale.
     pub mse_elsewhere: Option<f64>,
+    /// Frame by frame from the second (each against the frame before): the trail a moving
+    /// object leaves grows and shrinks as it crosses (empty in runs from before).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub per_frame: Vec<GhostFrame>,
+}
+
+/// One frame's disoccluded share and the mode's MSE on those pixels (absent where none was).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GhostFrame {
+    pub disoccluded: f64,
+    pub mse: Option<f64>,
 }
 
 /// A list, or (in runs from before) one value or nothing in its place.

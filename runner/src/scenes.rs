@@ -94,7 +94,8 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
     let start = Instant::now();
     ensure_generated(manifest, false)?;
     let path = manifest.gltf_path();
-    let scene = load_gltf(&path).with_context(|| format!("{}: gltf", manifest.path.display()))?;
+    let mut scene = load_gltf(&path).with_context(|| format!("{}: gltf", manifest.path.display()))?;
+    pick_animation(manifest, &mut scene)?;
     if scene.indices.is_empty() {
         bail!("{}: gltf: {} holds no triangles", manifest.path.display(), path.display());
     }
@@ -108,6 +109,43 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
         exposure: manifest.tonemap.exposure.unwrap_or(1.0),
     };
     Ok(LoadedScene { scene, camera, pivot, lighting, seconds: start.elapsed().as_secs_f64() })
+}
+
+/// Sets the animation that the manifest's `motion.animation` picks playing, or says why it
+/// cannot: no such animation in the file (naming those it has), or one that cannot play (naming
+/// it and the part at fault). A file whose animations no manifest picks stands still, and says so.
+fn pick_animation(manifest: &Manifest, scene: &mut Scene) -> anyhow::Result<()> {
+    let pick = manifest.motion.as_ref().and_then(|motion| motion.animation.as_ref());
+    let Some(pick) = pick else {
+        if !scene.animations.is_empty() {
+            scene.warnings.push(format!(
+                "{} animation(s) that the manifest does not play (motion.animation picks one): the scene stands still",
+                scene.animations.len()
+            ));
+        }
+        return Ok(());
+    };
+    let (manifest_path, gltf) = (manifest.path.display(), manifest.gltf_path());
+    let found = match (&pick.name, pick.index) {
+        (Some(name), _) => scene.animations.iter().position(|a| a.name.as_deref() == Some(name)),
+        (None, Some(index)) => (index < scene.animations.len()).then_some(index),
+        (None, None) => None,
+    };
+    let Some(index) = found else {
+        let field = if pick.name.is_some() { "name" } else { "index" };
+        let known: Vec<String> = scene.animations.iter().enumerate().map(|(i, a)| a.label(i)).collect();
+        let known = if known.is_empty() { "none".to_string() } else { known.join(", ") };
+        bail!(
+            "{manifest_path}: motion.animation.{field}: {} has no such animation (it has {known})",
+            gltf.display()
+        );
+    };
+    let animation = &scene.animations[index];
+    if let Err(error) = &animation.tracks {
+        bail!("{manifest_path}: motion.animation: {}: {}: {error}", gltf.display(), animation.label(index));
+    }
+    scene.playing = Some(index);
+    Ok(())
 }
 
 /// The pivot of the manifest's path (`motion.rs`) from `camera`, once the cameras of each of

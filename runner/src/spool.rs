@@ -5,12 +5,15 @@
 //! renders are done so that it neither slows nor disturbs them (`run/sequence.rs`), and the
 //! worst-flickering square, known only at the end (`flicker.rs`). A 256×192 frame takes 192 KB,
 //! a 1024×768 one 3 MB, so a nightly scene's spool runs to a few GB, mostly read back from the
-//! page cache. The folder is removed when the spool is dropped.
+//! page cache. The folder is removed when the spool is dropped; it is named as a temporary of
+//! its process (`.spool.tmp-<pid>`), so that what a killed run left is removed by the next run,
+//! report or compare of that folder (`plan::remove_stale_temporaries`). Before anything reads it
+//! back, every stream's length is checked against the frames appended to it.
 
 use std::fs::File;
 use std::io::Write;
 use std::os::unix::fs::FileExt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use aabench_renderer::DisplayImage;
 
@@ -32,18 +35,27 @@ pub struct Square {
     pub side: u32,
 }
 
+/// The folder a sequence spools to under `dir` (its `path` folder): named as this process's
+/// temporary.
+pub fn folder(dir: &Path) -> PathBuf {
+    dir.join(format!(".spool.tmp-{}", std::process::id()))
+}
+
 impl Spool {
     /// An empty spool of `size` frames for the named streams, in `dir` (created).
     pub fn create(dir: PathBuf, size: [u32; 2], names: Vec<String>) -> Result<Self, String> {
+        // The folder is this process's own: anything in it is a leftover.
+        let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         let mut streams = Vec::with_capacity(names.len());
         for (index, name) in names.into_iter().enumerate() {
             let path = dir.join(format!("{index}.rgba"));
+            // Appending, so that a file cut from outside stays short (rather than growing a hole
+            // of zeros at the cut) and its length tells.
             let file = File::options()
                 .create(true)
-                .truncate(true)
                 .read(true)
-                .write(true)
+                .append(true)
                 .open(&path)
                 .map_err(|e| format!("{}: {e}", path.display()))?;
             streams.push((name, file, 0));
@@ -77,6 +89,25 @@ impl Spool {
         self.streams[stream].2
     }
 
+    /// Checks that every stream's file holds exactly the frames appended to it. A file cut short
+    /// or written from outside would read back zeros or another's frames, which FLIP would
+    /// score without a word; this is an error naming the stream instead.
+    pub fn check(&self) -> Result<(), String> {
+        let bytes = u64::from(self.size[0]) * u64::from(self.size[1]) * 4;
+        for (index, (name, file, frames)) in self.streams.iter().enumerate() {
+            let length = file.metadata().map_err(|e| format!("{}: spool: {e}", self.dir.display()))?.len();
+            let expected = *frames as u64 * bytes;
+            if length != expected {
+                return Err(format!(
+                    "{}: spool: {index}.rgba ({name}) holds {length} bytes where its {frames} frame(s) \
+                     take {expected}: it was cut or written from outside, so its frames are not compared",
+                    self.dir.display()
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Frame `frame` of stream `stream`, whole.
     pub fn frame(&self, stream: usize, frame: usize) -> Result<Vec<u8>, String> {
         let [width, height] = self.size;
@@ -108,5 +139,34 @@ impl Spool {
 impl Drop for Spool {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stream_cut_from_outside_is_an_error_naming_it() {
+        let dir = std::env::temp_dir().join(format!("aabench-spool-test-{}", std::process::id()));
+        let spool_dir = folder(&dir);
+        assert!(spool_dir.to_string_lossy().ends_with(&format!(".spool.tmp-{}", std::process::id())));
+        let mut spool = Spool::create(spool_dir.clone(), [2, 2], vec!["truth".into(), "taa".into()]).unwrap();
+        let frame = DisplayImage::from_rgba8(&[7; 16]);
+        for stream in [0, 1] {
+            spool.append(stream, &frame).unwrap();
+            spool.append(stream, &frame).unwrap();
+        }
+        assert_eq!(spool.check(), Ok(()));
+        assert_eq!(spool.frame(1, 1).unwrap(), vec![7; 16]);
+        // Cut in the middle of the run and written on: its frames would read back shifted or
+        // as zeros.
+        spool.streams[1].1.set_len(16).unwrap();
+        spool.append(1, &frame).unwrap();
+        let error = spool.check().unwrap_err();
+        assert!(error.contains("1.rgba (taa) holds 32 bytes") && error.contains("take 48"), "{error}");
+        drop(spool);
+        assert!(!spool_dir.exists(), "the folder goes with the spool");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -83,14 +83,20 @@ pub fn cache_key(
 }
 
 /// The key of the truth at one frame of a camera path: the still truth's key (everything but
-/// the camera) with the frame's camera added.
-pub fn frame_key(still_key: &str, camera: &Camera) -> String {
+/// the camera and the pose; the manifest, which picks the animation, among it) with the frame's
+/// camera and, where an animation plays, its time added.
+pub fn frame_key(still_key: &str, camera: &Camera, animation_time: Option<f64>) -> String {
     let mut hasher = Sha256::new();
     hasher.update(b"aabench.truth-frame/1");
     hasher.update(still_key.as_bytes());
     let vectors = [camera.position, camera.forward, camera.up];
     for value in vectors.iter().flat_map(|v| v.to_array()).chain([camera.fov_y, camera.near, camera.far]) {
         hasher.update(value.to_le_bytes());
+    }
+    // Absent adds nothing, so that the keys of paths without an animation stay as they were.
+    if let Some(time) = animation_time {
+        hasher.update(b"animation time");
+        hasher.update(time.to_le_bytes());
     }
     hex(&hasher.finalize())
 }

@@ -127,6 +127,27 @@ fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
     assert_eq!(refused.status.code(), Some(2));
     assert!(stderr(&refused).contains("disagree"), "{}", stderr(&refused));
     assert_eq!(read_json(&file), baseline, "nothing was written");
+    // Nor runs of two builds, which a compare does not take as one run's processes either.
+    assert_eq!(record["build"].as_str().map(str::len), Some(16), "a run records its build");
+    let mut rebuilt = record.clone();
+    rebuilt["run_id"] = json!("rebuilt");
+    rebuilt["build"] = json!("0123456789abcdef");
+    let rebuilt_dir = ws.dir.join("rebuilt");
+    std::fs::create_dir_all(&rebuilt_dir).unwrap();
+    write_json(&rebuilt_dir.join("run.json"), &rebuilt);
+    let refused = ws.run(&["bless", &path_arg(&first), &path_arg(&rebuilt_dir)]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(stderr(&refused).contains("different builds"), "{}", stderr(&refused));
+    assert_eq!(read_json(&file), baseline, "nothing was written");
+    let mixed = ws.run(&[
+        "compare",
+        &path_arg(&first),
+        &path_arg(&rebuilt_dir),
+        "--out",
+        &path_arg(&ws.dir.join("mixed")),
+    ]);
+    assert_eq!(mixed.status.code(), Some(2));
+    assert!(stderr(&mixed).contains("0123456789abcdef"), "{}", stderr(&mixed));
 
     // A baseline doctored 0.5 dB better in one mode: that mode regressed.
     let mut doctored = baseline.clone();
@@ -198,6 +219,26 @@ fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
     let forced = ws.run(&["bless", &path_arg(&second), "--force"]);
     assert_eq!(forced.status.code(), Some(0), "{}", stderr(&forced));
     assert_eq!(read_json(&file)["run_ids"], json!([record["run_id"]]));
+
+    // The user's own files in the tier's folder are kept; a folder there, which a bless could
+    // not carry over, is refused by name before anything is written.
+    let tier = file.parent().unwrap();
+    std::fs::write(tier.join("NOTES.md"), "why these were blessed").unwrap();
+    assert_eq!(ws.run(&["bless", &path_arg(&second)]).status.code(), Some(0));
+    assert_eq!(std::fs::read_to_string(tier.join("NOTES.md")).unwrap(), "why these were blessed");
+    std::fs::create_dir(tier.join("archive")).unwrap();
+    let before = std::fs::read(&file).unwrap();
+    let refused = ws.run(&["bless", &path_arg(&second)]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(stderr(&refused).contains("archive"), "{}", stderr(&refused));
+    assert!(tier.join("archive").is_dir() && std::fs::read(&file).unwrap() == before);
+    // A baseline folder under a file: no bless can write there, so no `--force` is offered.
+    let through_file = ws.dir.join("NOTES.txt");
+    std::fs::write(&through_file, "a file").unwrap();
+    let nowhere = ws.run(&["bless", &path_arg(&second), "--baseline", &path_arg(&through_file)]);
+    assert_eq!(nowhere.status.code(), Some(2));
+    assert!(stderr(&nowhere).contains("cannot be read or written"), "{}", stderr(&nowhere));
+    assert!(!stderr(&nowhere).contains("--force"), "{}", stderr(&nowhere));
 }
 
 /// A stall made 256× as expensive in a copied manifest regresses both stalled modes (exit 1);
@@ -283,10 +324,18 @@ fn corrupt_truncated_and_wrong_schema_baselines_exit_two_and_stay_untouched() {
     let good = std::fs::read(&file).unwrap();
     let mut wrong_schema = read_json(&file);
     wrong_schema["schema"] = json!("aabench.baseline/0");
-    let cases: [(&str, Vec<u8>, &str); 3] = [
+    // A negative tolerance would turn identical values into "improved".
+    let mut negative = read_json(&file);
+    negative["scenes"][0]["gate"]["psnr_db"] = json!(-0.5);
+    let cases: [(&str, Vec<u8>, &str); 4] = [
         ("corrupt", b"{ this is not json".to_vec(), "not an aabench.baseline/1 file"),
         ("truncated", good[..good.len() / 2].to_vec(), "not an aabench.baseline/1 file"),
         ("wrong schema", serde_json::to_vec(&wrong_schema).unwrap(), "schema is `aabench.baseline/0`"),
+        (
+            "negative tolerance",
+            serde_json::to_vec(&negative).unwrap(),
+            "gate.psnr_db: -0.5 must be finite and ≥ 0",
+        ),
     ];
     let out = ws.dir.join("gate");
     for (name, bytes, reason) in cases {
@@ -324,6 +373,12 @@ fn a_failed_scene_fails_the_gate_with_or_without_a_baseline() {
     assert_eq!(failed[0]["scene"], "b-broken");
     assert!(failed[0]["detail"].as_str().unwrap().contains("lights[0].range"), "{}", failed[0]);
     assert!(std::fs::read_to_string(out.join("junit.xml")).unwrap().contains("failures=\"1\""));
+    // A bless of it writes the scene that finished and names the one it skips: done, with a
+    // failure (3), not "could not do its work" (2).
+    let blessed = ws.run(&["bless", &path_arg(&run_dir)]);
+    assert_eq!(blessed.status.code(), Some(3), "{}", stderr(&blessed));
+    assert!(stderr(&blessed).contains("b-broken: not blessed"), "{}", stderr(&blessed));
+    assert!(baseline_file(&ws, "a-edge").is_file());
 }
 
 /// Every `src` and `href` of an HTML page: relative, and naming a file that exists (or an
@@ -580,4 +635,21 @@ fn merged_shards_hold_the_pairs_of_the_unsharded_run_and_get_the_same_verdicts()
     assert!(stderr(&alone).contains("shards 2/2 are missing"), "{}", stderr(&alone));
     let twice = ws.run(&["merge", &path_arg(&first), &path_arg(&first), "--out", "twice"]);
     assert!(stderr(&twice).contains("given twice"), "{}", stderr(&twice));
+
+    // Shards of two builds are no one run; shards of two machines keep neither's machine.
+    let mut other = read_json(&second.join("run.json"));
+    other["build"] = json!("0123456789abcdef");
+    write_json(&second.join("run.json"), &other);
+    let builds = ws.run(&["merge", &path_arg(&first), &path_arg(&second), "--out", "builds"]);
+    assert_eq!(builds.status.code(), Some(2));
+    assert!(stderr(&builds).contains("different builds"), "{}", stderr(&builds));
+    other["build"] = read_json(&first.join("run.json"))["build"].clone();
+    let alu = other["platform"]["machine"]["alu_ns"].as_f64().unwrap();
+    other["platform"]["machine"]["alu_ns"] = json!(alu * 2.0);
+    write_json(&second.join("run.json"), &other);
+    let machines = ws.run(&["merge", &path_arg(&first), &path_arg(&second), "--out", "machines"]);
+    assert_eq!(machines.status.code(), Some(0), "{}", stderr(&machines));
+    let record = read_json(&ws.dir.join("machines/run.json"));
+    assert!(record["platform"]["machine"].is_null(), "{}", record["platform"]);
+    assert!(!read_json(&merged.join("run.json"))["platform"]["machine"].is_null(), "one machine is kept");
 }

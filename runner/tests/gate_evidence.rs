@@ -359,6 +359,22 @@ fn time_against_baselines_of_another_machine_is_informational() {
     assert_eq!(verdict["same_machine"], false);
     let notes = verdict["notes"].to_string();
     assert!(notes.contains("informational") && notes.contains("ALU probe"), "{notes}");
+    let summary = std::fs::read_to_string(ws.dir.join("gate-there/summary.md")).unwrap();
+    let headline = summary.lines().next().unwrap();
+    assert!(
+        headline.starts_with("## aabench gate: ✅ no regression") && headline.ends_with("— time not gated"),
+        "{summary}"
+    );
+    let here_summary = std::fs::read_to_string(ws.dir.join("gate-here/summary.md")).unwrap();
+    assert!(!here_summary.contains("time not gated"), "{here_summary}");
+    // A probe value no machine measures (an edited run.json) is no match, and says so.
+    let edited = doctored(&ws, "edited", &record, |r| {
+        scale_mode(r, "reference-2x2-stalled", 2.0);
+        r["platform"]["machine"]["alu_ns"] = json!(0.0);
+    });
+    let (edited, verdict) = compare(&ws, &[&edited], "gate-edited", &[]);
+    assert_eq!(edited.status.code(), Some(0), "{}", String::from_utf8_lossy(&edited.stdout));
+    assert!(verdict["notes"].to_string().contains("is no measurement"), "{}", verdict["notes"]);
     let check = verdict["checks"]
         .as_array()
         .unwrap()

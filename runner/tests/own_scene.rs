@@ -164,6 +164,37 @@ fn automatic_exposure_renders_a_sun_of_6830_lux_as_one_of_6_8() {
     assert!(white > lit / 2, "exposure 1 under a 6830 lux sun should blow the lit scene out ({white} white)");
 }
 
+/// Automatic exposure meters what shows the scene: a dim sky behind a floor under a 2000 lux sun
+/// (a real file's setting) does not drag the exposure up until the floor is white. A sun so
+/// bright that the scene's radiance passes the HDR target's f16 limit fails the scene by name,
+/// where it used to render one flat grey.
+#[test]
+fn automatic_exposure_meters_the_scene_not_its_sky_and_refuses_light_beyond_the_hdr_range() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("exposure-sky");
+    for (name, lux) in [("sunlit", 2000.0), ("blaze", 1e9)] {
+        let mut writer = box_scene();
+        writer.add_directional_light(glam::DVec3::new(-0.4, -1.0, -0.6), [1.0, 0.97, 0.9], lux);
+        writer.write(&ws.dir.join(format!("scenes/{name}.glb"))).unwrap();
+        let manifest = json!({ "schema_version": 1, "name": name, "gltf": format!("{name}.glb"),
+            "ambient": [0, 0, 0], "background": [0.0005, 0.0006, 0.001] });
+        std::fs::write(ws.dir.join(format!("scenes/{name}.json")), manifest.to_string()).unwrap();
+    }
+    let output = ws.run(&["run", "--modes", "deferred-1x1", "--repetitions", "1"]);
+    assert_eq!(output.status.code(), Some(3), "the blaze fails: {}", stderr(&output));
+    let text = stderr(&output);
+    assert!(text.contains("blaze.glb") && text.contains("65 504"), "{text}");
+    let record = ws.record();
+    let sunlit = scene(&record, "sunlit");
+    assert_eq!(sunlit["exposure"]["metered"], true, "{sunlit}");
+    let image = ws.display(mode(sunlit, "deferred-1x1")).to_rgb8();
+    // The sky is near black; what is not is the scene.
+    let lit: Vec<&image::Rgb<u8>> = image.pixels().filter(|p| p[1] > 8).collect();
+    assert!(lit.len() > image.pixels().len() / 10, "the scene covers {} pixels", lit.len());
+    let white = lit.iter().filter(|p| p.0.iter().all(|&c| c >= 250)).count();
+    assert!(white * 10 < lit.len(), "{white} of the scene's {} pixels are white", lit.len());
+}
+
 /// A floor with a box standing on it and `lights` point lights of the file's own above it.
 fn lit_box_file(path: &std::path::Path, lights: usize) {
     let mut writer = box_scene();

@@ -393,11 +393,28 @@ fn the_gate_compares_sequences_and_a_run_without_them_compared_less() {
     assert_eq!(outcome(&verdict, "adaptive-2x2", "sequence_shaded_percent")["outcome"], "regressed");
     assert_eq!(outcome(&verdict, "deferred-1x1", "instability")["outcome"], "unchanged");
     assert_eq!(outcome(&verdict, "deferred-1x1", "sequence_flip_vs_truth")["outcome"], "regressed");
-    std::fs::write(&file, original).unwrap();
+    std::fs::write(&file, &original).unwrap();
 
     let stills = run("stills", &["--sequences", "off"]);
     let (code, verdict) = compare(&stills, &[]);
     assert_eq!(code, Some(1), "{verdict}");
     assert_eq!(outcome(&verdict, "*", "status")["outcome"], "missing");
     assert_eq!(compare(&stills, &["--lenient"]).0, Some(0));
+
+    // A baseline whose sequence has another length is no comparison of this run's means.
+    let mut longer = read_json(&file);
+    for scene in longer["scenes"].as_array_mut().unwrap() {
+        scene["sequences"][0]["frames"] = json!(8);
+        scene["sequences"][0]["frames_done"] = json!(8);
+    }
+    write_json(&file, &longer);
+    let (code, verdict) = compare(&first, &[]);
+    assert_eq!(code, Some(1), "{verdict}");
+    let status = outcome(&verdict, "*", "status");
+    assert_eq!(status["outcome"], "failed");
+    assert!(
+        status["detail"].as_str().unwrap().contains("4 of 4 frames rendered, the baseline's 8 of 8"),
+        "{status}"
+    );
+    std::fs::write(&file, original).unwrap();
 }

@@ -94,10 +94,10 @@ impl Node for GBufferNode {
                 fragment: Some(fragment),
                 constants: Constants::new(),
             };
-            let tangents = ctx.scene.has_tangents();
+            let inputs = VertexInputs { tangents: ctx.scene.has_tangents(), previous: ctx.scene.is_moving() };
             let motion = self.motion;
             let create = |device: &_, layout: &_, module: &_, key: &_| {
-                create(device, layout, module, key, tangents, motion)
+                create(device, layout, module, key, inputs, motion)
             };
             let raster = Raster::GBuffer { class, samples: self.samples };
             let bundle = ctx.render_pipeline(io, &program, raster, &[], create)?;
@@ -136,12 +136,30 @@ const TANGENT_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayo
     attributes: &wgpu::vertex_attr_array![4 => Float32x4],
 };
 
+/// The last vertex buffer of scenes whose animation plays: each vertex's position in the frame
+/// before.
+const PREVIOUS_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: 12,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![5 => Float32x3],
+};
+
+/// The vertex buffers a scene pipeline reads beside the vertices (`GpuScene::draw` binds them
+/// in this order).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct VertexInputs {
+    /// A tangent per vertex, for normal maps.
+    pub tangents: bool,
+    /// Each vertex's position in the frame before, for motion vectors of moving objects.
+    pub previous: bool,
+}
+
 fn create(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     key: &RenderKey,
-    tangents: bool,
+    inputs: VertexInputs,
     motion: bool,
 ) -> wgpu::RenderPipeline {
     let Raster::GBuffer { class, samples } = key.raster else { unreachable!("a G-buffer key") };
@@ -156,7 +174,7 @@ fn create(
         ..Default::default()
     };
     let target = Target { depth: DEPTH_FORMAT, colors: &targets, samples };
-    scene_pipeline(device, layout, module, key, primitive, target, tangents)
+    scene_pipeline(device, layout, module, key, primitive, target, inputs)
 }
 
 /// What a scene pipeline renders into: a depth target, colour targets when the key has a
@@ -167,8 +185,8 @@ pub(crate) struct Target<'a> {
     pub samples: u32,
 }
 
-/// A pipeline that draws the scene's vertices (with their tangents when `tangents`) with
-/// reversed depth into `target`: what the G-buffer and shadow passes share.
+/// A pipeline that draws the scene's vertices (with the `inputs` beside them) with reversed
+/// depth into `target`: what the G-buffer and shadow passes share.
 pub(crate) fn scene_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
@@ -176,10 +194,13 @@ pub(crate) fn scene_pipeline(
     key: &RenderKey,
     primitive: wgpu::PrimitiveState,
     target: Target,
-    tangents: bool,
+    inputs: VertexInputs,
 ) -> wgpu::RenderPipeline {
-    let with_tangents = [Some(vertex_layout()), Some(TANGENT_LAYOUT)];
-    let buffers = if tangents { &with_tangents[..] } else { &with_tangents[..1] };
+    let buffers: Vec<_> = [Some(vertex_layout())]
+        .into_iter()
+        .chain(inputs.tangents.then_some(Some(TANGENT_LAYOUT)))
+        .chain(inputs.previous.then_some(Some(PREVIOUS_LAYOUT)))
+        .collect();
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: key.fragment.or(Some(key.vertex)),
         layout: Some(layout),
@@ -187,7 +208,7 @@ pub(crate) fn scene_pipeline(
             module,
             entry_point: Some(key.vertex),
             compilation_options: Default::default(),
-            buffers,
+            buffers: &buffers,
         },
         primitive,
         depth_stencil: Some(reversed_depth_test(target.depth)),

@@ -65,7 +65,7 @@ fn create(
     // Faces of a cube map mirror one axis, so winding flips between faces: draw both sides.
     // Depth needs no tangents.
     let target = super::gbuffer::Target { depth: FORMAT, colors: &[], samples: 1 };
-    scene_pipeline(device, layout, module, key, wgpu::PrimitiveState::default(), target, false)
+    scene_pipeline(device, layout, module, key, wgpu::PrimitiveState::default(), target, Default::default())
 }
 
 #[derive(Debug)]

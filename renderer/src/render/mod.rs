@@ -22,6 +22,7 @@ use crate::graph::{Dims, Output, Plan, PortRef, Resolved};
 use crate::mode::Mode;
 use crate::passes::{Allocated, BuildContext, Io, Pass};
 use crate::pipelines::Pipelines;
+use crate::scene::pose::Poser;
 use crate::scene::{Camera, FrameUniforms, GpuScene, Lighting, Scene, Tile};
 use crate::settings::RenderSettings;
 use crate::technique::{FrameGraph, Technique};
@@ -46,6 +47,8 @@ pub struct SceneRenderer {
     /// Kept to rewrite the frame uniforms for ground-truth tiles, and shared with the temporal
     /// modes, which make their own from it.
     view: Arc<Mutex<View>>,
+    /// What poses the scene, where an animation plays.
+    poser: Option<Poser>,
 }
 
 /// What the frame uniforms are made from.
@@ -68,6 +71,11 @@ impl SceneRenderer {
         let frame = FrameUniforms::new(camera, lighting, settings.width, settings.height);
         let needs = SceneNeeds::of(scene, lighting);
         let gpu_scene = GpuScene::new(&gpu.device, &gpu.queue, scene, lighting, &frame);
+        // A playing animation starts at its time 0, not in the file's rest pose.
+        let poser = Poser::of(scene);
+        if let Some(poser) = &poser {
+            gpu_scene.write_pose(&gpu.queue, poser, 0.0, 0.0);
+        }
         gpu.check()?;
         Ok(SceneRenderer {
             pipelines: Pipelines::new(gpu.device.clone(), gpu.queue.clone(), needs.features),
@@ -78,6 +86,7 @@ impl SceneRenderer {
             pool: Pool::default(),
             memory_budget: None,
             view: Arc::new(Mutex::new(View { camera: *camera, lighting: lighting.clone() })),
+            poser,
         })
     }
 
@@ -299,17 +308,46 @@ impl SceneRenderer {
         Ok(())
     }
 
+    /// Poses the scene: every frame rendered after sees the objects its animation moves where
+    /// they lie `now` seconds into it, and their motion vectors hold the motion since `then` (the
+    /// time of the frame before; `then == now` for a still). A scene without a playing
+    /// animation refuses.
+    pub fn pose(&mut self, now: f64, then: f64) -> Result<(), RenderError> {
+        let Some(poser) = &self.poser else {
+            return Err(RenderError::Pose("no animation plays in this scene".into()));
+        };
+        if !(now.is_finite() && then.is_finite()) {
+            return Err(RenderError::Pose(format!("times {now} and {then} must be finite")));
+        }
+        self.scene.write_pose(&self.gpu.queue, poser, now, then);
+        self.gpu.check()
+    }
+
+    /// Whether an animation plays: frames are posed ([`SceneRenderer::pose`]).
+    pub fn is_moving(&self) -> bool {
+        self.poser.is_some()
+    }
+
     /// Meters the scene's exposure: renders deferred-1x1 once at exposure 1 and returns the
-    /// exposure that maps the log-average luminance of its HDR image to `key`
-    /// ([`crate::color::metered_exposure`]), clamped to `range`. Every frame rendered after,
-    /// the truth's and each mode's, takes that exposure. On an error the exposure stays 1.
+    /// exposure ([`crate::color::metered_exposure`]) that maps the log-average luminance of the
+    /// pixels that show the scene (not the background) to `key`, keeps all but a fiftieth of
+    /// them below white, and stays within `range`. Every frame rendered after, the truth's and
+    /// each mode's, takes that exposure. A scene whose light reaches the HDR target's limit
+    /// is an error ([`RenderError::Limit`]); on an error the exposure stays 1.
     pub fn meter_exposure(&mut self, key: f64, range: [f32; 2]) -> Result<f32, RenderError> {
         lock(&self.view).lighting.exposure = 1.0;
         let (width, height) = (self.settings.width, self.settings.height);
+        let white = self.settings.color.tonemap.map_or(1.0, |tonemap| tonemap.hdr_max);
         let metered = self
             .render_alone(Mode::new(Technique::Deferred, 1, false), Tile::whole(width, height), "metering")
-            .and_then(|outputs| Ok(half_texels(&self.gpu.read_texture(&outputs[&Output::Hdr])?)))
-            .map(|hdr| crate::color::metered_exposure(&hdr, key, range));
+            .and_then(|outputs| {
+                let hdr = half_texels(&self.gpu.read_texture(&outputs[&Output::Hdr])?);
+                let depth = self.gpu.read_texture(&outputs[&Output::GBufferDepth])?;
+                // Reversed depth: the background keeps the cleared far plane, 0.
+                let scene: Vec<bool> = depth.chunks_exact(4).map(|d| d != [0; 4]).collect();
+                crate::color::metered_exposure(&hdr, Some(&scene), key, white, range)
+                    .map_err(RenderError::Limit)
+            });
         if let Ok(exposure) = metered {
             lock(&self.view).lighting.exposure = exposure;
         }

@@ -23,8 +23,14 @@ pub struct CameraError {
 
 /// A number as a message shows it: plainly in everyday ranges, in exponent form when huge or
 /// tiny (1e-300 has 300 zeros in plain form).
-fn number(x: f64) -> String {
-    if x != 0.0 && x.is_finite() && !(1e-4..1e9).contains(&x.abs()) {
+/// A number as messages show it: plainly between 10⁻⁴ and 10⁹, else in scientific notation (a
+/// value of 10³⁰⁸ is not printed as 309 digits).
+pub fn number<T>(x: T) -> String
+where
+    T: Copy + Into<f64> + std::fmt::Display + std::fmt::LowerExp,
+{
+    let value: f64 = x.into();
+    if value != 0.0 && value.is_finite() && !(1e-4..1e9).contains(&value.abs()) {
         format!("{x:e}")
     } else {
         format!("{x}")

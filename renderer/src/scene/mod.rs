@@ -2,16 +2,20 @@
 //! manifest adds. Generated scenes are written as glTF and read back through the same importer,
 //! so there is one path for generated scenes and users' own files.
 
+pub mod animation;
 mod camera;
 pub mod generate;
 mod import;
+pub mod pose;
 pub mod shadow;
 pub mod textures;
 mod upload;
 pub mod write;
 
-pub use camera::{Camera, CameraError, FrameUniforms, MAX_COORDINATE, Tile};
-pub use import::{MAX_TEXTURE_SIDE, load_gltf, percent_decode, read_generator, regular_file};
+pub use camera::{Camera, CameraError, FrameUniforms, MAX_COORDINATE, Tile, number};
+pub use import::{
+    MAX_TEXTURE_SIDE, is_data_uri, load_gltf, percent_decode, read_generator, regular_file, shown,
+};
 pub use shadow::{MAX_SHADOW_LIGHTS, Shadow, ShadowCubes};
 pub use upload::{
     GpuScene, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MAX_LIGHTS, MAX_MATERIALS, SLOT_BASE,
@@ -288,9 +292,22 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// What the file uses that aabench ignores (optional extensions), one line each.
     pub warnings: Vec<String>,
+    /// The file's animations, each playable or with the reason it is not.
+    pub animations: Vec<animation::Animation>,
+    /// The node trees the animations move, with the vertices each node's meshes gave.
+    pub rig: animation::Rig,
+    /// The animation that frames play (an index into `animations`, whose tracks are `Ok`);
+    /// none leaves every node at rest.
+    pub playing: Option<usize>,
 }
 
 impl Scene {
+    /// The tracks of the animation that plays, if one does.
+    pub fn playing_tracks(&self) -> Option<&[animation::Track]> {
+        let animation = self.animations.get(self.playing?)?;
+        animation.tracks.as_deref().ok()
+    }
+
     /// Whether any material samples a texture.
     pub fn is_textured(&self) -> bool {
         !self.textures.is_empty() && self.materials.iter().any(|m| m.textures().next().is_some())

@@ -103,6 +103,8 @@ pub struct GpuScene {
     pub(crate) vertices: wgpu::Buffer,
     /// One tangent per vertex, when a material has a normal map.
     tangents: Option<wgpu::Buffer>,
+    /// Where each vertex lay in the frame before, when an animation plays (`MOVING`).
+    previous: Option<wgpu::Buffer>,
     pub(crate) indices: wgpu::Buffer,
     pub(crate) draws: Vec<(DrawClass, Range<u32>)>,
     pub(crate) light_count: u32,
@@ -165,11 +167,19 @@ impl GpuScene {
         // Where each texture lies, for scenes whose textures share layers (`TEXTURE_PAGES`).
         let texture_places = (textures.is_some() && layout.is_packed())
             .then(|| buffer("texture places", bytemuck::cast_slice(&layout.gpu_places()), storage));
+        // A playing animation rewrites the vertices of the nodes it moves every frame.
+        let moving = scene.playing_tracks().is_some();
+        let vertex = if moving {
+            wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST
+        } else {
+            wgpu::BufferUsages::VERTEX
+        };
+        let positions: Vec<[f32; 3]> = scene.vertices.iter().map(|v| v.position).collect();
         GpuScene {
-            vertices: buffer("vertices", bytemuck::cast_slice(&scene.vertices), wgpu::BufferUsages::VERTEX),
-            tangents: (!scene.tangents.is_empty()).then(|| {
-                buffer("tangents", bytemuck::cast_slice(&scene.tangents), wgpu::BufferUsages::VERTEX)
-            }),
+            vertices: buffer("vertices", bytemuck::cast_slice(&scene.vertices), vertex),
+            tangents: (!scene.tangents.is_empty())
+                .then(|| buffer("tangents", bytemuck::cast_slice(&scene.tangents), vertex)),
+            previous: moving.then(|| buffer("previous positions", bytemuck::cast_slice(&positions), vertex)),
             indices: buffer("indices", bytemuck::cast_slice(&scene.indices), wgpu::BufferUsages::INDEX),
             draws: scene.draws.clone(),
             light_count: lights.len() as u32,
@@ -221,6 +231,33 @@ impl GpuScene {
         }
     }
 
+    /// Moves the vertices of the nodes that `poser`'s animation moves to where they lie at
+    /// `now` seconds, and their positions of the frame before to where they lay at `then`.
+    pub(crate) fn write_pose(&self, queue: &wgpu::Queue, poser: &super::pose::Poser, now: f64, then: f64) {
+        const VERTEX: u64 = size_of::<super::Vertex>() as u64;
+        for moved in poser.vertices_at(now) {
+            queue.write_buffer(
+                &self.vertices,
+                moved.first as u64 * VERTEX,
+                bytemuck::cast_slice(&moved.vertices),
+            );
+            if let Some(tangents) = self.tangents.as_ref().filter(|_| !moved.tangents.is_empty()) {
+                queue.write_buffer(tangents, moved.first as u64 * 16, bytemuck::cast_slice(&moved.tangents));
+            }
+        }
+        if let Some(previous) = &self.previous {
+            for (first, positions) in poser.positions_at(then) {
+                queue.write_buffer(previous, first as u64 * 12, bytemuck::cast_slice(&positions));
+            }
+        }
+    }
+
+    /// Whether an animation plays: the vertices have their positions of the frame before (the
+    /// last vertex buffer).
+    pub(crate) fn is_moving(&self) -> bool {
+        self.previous.is_some()
+    }
+
     /// Whether the vertices have tangents (a second vertex buffer), for normal maps.
     pub(crate) fn has_tangents(&self) -> bool {
         self.tangents.is_some()
@@ -243,6 +280,10 @@ impl GpuScene {
         pass.set_vertex_buffer(0, self.vertices.slice(..));
         if let Some(tangents) = &self.tangents {
             pass.set_vertex_buffer(1, tangents.slice(..));
+        }
+        // After the tangents, where the scene has them (`scene_pipeline` lays them out so).
+        if let Some(previous) = &self.previous {
+            pass.set_vertex_buffer(1 + u32::from(self.tangents.is_some()), previous.slice(..));
         }
         pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
         for (class, range) in &self.draws {

@@ -101,6 +101,7 @@ pub struct GltfWriter {
     cameras: Vec<Value>,
     /// `KHR_lights_punctual` lights.
     lights: Vec<Value>,
+    animations: Vec<Value>,
     /// A root node's uniform scale and translation over every node, if any.
     placement: Option<(f64, [f64; 3])>,
 }
@@ -125,6 +126,7 @@ impl GltfWriter {
             nodes: Vec::new(),
             cameras: Vec::new(),
             lights: Vec::new(),
+            animations: Vec::new(),
             placement: None,
         }
     }
@@ -180,10 +182,11 @@ impl GltfWriter {
         self.materials.len() - 1
     }
 
-    /// Adds a mesh as a node of the scene, in world space. Empty meshes are skipped.
-    pub fn add_mesh(&mut self, name: &str, mesh: &MeshData, material: usize) {
+    /// Adds a mesh as a node of the scene, in world space, and returns the node. Empty meshes
+    /// are skipped.
+    pub fn add_mesh(&mut self, name: &str, mesh: &MeshData, material: usize) -> Option<usize> {
         if mesh.indices.is_empty() {
-            return;
+            return None;
         }
         let mut mesh = mesh.clone();
         mesh.orient_to_normals();
@@ -221,6 +224,48 @@ impl GltfWriter {
             }],
         }));
         self.nodes.push(json!({"name": name, "mesh": self.meshes.len() - 1}));
+        Some(self.nodes.len() - 1)
+    }
+
+    /// Adds a node that holds `children` (nodes added before, which stop being roots) and returns
+    /// it.
+    pub fn add_group(&mut self, name: &str, children: &[usize]) -> usize {
+        self.nodes.push(json!({"name": name, "children": children}));
+        self.nodes.len() - 1
+    }
+
+    /// Adds an animation that moves `node` through `translations` at `times` (seconds),
+    /// linearly.
+    pub fn add_translation_animation(
+        &mut self,
+        name: &str,
+        node: usize,
+        times: &[f32],
+        translations: &[[f32; 3]],
+    ) {
+        let (first, last) = (times.first().copied().unwrap_or(0.0), times.last().copied().unwrap_or(0.0));
+        let input = self.add_data(
+            bytemuck::cast_slice(times),
+            json!({"componentType": FLOAT, "count": times.len(), "type": "SCALAR", "min": [first], "max": [last]}),
+        );
+        let output = self.add_data(
+            bytemuck::cast_slice(translations),
+            json!({"componentType": FLOAT, "count": translations.len(), "type": "VEC3"}),
+        );
+        self.animations.push(json!({
+            "name": name,
+            "channels": [{"sampler": 0, "target": {"node": node, "path": "translation"}}],
+            "samplers": [{"input": input, "output": output, "interpolation": "LINEAR"}],
+        }));
+    }
+
+    /// An accessor of data that no vertex stage reads (its view has no target).
+    fn add_data(&mut self, bytes: &[u8], accessor: Value) -> usize {
+        let view = self.add_view(bytes, None);
+        let mut accessor = accessor;
+        accessor["bufferView"] = json!(view);
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
     }
 
     /// Adds a perspective camera at `position` looking at `target`, +Y up.
@@ -272,10 +317,17 @@ impl GltfWriter {
 
     fn document(&self) -> Value {
         let mut nodes = self.nodes.clone();
+        // Every node that is nobody's child.
+        let held: Vec<u64> = nodes
+            .iter()
+            .flat_map(|n| n["children"].as_array().cloned().unwrap_or_default())
+            .filter_map(|c| c.as_u64())
+            .collect();
+        let tops: Vec<usize> = (0..nodes.len()).filter(|i| !held.contains(&(*i as u64))).collect();
         let roots: Vec<usize> = match self.placement {
-            None => (0..nodes.len()).collect(),
+            None => tops,
             Some((scale, translation)) => {
-                let children: Vec<usize> = (0..nodes.len()).collect();
+                let children = tops;
                 nodes.push(json!({
                     "name": "placement",
                     "children": children,
@@ -302,6 +354,9 @@ impl GltfWriter {
             // Linear mag, trilinear min, repeat.
             document["samplers"] =
                 json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497}]);
+        }
+        if !self.animations.is_empty() {
+            document["animations"] = json!(self.animations);
         }
         if !self.lights.is_empty() {
             document["extensionsUsed"] = json!(["KHR_lights_punctual"]);

@@ -230,6 +230,9 @@ pub(crate) struct Frame<'a> {
     pub height: u32,
     /// The scene has textures.
     pub textured: bool,
+    /// An animation plays: the G-buffer of a mode that carries a history writes motion
+    /// vectors, which hold the objects' motion as well as the camera's.
+    pub moving: bool,
     pub color: &'a ColorSettings,
     pub adaptive: &'a AdaptiveSettings,
     /// The device's limits, which bound the lists some techniques build.

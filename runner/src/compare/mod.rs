@@ -213,9 +213,22 @@ pub fn compare(request: &Request) -> Verdict {
 }
 
 /// Runs that cannot be compared together at all (exit 2): processes of the run, of the base,
-/// or of a confirmation on different platforms or tiers than the run's first, or the same run
-/// given twice. `groups` are the run's processes first, then the others.
-pub fn check_comparable(groups: &[&[RunRecord]]) -> Result<(), String> {
+/// or of a confirmation on different platforms or tiers than the run's first, the same run
+/// given twice, or the run's processes (or the base's) of more than one build. `groups` are
+/// the run's processes, the base's, and the confirming runs of each.
+pub fn check_comparable(groups: &[&[RunRecord]; 4]) -> Result<(), String> {
+    // The run's processes are one build, the base's another: each group, and its confirming
+    // runs, of one build.
+    let [head, base, confirm_head, confirm_base] = groups;
+    for (side, confirm) in [(head, confirm_head), (base, confirm_base)] {
+        if let Some(first) = side.first().or(confirm.first()) {
+            let builds =
+                side.iter().chain(confirm.iter()).find_map(|run| crate::record::different_builds(first, run));
+            if let Some(why) = builds {
+                return Err(why);
+            }
+        }
+    }
     let all: Vec<&RunRecord> = groups.iter().flat_map(|group| group.iter()).collect();
     let first = all[0];
     for (index, run) in all.iter().enumerate() {
@@ -435,9 +448,32 @@ fn compare_scene(
         let detail = "the baseline holds the scene's sequence, the run rendered none (--sequences off?)";
         checks.push(status_check(scene, "*", Outcome::Missing, detail));
     }
+    checks.extend(sequence_lengths(scene, then));
     for old in &then.modes {
         if scene.mode(&old.mode).is_none() {
             checks.push(status_check(scene, &old.mode, Outcome::Missing, "not in the run"));
+        }
+    }
+    checks
+}
+
+/// Means over other frames are other numbers: a sequence cut short (or of another length) is no
+/// comparison of the baseline's, and fails.
+fn sequence_lengths(scene: &SceneRecord, then: &SceneRecord) -> Vec<Check> {
+    let mut checks = Vec::new();
+    for (index, (now, before)) in scene.sequences.iter().zip(&then.sequences).enumerate() {
+        let (frames, frames_then) = ((now.frames, now.frames_done), (before.frames, before.frames_done));
+        if frames != frames_then {
+            let detail = format!(
+                "sequence {} ({}): {} of {} frames rendered, the baseline's {} of {}: its means are over other frames",
+                index + 1,
+                now.speed(),
+                frames.1,
+                frames.0,
+                frames_then.1,
+                frames_then.0
+            );
+            checks.push(status_check(scene, "*", Outcome::Failed, &detail));
         }
     }
     checks

@@ -55,11 +55,14 @@ pub fn summary(verdict: &Verdict) -> String {
     let mut out = String::new();
     let headline = if verdict.regressed { "❌ regression" } else { "✅ no regression" };
     let reported_only = verdict.checks.iter().filter(|c| c.outcome.fails() && !c.gated).count();
-    let headline = if reported_only > 0 && !verdict.regressed {
+    let mut headline = if reported_only > 0 && !verdict.regressed {
         format!("{headline} ({reported_only} failing outcomes reported, not failed)")
     } else {
         headline.to_string()
     };
+    if !time_gated(verdict) {
+        headline += " — time not gated";
+    }
     let _ = writeln!(out, "## aabench gate: {headline}\n");
     let _ = writeln!(out, "{}\n", tally(verdict));
     provenance(&mut out, verdict);
@@ -82,6 +85,16 @@ pub fn summary(verdict: &Verdict) -> String {
 }
 
 /// What was compared with what, and what time was gated against.
+/// Whether time was gated at all: against base runs, against the baselines on the machine that
+/// blessed them, or everywhere (`--fail-on all`).
+fn time_gated(verdict: &Verdict) -> bool {
+    match verdict.fail_on {
+        FailOn::Quality => false,
+        FailOn::All => true,
+        _ => !verdict.base_run_ids.is_empty() || verdict.same_machine,
+    }
+}
+
 fn provenance(out: &mut String, verdict: &Verdict) {
     let against = match (&verdict.baseline_dir, verdict.same_platform) {
         (None, _) => "no baselines".to_string(),

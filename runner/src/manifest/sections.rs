@@ -5,7 +5,7 @@
 use aabench_renderer::AdaptiveSettings;
 use aabench_renderer::adaptive::{DepthMetric, MAX_METRIC_CONSTANT, StableCounts};
 use aabench_renderer::scene::generate::Generator;
-use aabench_renderer::scene::{Camera, MAX_SHADOW_LIGHTS, Shadow, check_light};
+use aabench_renderer::scene::{Camera, MAX_SHADOW_LIGHTS, Shadow, check_light, number};
 use glam::DVec3;
 use serde::Deserialize;
 
@@ -204,7 +204,7 @@ pub fn check_shadows(shadows: &[(String, Shadow)]) -> Result<(), (String, String
         }
         for (name, value) in [("bias", shadow.bias), ("radius", shadow.radius)] {
             if !(value >= 0.0 && value.is_finite()) {
-                return Err((format!("{field}.{name}"), format!("{value} must be finite and ≥ 0")));
+                return Err((format!("{field}.{name}"), format!("{} must be finite and ≥ 0", number(value))));
             }
         }
     }
@@ -273,7 +273,10 @@ impl AdaptiveSpec {
         ];
         for (name, value) in constants {
             if !(0.0..=MAX_METRIC_CONSTANT).contains(&value) {
-                return Err((name.into(), format!("{value} must be within [0, {MAX_METRIC_CONSTANT:e}]")));
+                return Err((
+                    name.into(),
+                    format!("{} must be within [0, {MAX_METRIC_CONSTANT:e}]", number(value)),
+                ));
             }
         }
         let shares = [
@@ -284,7 +287,7 @@ impl AdaptiveSpec {
         ];
         for (name, value) in shares {
             if !(0.0..=1.0).contains(&value) {
-                return Err((name.into(), format!("{value} must be in [0, 1]")));
+                return Err((name.into(), format!("{} must be in [0, 1]", number(value))));
             }
         }
         Ok(())

@@ -109,7 +109,19 @@ fn malformed_manifests_name_the_file_and_the_field() {
     check(|j| j["adaptive"] = json!({"stable_hold": 1.5}), "adaptive.stable_hold", "[0, 1]");
     check(|j| j["adaptive"] = json!({"stable_decay": -1}), "adaptive.stable_decay", "[0, 1]");
     check(|j| j["adaptive"] = json!({"c_depth": -1}), "adaptive.c_depth", "within [0, 1e12]");
-    check(|j| j["adaptive"] = json!({"c_normal": 1e13}), "adaptive.c_normal", "within [0, 1e12]");
+    check(
+        |j| j["adaptive"] = json!({"c_normal": 1e13}),
+        "adaptive.c_normal",
+        "1e13 must be within [0, 1e12]",
+    );
+    // Huge numbers are quoted in scientific notation, not as hundreds of digits.
+    check(|j| j["adaptive"] = json!({"c_depth": 3e38}), "adaptive.c_depth", "3e38 must be within");
+    check(|j| j["motion"] = json!({"rate": 1e308}), "motion.rate", "1e308 must be finite");
+    check(
+        |j| j["motion"] = json!({"path": "static", "animation": {"name": "a", "start_s": 1e300}}),
+        "motion.animation.start_s",
+        "1e300 must be within",
+    );
     check(|j| j["adaptive"] = json!({"depth_metric": "linear"}), "adaptive.depth_metric", "unknown variant");
     check(|j| j["stall_iterations"] = json!(1_000_001), "stall_iterations", "65 535 loop iterations");
     check(|j| j["gltf"] = json!("../elsewhere.glb"), "gltf", "generated files stay inside");

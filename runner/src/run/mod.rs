@@ -54,6 +54,7 @@ pub async fn execute(plan: &RunPlan, progress: Progress, cancel: Arc<AtomicBool>
         status: Status::Running,
         tier: plan.tier,
         aabench_version: env!("CARGO_PKG_VERSION").into(),
+        build: Some(crate::record::this_build()),
         // Probed before any frame, while nothing else of the run uses the cores.
         platform: Platform { machine: Some(Machine::measure()), ..Platform::from(&worker.platform) },
         settings: RunSettings {

@@ -203,6 +203,8 @@ impl<'a> SceneRun<'a> {
         self.status("uploading");
         let memory_limit = plan.memory_limit;
         let metered = manifest.tonemap.exposure.is_none();
+        // A playing animation's still is its pose at its start.
+        let start = manifest.motion.as_ref().and_then(|motion| motion.animation_time(0));
         let uploaded = self
             .worker
             .call(plan.frame_timeout, move |state| {
@@ -217,6 +219,9 @@ impl<'a> SceneRun<'a> {
                     &lighting,
                     settings,
                 )?;
+                if let Some(start) = start.filter(|_| renderer.is_moving()) {
+                    renderer.pose(start, start)?;
+                }
                 // After the upload, so that the scene's own memory is no longer available.
                 let budget =
                     memory_limit.or_else(|| super::memory::available_memory().map(|bytes| bytes / 10 * 9));
@@ -365,6 +370,15 @@ fn conclude(mut record: SceneRecord, worker_stuck: bool, interrupted: bool) -> S
         record.error = Some(format!("ground truth: {error}"));
     } else if worker_stuck {
         record.error = Some("the GPU worker stopped; see the failed mode".into());
+    } else if let Some(stopped) = record.sequences.iter().find(|s| s.error.is_some()) {
+        // Means over the frames a stopped sequence reached are no measurement of its path.
+        record.error = Some(format!(
+            "sequence ({}): stopped after {} of {} frames: {}",
+            stopped.speed(),
+            stopped.frames_done,
+            stopped.frames,
+            stopped.error.as_deref().unwrap_or_default()
+        ));
     }
     record.status = if record.error.is_none() && record.modes.iter().all(|m| m.status == Status::Ok) {
         Status::Ok
@@ -380,4 +394,30 @@ fn fail(mut record: SceneRecord, error: String) -> SceneRecord {
     record.status = Status::Failed;
     record.error = Some(error);
     record
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A committed baseline's record of `scene` (any platform's quick tier).
+    fn blessed(scene: &str) -> SceneRecord {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../baselines");
+        let platform = std::fs::read_dir(&root).unwrap().next().unwrap().unwrap().path();
+        let baseline = crate::baseline::load(&platform.join(format!("quick/{scene}.json"))).unwrap();
+        baseline.scene().clone()
+    }
+
+    #[test]
+    fn a_sequence_that_stopped_leaves_its_scene_not_ok() {
+        let whole = blessed("wire");
+        assert_eq!(conclude(whole.clone(), false, false).status, Status::Ok);
+        let mut cut = whole;
+        cut.sequences[0].frames_done = 3;
+        cut.sequences[0].error = Some("interrupted after 3 of 8 frames".into());
+        let failed = conclude(cut.clone(), false, false);
+        assert_eq!(failed.status, Status::Failed);
+        assert!(failed.error.unwrap().contains("stopped after 3 of 8 frames"));
+        assert_eq!(conclude(cut, false, true).status, Status::Interrupted);
+    }
 }

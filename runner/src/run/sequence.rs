@@ -23,7 +23,7 @@
 //! A temporal mode (TAA) starts the path from a still: its warm-up frames at the first camera.
 
 use std::sync::Arc;
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use aabench_renderer::scene::Camera;
@@ -34,7 +34,7 @@ use super::scene::SceneRun;
 use crate::flicker::{self, TRUTH_STREAM, pixel_changes_of_error};
 use crate::metrics::{self, Decibels, FrameChecks};
 use crate::motion::{MotionSpec, Pace, PathKind};
-use crate::record::{Ghosting, ModeSequence, SequenceRecord, fingerprint};
+use crate::record::{GhostFrame, Ghosting, ModeSequence, SequenceRecord, fingerprint};
 use crate::spool::Spool;
 use crate::temporal::{self, Flow, Geometry, PairError};
 use crate::truth;
@@ -94,10 +94,10 @@ struct ModeState {
     /// time (every frame but the first, which is rendered as a still).
     shaded_percent: Vec<f64>,
     frame_seconds: Vec<f64>,
-    /// The error along the truth's motion, summed over the frame pairs; the share of pixels
-    /// disoccluded per pair.
+    /// The error along the truth's motion, summed over the frame pairs; per pair, the share of
+    /// pixels disoccluded and the error there.
     followed: PairError,
-    disoccluded: Vec<f64>,
+    ghosting: Vec<GhostFrame>,
     checks: FrameChecks,
     error: Option<String>,
 }
@@ -116,6 +116,10 @@ pub(super) async fn run(
         path: along.motion.path.name().to_string(),
         rate: (!fixed).then_some(along.pace.rate),
         pixels_per_frame: along.pace.pixels_per_frame,
+        animation: along.motion.animation.as_ref().map(|pick| match (&pick.name, pick.index) {
+            (Some(name), _) => name.clone(),
+            (None, index) => format!("animations[{}]", index.unwrap_or_default()),
+        }),
         frames: along.cameras.len() as u32,
         frames_done: 0,
         time_step_s: along.motion.time_step_s,
@@ -136,7 +140,7 @@ pub(super) async fn run(
     let size = scene.resolution;
     let names =
         std::iter::once(TRUTH_STREAM.to_string()).chain(modes.iter().map(|(mode, _)| mode.to_string()));
-    let mut spool = Spool::create(out_dir.join(".spool"), size, names.collect());
+    let mut spool = Spool::create(crate::spool::folder(&out_dir), size, names.collect());
     let mut flicker = vec![0.0; size[0] as usize * size[1] as usize];
     let rendered = render_frames(scene, &along, modes, &mut record, &mut states, (&mut spool, &mut flicker));
     if let Err(error) = rendered.await {
@@ -148,10 +152,12 @@ pub(super) async fn run(
     let animated_streams: Vec<usize> =
         (0..modes.len()).filter(|&i| animated(modes[i].0, modes)).map(|i| i + 1).collect();
     let (delay_s, run_dir) = (along.motion.time_step_s, scene.plan.run_dir.clone());
+    let cancel = Arc::clone(scene.cancel);
     let after = tokio::task::spawn_blocking(move || {
         let spool = spool?;
+        spool.check()?;
         let start = Instant::now();
-        let flips = flip_along(&spool, done)?;
+        let flips = flip_along(&spool, done, &cancel)?;
         let flip_s = start.elapsed().as_secs_f64();
         let start = Instant::now();
         let region =
@@ -217,12 +223,18 @@ async fn render_frames(
         let status = |scene: &SceneRun, what: &str| {
             scene.status(&format!("sequence frame {}/{frames}: {what}", frame + 1))
         };
-        set_camera(scene, camera).await?;
+        // The animation's time now and at the frame before (the first frame is a still).
+        let times =
+            along.motion.animation_time(frame).zip(along.motion.animation_time(frame.saturating_sub(1)));
+        set_view(scene, camera, times).await?;
+        // The still is the first frame's pose: a later frame of an animation is not.
+        let still_pose = frame == 0 || times.is_none();
         let truth = match along.still_truth {
-            Some(still) if camera == *along.still_camera => still.clone(),
+            Some(still) if camera == *along.still_camera && still_pose => still.clone(),
             _ => {
                 status(scene, "the truth");
-                truth_frame(scene, along.still_key, frame, &camera, record).await?
+                let view = FrameView { frame, camera: &camera, time: times.map(|(now, _)| now) };
+                truth_frame(scene, along.still_key, view, record).await?
             }
         };
         keep(0, &truth);
@@ -292,12 +304,18 @@ impl TruthTrack {
     }
 }
 
-/// Moves the renderer's camera: every frame rendered after sees the scene through `camera`.
-async fn set_camera(scene: &mut SceneRun<'_>, camera: Camera) -> Result<(), String> {
+/// Moves the renderer's camera, and poses the scene where an animation plays (at its time now
+/// and at the frame before): every frame rendered after sees the scene so.
+async fn set_view(scene: &mut SceneRun<'_>, camera: Camera, times: Option<(f64, f64)>) -> Result<(), String> {
     scene
         .worker
         .call(scene.plan.frame_timeout, move |state| {
-            state.renderer.as_mut().expect("an uploaded scene").set_camera(&camera)
+            let renderer = state.renderer.as_mut().expect("an uploaded scene");
+            renderer.set_camera(&camera)?;
+            match times {
+                Some((now, then)) => renderer.pose(now, then),
+                None => Ok(()),
+            }
         })
         .await
         .map_err(|e| e.to_string())?
@@ -377,20 +395,26 @@ async fn geometry(scene: &mut SceneRun<'_>, cameras: [&Camera; 2], first: bool) 
         .map_err(|e| format!("the geometry probe: {e}"))
 }
 
-/// The truth at frame `frame` of the path: from the cache, or rendered now and cached. Its key
-/// is the still truth's with the frame's camera added.
+/// A frame of the path: its index, camera and, where an animation plays, its time.
+struct FrameView<'a> {
+    frame: usize,
+    camera: &'a Camera,
+    time: Option<f64>,
+}
+
+/// The truth at a frame of the path: from the cache, or rendered now and cached. Its key is the
+/// still truth's with the frame's camera and animation time added.
 async fn truth_frame(
     scene: &mut SceneRun<'_>,
     still_key: &str,
-    frame: usize,
-    camera: &Camera,
+    FrameView { frame, camera, time }: FrameView<'_>,
     record: &mut SequenceRecord,
 ) -> Result<DisplayImage, String> {
     if still_key.is_empty() {
         return Err("the still truth has no key to derive the frames' from".into());
     }
     let (plan, manifest, resolution) = (scene.plan, scene.manifest, scene.resolution);
-    let key = truth::frame_key(still_key, camera);
+    let key = truth::frame_key(still_key, camera, time);
     let name = format!("{}-frame{frame:03}", manifest.name);
     let cache = truth::cache_file(&plan.truth_cache_dir(manifest), &name, resolution, &key);
     if let Some(display) = truth::load_cached(&cache, resolution, manifest.display_bits()) {
@@ -436,8 +460,12 @@ impl ModeState {
             }
             if let Some(flow) = truth.flow {
                 let pair = [&frame.display, truth.now];
-                self.followed.add(&flow.error(pair, [&before.display, truth_before], flicker));
-                self.disoccluded.push(flow.disoccluded_share());
+                let error = flow.error(pair, [&before.display, truth_before], flicker);
+                self.ghosting.push(GhostFrame {
+                    disoccluded: flow.disoccluded_share(),
+                    mse: temporal::mean(error.disoccluded),
+                });
+                self.followed.add(&error);
             }
         }
         self.previous = Some(frame);
@@ -458,7 +486,7 @@ impl ModeState {
             shaded_percent,
             frame_seconds,
             followed,
-            disoccluded,
+            ghosting,
             checks,
             error,
         } = self;
@@ -480,11 +508,14 @@ impl ModeState {
             shaded_percent: mean(&shaded_percent),
             frame_ms: crate::stats::Summary::new(frame_seconds.iter().map(|s| s * 1e3).collect()),
             flicker: temporal::mean(followed.flicker),
-            ghosting: mean(&disoccluded).map(|disoccluded| Ghosting {
-                disoccluded,
-                mse: temporal::mean(followed.disoccluded),
-                mse_edges: temporal::mean(followed.edges),
-                mse_elsewhere: temporal::mean(followed.elsewhere),
+            ghosting: mean(&ghosting.iter().map(|g| g.disoccluded).collect::<Vec<_>>()).map(|disoccluded| {
+                Ghosting {
+                    disoccluded,
+                    mse: temporal::mean(followed.disoccluded),
+                    mse_edges: temporal::mean(followed.edges),
+                    mse_elsewhere: temporal::mean(followed.elsewhere),
+                    per_frame: ghosting,
+                }
             }),
             hashes,
         };
@@ -496,12 +527,17 @@ impl ModeState {
 /// frame (stream 0's); empty for the truth's and for a stream that holds fewer frames (its mode
 /// failed on the way). Frames identical to another (a stalled mode's and its twin's) are
 /// compared once; the comparisons of a frame run on every core.
-fn flip_along(spool: &Spool, frames: usize) -> Result<Vec<Vec<f64>>, String> {
+fn flip_along(spool: &Spool, frames: usize, cancel: &AtomicBool) -> Result<Vec<Vec<f64>>, String> {
     let [width, height] = spool.size();
     let complete: Vec<usize> = (1..spool.streams()).filter(|&s| spool.frames(s) >= frames).collect();
     let mut flips = vec![Vec::with_capacity(frames); spool.streams()];
     let threads = std::thread::available_parallelism().map_or(1, usize::from);
     for frame in 0..frames {
+        // A signal stops the comparisons between images, not after the path's last.
+        let stopped = || format!("interrupted: FLIP stopped at frame {frame} of {frames}");
+        if cancel.load(Ordering::SeqCst) {
+            return Err(stopped());
+        }
         let truth = spool.frame(0, frame)?;
         let images = complete.iter().map(|&s| spool.frame(s, frame)).collect::<Result<Vec<_>, _>>()?;
         let mut seen = std::collections::HashSet::new();
@@ -512,7 +548,9 @@ fn flip_along(spool: &Spool, frames: usize) -> Result<Vec<Vec<f64>>, String> {
             let mut done = Vec::new();
             loop {
                 let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(image) = distinct.get(i) else { return done };
+                let Some(image) = distinct.get(i).filter(|_| !cancel.load(Ordering::SeqCst)) else {
+                    return done;
+                };
                 done.push((*image, crate::perceptual::flip_rgba8(image, &truth, width, height).mean()));
             }
         };
@@ -520,6 +558,9 @@ fn flip_along(spool: &Spool, frames: usize) -> Result<Vec<Vec<f64>>, String> {
             let workers: Vec<_> = (0..threads).map(|_| scope.spawn(compare)).collect();
             workers.into_iter().flat_map(|w| w.join().expect("a FLIP thread panicked")).collect()
         });
+        if values.len() < distinct.len() {
+            return Err(stopped());
+        }
         for (&stream, image) in complete.iter().zip(&images) {
             flips[stream].push(values[image.as_slice()]);
         }
@@ -555,4 +596,27 @@ fn per_value(sum: u64, image: &DisplayImage, frames: usize) -> f64 {
     let scale = f64::from(image.max_code());
     let values = (image.rgba.len() / 4 * 3 * frames).max(1) as f64;
     sum as f64 / (scale * scale) / values
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flip_along_the_path_stops_at_a_signal() {
+        let dir = std::env::temp_dir().join(format!("aabench-flip-stop-{}", std::process::id()));
+        let mut spool =
+            Spool::create(dir.join("spool"), [8, 8], vec!["truth".into(), "mode".into()]).unwrap();
+        for value in [10, 200] {
+            for stream in [0, 1] {
+                spool.append(stream, &DisplayImage::from_rgba8(&[value; 256])).unwrap();
+            }
+        }
+        let flips = flip_along(&spool, 2, &AtomicBool::new(false)).unwrap();
+        assert_eq!((flips[1].len(), flips[1][0]), (2, 0.0), "identical frames: FLIP 0 at each");
+        let error = flip_along(&spool, 2, &AtomicBool::new(true)).unwrap_err();
+        assert!(error.contains("interrupted"), "{error}");
+        drop(spool);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

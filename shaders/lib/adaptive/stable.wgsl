@@ -6,8 +6,9 @@
 // before combine by technique/adaptive: StableCounts::next (its CPU twin): c rises at once to n, and
 // falls only where n asks for more than STABLE_HOLD samples fewer, and then by at most the
 // share STABLE_DECAY of itself a frame. The frame before's count is the one of the pixel where
-// the window's nearest sample lay then (the reprojection in the frame uniforms: the scenes are
-// static, so points move with the camera alone), taken only where that pixel could see the
+// the window's nearest sample lay then (the reprojection in the frame uniforms where the scene
+// stands still, so points move with the camera alone; the G-buffer's motion vectors where objects
+// move, and the reprojection still for the background), taken only where that pixel could see the
 // point: where it lay no deeper than the deepest sample of that pixel's window, by
 // STABLE_DEPTH_TOLERANCE (the background counts as deepest). A depth within a tolerance of one
 // sample's would fail on grazing surfaces, whose depth changes by a percent across a pixel.
@@ -21,6 +22,11 @@ override STABLE_DEPTH_TOLERANCE: f32;
 // whole samples), y the linear view depth of the deepest sample in its pixel's window,
 // or -1 where a sample of it saw the background.
 @group(2) @binding(16) var count_history: texture_2d<f32>;
+
+#ifdef MOVING
+// Each G-buffer sample's motion in the frame's pixels and its linear depth then (gbuffer.wgsl).
+@group(2) @binding(17) var gb_motion: texture_2d<f32>;
+#endif
 
 const SAW_BACKGROUND: f32 = -1.0;
 
@@ -79,6 +85,25 @@ fn window_extent(origin: vec2<i32>) -> WindowDepths {
     return w;
 }
 
+// Where the window's nearest sample lay in the frame before, in the frame's pixels (xy), and its
+// linear depth then (z), or a NaN where no camera can take it back.
+fn place_before(w: WindowDepths) -> vec3<f32> {
+    let gbuffer_size = vec2<f32>(textureDimensions(gb_depth));
+    let point = vec2<f32>(w.nearest_texel) + 0.5;
+#ifdef MOVING
+    if w.nearest > 0.0 {
+        let motion = textureLoad(gb_motion, w.nearest_texel, 0);
+        return vec3<f32>(point / f32(M) - motion.xy, motion.z);
+    }
+#endif
+    let size = frame.jitter.zw;
+    let ndc = point / gbuffer_size * vec2<f32>(2.0, -2.0) + vec2<f32>(-1.0, 1.0);
+    let before = frame.reprojection * vec4<f32>(ndc, w.nearest, 1.0);
+    let then = (before.xy / before.w * vec2<f32>(0.5, -0.5) + 0.5) * size;
+    // before.w is the point's clip w then over its clip w now: its linear depth then over now.
+    return vec3<f32>(then, before.w * linear_depth_of(w.nearest));
+}
+
 // The count the pixel's surface had in the frame before, or -1 where the history does not hold
 // it.
 fn count_before(w: WindowDepths) -> f32 {
@@ -86,10 +111,8 @@ fn count_before(w: WindowDepths) -> f32 {
         return -1.0;
     }
     let size = frame.jitter.zw;
-    let gbuffer_size = vec2<f32>(textureDimensions(gb_depth));
-    let ndc = (vec2<f32>(w.nearest_texel) + 0.5) / gbuffer_size * vec2<f32>(2.0, -2.0) + vec2<f32>(-1.0, 1.0);
-    let before = frame.reprojection * vec4<f32>(ndc, w.nearest, 1.0);
-    let then = (before.xy / before.w * vec2<f32>(0.5, -0.5) + 0.5) * size;
+    let place = place_before(w);
+    let then = place.xy;
     // Also false for NaN: a point that no camera can reproject.
     if !(all(then >= vec2<f32>(0.0)) && all(then < size)) {
         return -1.0;
@@ -102,9 +125,7 @@ fn count_before(w: WindowDepths) -> f32 {
         // The background now, where the pixel before saw none.
         return -1.0;
     }
-    // before.w is the point's clip w then over its clip w now: its linear depth then over now.
-    let depth_then = before.w * linear_depth_of(w.nearest);
-    return select(-1.0, kept.x, depth_then <= kept.y * (1.0 + STABLE_DEPTH_TOLERANCE));
+    return select(-1.0, kept.x, place.z <= kept.y * (1.0 + STABLE_DEPTH_TOLERANCE));
 }
 
 @fragment

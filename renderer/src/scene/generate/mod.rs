@@ -52,10 +52,13 @@ pub enum Generator {
     /// Wires far thinner than a pixel and a fence of thin slats before a plain wall: what
     /// flickers when the camera moves.
     Wire,
+    /// A finely checkered crate behind thin bars, sliding across a brick wall and a tiled floor
+    /// before a still camera: what a moving object leaves behind.
+    Crossing,
 }
 
 impl Generator {
-    pub const ALL: [Generator; 12] = [
+    pub const ALL: [Generator; 13] = [
         Generator::Atrium,
         Generator::Thin,
         Generator::Specular,
@@ -68,6 +71,7 @@ impl Generator {
         Generator::Gallery,
         Generator::Texture,
         Generator::Wire,
+        Generator::Crossing,
     ];
 
     /// The `asset.generator` string of a current file made by this generator and seed.
@@ -146,6 +150,7 @@ impl Generated {
             Generator::Gallery => scenes::gallery(&mut builder),
             Generator::Texture => scenes::texture(&mut builder),
             Generator::Wire => scenes::wire(&mut builder),
+            Generator::Crossing => scenes::crossing(&mut builder),
         }
         let mut writer = builder.finish();
         if self.placement != Placement::IDENTITY {
@@ -175,6 +180,7 @@ impl fmt::Display for Generator {
             Generator::Gallery => "gallery",
             Generator::Texture => "texture",
             Generator::Wire => "wire",
+            Generator::Crossing => "crossing",
         })
     }
 }
@@ -237,6 +243,16 @@ impl Builder {
     /// The mesh that collects all geometry of `material`.
     pub fn mesh(&mut self, material: usize) -> &mut Mesh {
         &mut self.parts.get_mut(&material).expect("material made by this builder").1
+    }
+
+    /// Adds an object of `parts` (each a material's mesh) that the animation `name` slides
+    /// linearly through `translations` at `times` (seconds): one node moved, its parts its
+    /// children.
+    pub fn moving(&mut self, name: &str, parts: &[(usize, Mesh)], times: &[f32], translations: &[[f32; 3]]) {
+        let children: Vec<usize> =
+            parts.iter().filter_map(|(material, mesh)| self.writer.add_mesh(name, mesh, *material)).collect();
+        let node = self.writer.add_group(name, &children);
+        self.writer.add_translation_animation(name, node, times, translations);
     }
 
     pub fn camera(&mut self, position: [f64; 3], target: [f64; 3], fov_y_degrees: f64, far: f64) {

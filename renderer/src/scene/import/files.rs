@@ -33,18 +33,24 @@ pub(super) fn check_external_files(document: &gltf::Document, base: &Path) -> Re
     }
     for (what, uri) in buffers.chain(images) {
         if uri.starts_with("data:") {
+            // The gltf crate decodes a buffer's data without saying which buffer it is.
+            if what.starts_with("buffers") {
+                super::images::decode_data_uri(uri).map_err(|e| format!("{what} (data URI): {e}"))?;
+            }
             continue;
         }
         // `file:`, `http:` …: the gltf crate would follow them out of the folder.
         if uri.split(['/', '?', '#']).next().is_some_and(|first| first.contains(':')) {
             return Err(format!(
-                "{what}.uri: `{uri}` has a scheme; only relative paths and data: URIs are read"
+                "{what}.uri: `{}` has a scheme; only relative paths and data: URIs are read",
+                shown(uri)
             ));
         }
         let relative = PathBuf::from(percent_decode(uri).map_err(|e| format!("{what}.uri: {e}"))?);
         if relative.has_root() {
             return Err(format!(
-                "{what}.uri: `{uri}` is an absolute path; glTF resources are named relative to the file"
+                "{what}.uri: `{}` is an absolute path; glTF resources are named relative to the file",
+                shown(uri)
             ));
         }
         regular_file(&base.join(&relative)).map_err(|e| format!("{what}.uri: {e}"))?;
@@ -72,14 +78,50 @@ pub fn percent_decode(uri: &str) -> Result<String, String> {
             }
         }
     }
-    String::from_utf8(out).map_err(|_| format!("`{uri}`: its %-escapes do not decode to UTF-8"))
+    String::from_utf8(out).map_err(|_| format!("`{}`: its %-escapes do not decode to UTF-8", shown(uri)))
+}
+
+/// A URI as messages quote it: whole up to 80 characters, else its first 60 and its length (a
+/// data URI can hold megabytes, which no message should repeat).
+pub fn shown(uri: &str) -> String {
+    match uri.char_indices().nth(80) {
+        None => uri.to_string(),
+        Some(_) => {
+            let cut = uri.char_indices().nth(60).map_or(uri.len(), |(i, _)| i);
+            format!("{}… ({} bytes)", &uri[..cut], uri.len())
+        }
+    }
+}
+
+/// Whether a URI is a `data:` URI. URI schemes are case-insensitive (RFC 3986, 3.1).
+pub fn is_data_uri(uri: &str) -> bool {
+    uri.get(..5).is_some_and(|scheme| scheme.eq_ignore_ascii_case("data:"))
+}
+
+/// Writes every buffer's and image's `data:` scheme in lower case, the one spelling the gltf
+/// crate and the importer recognise.
+fn lower_data_schemes(json: &mut gltf::json::Root) {
+    let uris = json.buffers.iter_mut().filter_map(|b| b.uri.as_mut());
+    for uri in uris.chain(json.images.iter_mut().filter_map(|i| i.uri.as_mut())) {
+        if is_data_uri(uri) && !uri.starts_with("data:") {
+            uri.replace_range(..5, "data:");
+        }
+    }
 }
 
 /// Reads and validates a glTF or GLB file; the second value holds a warning for each departure
 /// from the specification that it tolerates. The gltf crate's validation (gltf-json 1.4.1)
 /// looks up each primitive's POSITION accessor before checking that it exists, and panics when
 /// it does not; that one reference is checked here first.
-pub(super) fn open(path: &Path) -> Result<(gltf::Gltf, Vec<String>), String> {
+/// A file as read: its document, what was stood in for, and the animations taken out of it
+/// (`animations::quarantine`).
+pub(super) struct Opened {
+    pub gltf: gltf::Gltf,
+    pub warnings: Vec<String>,
+    pub broken_animations: Vec<(usize, String)>,
+}
+
+pub(super) fn open(path: &Path) -> Result<Opened, String> {
     use gltf::json::mesh::Semantic;
     use gltf::json::validation::Checked;
     let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
@@ -137,8 +179,10 @@ pub(super) fn open(path: &Path) -> Result<(gltf::Gltf, Vec<String>), String> {
             ));
         }
     }
+    lower_data_schemes(&mut json);
+    let broken_animations = super::animations::quarantine(&mut json);
     let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
-    Ok((gltf::Gltf { document, blob }, warnings))
+    Ok(Opened { gltf: gltf::Gltf { document, blob }, warnings, broken_animations })
 }
 
 /// The glTF extensions the importer reads. A file may require only these; others it merely
@@ -158,8 +202,8 @@ pub(super) fn ignored_extensions(document: &gltf::Document) -> Vec<String> {
 
 /// The `asset.generator` string of a glTF file, if it can be read.
 pub fn read_generator(path: &Path) -> Option<String> {
-    let (gltf, _) = open(path).ok()?;
-    gltf.document.as_json().asset.generator.clone()
+    let opened = open(path).ok()?;
+    opened.gltf.document.as_json().asset.generator.clone()
 }
 
 /// Where an image's bytes are.

@@ -61,7 +61,7 @@ fn decode_image(
         }
         ImageSource::Uri(uri) => {
             let path = base.join(percent_decode(uri).map_err(|e| format!("images[{index}].uri: {e}"))?);
-            let what = format!("images[{index}] (uri {uri})");
+            let what = format!("images[{index}] (uri {})", super::files::shown(uri));
             let bytes = std::fs::read(&path).map_err(|e| format!("{what}: {}: {e}", path.display()))?;
             (std::borrow::Cow::Owned(bytes), what)
         }
@@ -91,10 +91,11 @@ fn decode_image(
 }
 
 /// The bytes of a base64 `data:` URI (`data:[<media type>];base64,<data>`).
-fn decode_data_uri(uri: &str) -> Result<Vec<u8>, String> {
+pub(super) fn decode_data_uri(uri: &str) -> Result<Vec<u8>, String> {
     let rest = uri.strip_prefix("data:").unwrap_or(uri);
     let (header, data) = rest.split_once(',').ok_or("no `,` between the media type and the data")?;
     if !header.ends_with(";base64") {
+        let header = super::files::shown(header);
         return Err(format!("`data:{header},…` is not base64; only base64 data URIs are read"));
     }
     base64::decode(data).map_err(|e| format!("bad base64: {e}"))

@@ -13,9 +13,11 @@ use std::path::Path;
 
 use glam::{DMat4, DVec3};
 
+use super::animation::{RestNode, Rig};
 use super::{DrawClass, Light, Scene};
 use crate::error::RenderError;
 
+mod animations;
 mod files;
 mod images;
 mod lights;
@@ -23,8 +25,9 @@ mod materials;
 mod primitives;
 mod tangents;
 
-use files::{check_external_files, ignored_extensions, open};
-pub use files::{percent_decode, read_generator, regular_file};
+use animations::import_animations;
+use files::{Opened, check_external_files, ignored_extensions, open};
+pub use files::{is_data_uri, percent_decode, read_generator, regular_file, shown};
 pub use images::MAX_TEXTURE_SIDE;
 use images::decode_textures;
 use lights::{camera_from_node, light_from_node};
@@ -35,7 +38,7 @@ use materials::{Materials, import_materials};
 pub fn load_gltf(path: &Path) -> Result<Scene, RenderError> {
     let fail = |message: String| RenderError::Scene { path: path.to_path_buf(), message };
     regular_file(path).map_err(|e| fail(format!("cannot read glTF: {e}")))?;
-    let (gltf::Gltf { document, blob }, lenient) =
+    let Opened { gltf: gltf::Gltf { document, blob }, warnings: lenient, broken_animations } =
         open(path).map_err(|e| fail(format!("cannot read glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
     check_external_files(&document, base).map_err(fail)?;
@@ -54,7 +57,14 @@ pub fn load_gltf(path: &Path) -> Result<Scene, RenderError> {
     importer.scene.materials = materials;
     importer.visit_scene(&document, &buffers).map_err(fail)?;
 
+    let animations = import_animations(&document, &buffers, &broken_animations, &importer.rig);
     let mut scene = importer.finish();
+    for (index, animation) in animations.iter().enumerate() {
+        if let Err(error) = &animation.tracks {
+            warnings.push(format!("{}: cannot be played: {error}", animation.label(index)));
+        }
+    }
+    scene.animations = animations;
     scene.textures = decode_textures(&document, base, &buffers, &textures).map_err(fail)?;
     scene.generator = document.as_json().asset.generator.clone();
     warnings.extend(lenient);
@@ -77,6 +87,11 @@ struct Importer {
     triangles: BTreeMap<DrawClass, Vec<[u32; 3]>>,
     /// Normal-mapped primitives without tangents of their own, for MikkTSpace.
     untangented: Vec<Primitive>,
+    /// The node trees as walked, for the animations that move them.
+    rig: Rig,
+    /// Vertices that tangent generation split off at the end of the list: where the primitive
+    /// they came from starts, and the range of its copies.
+    split_off: Vec<(usize, std::ops::Range<usize>)>,
 }
 
 /// Where one primitive's vertices and triangles lie in the importer's lists.
@@ -107,9 +122,10 @@ impl Importer {
             }
         };
         let mut reached = vec![false; document.nodes().len()];
-        let mut stack: Vec<(gltf::Node, DMat4)> =
-            roots.into_iter().rev().map(|n| (n, DMat4::IDENTITY)).collect();
-        while let Some((node, parent)) = stack.pop() {
+        // Each node with its parent's world transform and place in the rig.
+        let mut stack: Vec<(gltf::Node, DMat4, Option<usize>)> =
+            roots.into_iter().rev().map(|n| (n, DMat4::IDENTITY, None)).collect();
+        while let Some((node, parent, parent_place)) = stack.pop() {
             if std::mem::replace(&mut reached[node.index()], true) {
                 return Err(format!(
                     "nodes[{}]: reached twice: the node hierarchy has a cycle or a node with two parents \
@@ -117,20 +133,36 @@ impl Importer {
                     node.index()
                 ));
             }
-            let world = self.visit(document, &node, parent, buffers)?;
-            stack.extend(node.children().map(|child| (child, world)).collect::<Vec<_>>().into_iter().rev());
+            let first_vertex = self.scene.vertices.len();
+            let (local, world) = self.visit(document, &node, parent, buffers)?;
+            let (translation, rotation, scale) = node.transform().decomposed();
+            let own = first_vertex..self.scene.vertices.len();
+            self.rig.nodes.push(RestNode {
+                parent: parent_place,
+                node: node.index(),
+                matrix: local,
+                translation: glam::Vec3::from(translation).as_dvec3(),
+                rotation: glam::Quat::from_array(rotation).as_dquat(),
+                scale: glam::Vec3::from(scale).as_dvec3(),
+                vertices: vec![own],
+                world,
+            });
+            let place = Some(self.rig.nodes.len() - 1);
+            stack.extend(
+                node.children().map(|child| (child, world, place)).collect::<Vec<_>>().into_iter().rev(),
+            );
         }
         Ok(())
     }
 
-    /// Adds one node's mesh and camera; returns its world transform.
+    /// Adds one node's mesh and camera; returns its local and world transforms.
     fn visit(
         &mut self,
         document: &gltf::Document,
         node: &gltf::Node,
         parent: DMat4,
         buffers: &[gltf::buffer::Data],
-    ) -> Result<DMat4, String> {
+    ) -> Result<(DMat4, DMat4), String> {
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent * local;
         if !world.is_finite() {
@@ -148,7 +180,7 @@ impl Importer {
             self.lights
                 .push(light_from_node(&light, world).map_err(|e| format!("nodes[{}]: {e}", node.index()))?);
         }
-        Ok(world)
+        Ok((local, world))
     }
 
     /// Sorts the triangles by draw class and makes positions relative to the scene's origin:
@@ -156,6 +188,13 @@ impl Importer {
     /// far from the file's origin keeps f32 precision (and a scene near it keeps its bits).
     fn finish(mut self) -> Scene {
         self.generate_tangents();
+        // A node moves the copies of its vertices with them.
+        for (first, copies) in std::mem::take(&mut self.split_off) {
+            let owner = self.rig.nodes.iter_mut().find(|n| n.vertices.iter().any(|r| r.contains(&first)));
+            if let Some(owner) = owner {
+                owner.vertices.push(copies);
+            }
+        }
         let (lo, hi) = self
             .world
             .iter()
@@ -172,6 +211,7 @@ impl Importer {
             self.scene.tangents.resize(self.scene.vertices.len(), [0.0; 4]);
         }
         self.scene.origin = origin;
+        self.scene.rig = std::mem::take(&mut self.rig);
         if let Some(camera) = &mut self.scene.camera {
             camera.position -= origin;
         }

@@ -36,8 +36,9 @@ impl Importer {
         let normal_matrix = DMat3::from_mat4(world).inverse().transpose();
         let world_positions = to_world(&positions, world).map_err(|(i, p)| {
             format!(
-                "{}: vertex {i} lies at {p} in world space, beyond ±{:e} (the node transforms multiply up)",
+                "{}: vertex {i} lies at {} in world space, beyond ±{:e} (the node transforms multiply up)",
                 name(),
+                crate::scene::camera::vector(p),
                 crate::scene::MAX_COORDINATE
             )
         })?;
@@ -244,7 +245,10 @@ fn check_format(semantic: Option<&gltf::Semantic>, accessor: &gltf::Accessor) ->
 
 /// Checks that an accessor's elements lie inside its buffer view and the view inside its
 /// buffer, so that a short file is reported as short rather than as a missing attribute.
-fn check_accessor(accessor: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<(), String> {
+pub(super) fn check_accessor(
+    accessor: &gltf::Accessor,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), String> {
     let index = accessor.index();
     // glTF requires count ≥ 1; the crate's readers compute count − 1.
     if accessor.count() == 0 {

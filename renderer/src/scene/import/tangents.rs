@@ -63,7 +63,12 @@ impl Importer {
             workers.into_iter().flat_map(|worker| worker.join().expect("MikkTSpace panicked")).collect()
         });
         for (primitive, corners) in primitives.iter().zip(corners) {
+            let before = self.scene.vertices.len();
             self.weld_tangents(primitive, &corners);
+            let copies = before..self.scene.vertices.len();
+            if !copies.is_empty() {
+                self.split_off.push((primitive.vertices.start, copies));
+            }
         }
     }
 

@@ -131,6 +131,7 @@ pub(crate) fn add(frame: &mut Frame, variant: Variant, m: u32, stalled: bool) ->
         settings: *frame.adaptive,
         tonemap: frame.color.tonemap,
         counts,
+        moving: frame.moving,
     };
     let reads = evaluate_node.gbuffer_reads();
     let g = &mut frame.graph;
@@ -139,6 +140,9 @@ pub(crate) fn add(frame: &mut Frame, variant: Variant, m: u32, stalled: bool) ->
     g.connect(first, "first", evaluate, "first");
     g.retain(evaluate, "counts", Output::SampleCounts);
     if counts == Counts::Stable {
+        if frame.moving {
+            frame.graph.connect(sources.gbuffer, gbuffer::MOTION, evaluate, gbuffer::MOTION);
+        }
         keep_counts(frame, evaluate);
     }
     // `-coverage` reads its samples' slopes from the list, which the loop has no room for.

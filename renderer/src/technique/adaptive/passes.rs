@@ -170,6 +170,9 @@ pub(crate) struct EvaluateNode {
     pub tonemap: Option<Tonemap>,
     /// Under `Stable`, the pass also reads the frame before's counts and writes this frame's.
     pub counts: Counts,
+    /// Objects move: under `Stable`, the pass follows each window's nearest sample back by the
+    /// G-buffer's motion vectors.
+    pub moving: bool,
 }
 
 impl EvaluateNode {
@@ -208,6 +211,10 @@ impl Node for EvaluateNode {
                 Port::new("count_history", count_history(), Access::Loaded),
                 Port::new("count_history_next", count_history(), Access::Attachment),
             ]);
+            if self.moving {
+                let motion = Resource::texture(gbuffer::MOTION_FORMAT, Extent::GBuffer);
+                ports.push(Port::new(gbuffer::MOTION, motion, Access::Loaded));
+            }
         }
         PassDecl { name: "evaluate", ports }
     }

@@ -16,16 +16,13 @@
 //! reference-4x4. Every case's numbers are printed, with the measure without motion
 //! compensation (`instability`) beside.
 
-use std::sync::Arc;
+mod support;
 
 use aabench::motion::MotionSpec;
 use aabench::temporal::{self, Flow, Geometry, PairError};
+use aabench_renderer::scene::Camera;
 use aabench_renderer::scene::generate::Generator;
-use aabench_renderer::scene::{Camera, Lighting, load_gltf};
-use aabench_renderer::{
-    AdaptiveSettings, ColorSettings, DisplayImage, Gpu, PreparedMode, RenderSettings, SceneRenderer,
-};
-use glam::Vec3;
+use aabench_renderer::{DisplayImage, PreparedMode, SceneRenderer};
 
 const WIDTH: u32 = 128;
 const HEIGHT: u32 = 96;
@@ -36,29 +33,10 @@ const SLOW: f64 = 0.125;
 
 /// The `thin` scene under the default rig, on a renderer of its own, and its camera.
 fn thin() -> (SceneRenderer, Camera) {
-    let gpu = Arc::new(Gpu::new().expect("a Vulkan adapter (lavapipe)"));
-    let dir = std::env::temp_dir().join(format!("aabench-flicker-test-{}", std::process::id()));
-    let path = dir.join("thin.glb");
-    Generator::Thin.write(1, &path).expect("write the scene");
-    let scene = load_gltf(&path).expect("import the scene");
-    let _ = std::fs::remove_dir_all(&dir);
+    let scene = support::generated_scene(Generator::Thin);
     let mut camera = scene.camera.expect("generated scenes carry a camera");
     camera.far = camera.far.min(500.0);
-    // The rig a scene without lights of its own gets (`scenes.rs`).
-    let lighting = Lighting {
-        lights: aabench::scenes::default_rig(),
-        ambient: Vec3::splat(0.05),
-        background: Vec3::new(0.2, 0.3, 0.5),
-        exposure: 1.0,
-    };
-    let settings = RenderSettings {
-        width: WIDTH,
-        height: HEIGHT,
-        stall_iterations: 0,
-        adaptive: AdaptiveSettings::default(),
-        color: ColorSettings::plain(),
-    };
-    (SceneRenderer::new(gpu, &scene, &camera, &lighting, settings).expect("scene upload"), camera)
+    (support::plain_renderer(&scene, &camera, [WIDTH, HEIGHT], 0.05), camera)
 }
 
 /// The pan's cameras: the view turning about the up axis, the middle of the view moving

@@ -10,13 +10,10 @@
 
 mod support;
 
-use std::sync::Arc;
-
 use aabench::temporal::{self, Flow, Geometry, PairError};
+use aabench_renderer::scene::Camera;
 use aabench_renderer::scene::generate::Generator;
-use aabench_renderer::scene::{Camera, Lighting, load_gltf};
-use aabench_renderer::{ColorSettings, DisplayImage, Gpu, Mode, PreparedMode, RenderSettings, SceneRenderer};
-use glam::Vec3;
+use aabench_renderer::{DisplayImage, Mode, PreparedMode, SceneRenderer};
 use serde_json::json;
 
 const WIDTH: u32 = 128;
@@ -26,29 +23,11 @@ const STEP: f64 = 1.0 / 60.0;
 
 /// The `crossing` scene with its animation playing, on a renderer of its own, and its camera.
 fn crossing() -> (SceneRenderer, Camera) {
-    let gpu = Arc::new(Gpu::new().expect("a Vulkan adapter (lavapipe)"));
-    let dir = std::env::temp_dir().join(format!("aabench-moving-test-{}", std::process::id()));
-    let path = dir.join("crossing.glb");
-    Generator::Crossing.write(1, &path).expect("write the scene");
-    let mut scene = load_gltf(&path).expect("import the scene");
-    let _ = std::fs::remove_dir_all(&dir);
+    let mut scene = support::generated_scene(Generator::Crossing);
     scene.playing = scene.animations.iter().position(|a| a.name.as_deref() == Some("crossing"));
     assert!(scene.playing.is_some(), "the scene carries its animation");
     let camera = scene.camera.expect("generated scenes carry a camera");
-    let lighting = Lighting {
-        lights: aabench::scenes::default_rig(),
-        ambient: Vec3::splat(0.1),
-        background: Vec3::new(0.2, 0.3, 0.5),
-        exposure: 1.0,
-    };
-    let settings = RenderSettings {
-        width: WIDTH,
-        height: HEIGHT,
-        stall_iterations: 0,
-        adaptive: Default::default(),
-        color: ColorSettings::plain(),
-    };
-    (SceneRenderer::new(gpu, &scene, &camera, &lighting, settings).expect("scene upload"), camera)
+    (support::plain_renderer(&scene, &camera, [WIDTH, HEIGHT], 0.1), camera)
 }
 
 /// Poses frame `frame`: the animation at its time, with the frame before's time where motion

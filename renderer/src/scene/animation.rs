@@ -201,13 +201,12 @@ impl Rig {
     /// it): its vertex range and the change of its world transform since the vertices were
     /// baked, which maps a baked vertex to where it lies at `time`.
     pub fn moves(&self, tracks: &[Track], time: f64) -> Vec<(Range<usize>, DMat4)> {
+        let moved = self.moved(tracks);
         let mut world: Vec<DMat4> = Vec::with_capacity(self.nodes.len());
-        let mut moved = vec![false; self.nodes.len()];
         let mut changes = Vec::new();
         for (i, rest) in self.nodes.iter().enumerate() {
             let own: Vec<&Track> = tracks.iter().filter(|t| t.node == rest.node).collect();
             let local = if own.is_empty() { rest.matrix } else { animated(rest, &own, time) };
-            moved[i] = !own.is_empty() || rest.parent.is_some_and(|p| moved[p]);
             let parent = rest.parent.map_or(DMat4::IDENTITY, |p| world[p]);
             world.push(parent * local);
             if moved[i] {
@@ -218,6 +217,15 @@ impl Rig {
         changes
     }
 
+    /// Which nodes `tracks` move, in [`Rig::nodes`] order: their own, and every node below one.
+    fn moved(&self, tracks: &[Track]) -> Vec<bool> {
+        let mut moved = vec![false; self.nodes.len()];
+        for (i, rest) in self.nodes.iter().enumerate() {
+            moved[i] = tracks.iter().any(|t| t.node == rest.node) || rest.parent.is_some_and(|p| moved[p]);
+        }
+        moved
+    }
+
     /// The rest node of glTF node `node`, if the walk reached it.
     pub fn node(&self, node: usize) -> Option<&RestNode> {
         self.nodes.iter().find(|n| n.node == node)
@@ -226,15 +234,12 @@ impl Rig {
     /// A node with vertices that `tracks` move and whose rest world transform cannot be undone
     /// (a scale of zero at rest): its vertices cannot be carried from where they were baked.
     pub fn singular_mover(&self, tracks: &[Track]) -> Option<usize> {
-        let mut moved = vec![false; self.nodes.len()];
-        for (i, rest) in self.nodes.iter().enumerate() {
-            moved[i] = tracks.iter().any(|t| t.node == rest.node) || rest.parent.is_some_and(|p| moved[p]);
-            let carries = rest.vertices.iter().any(|r| !r.is_empty());
-            if moved[i] && carries && rest.world.determinant().abs() < 1e-300 {
-                return Some(rest.node);
-            }
-        }
-        None
+        let carries = |rest: &RestNode| rest.vertices.iter().any(|r| !r.is_empty());
+        self.nodes
+            .iter()
+            .zip(self.moved(tracks))
+            .find(|(rest, moved)| *moved && carries(rest) && rest.world.determinant().abs() < 1e-300)
+            .map(|(rest, _)| rest.node)
     }
 }
 

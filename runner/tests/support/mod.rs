@@ -147,3 +147,41 @@ pub fn precondition(holds: bool, what: &str) -> bool {
     eprintln!("skipped: {what}");
     false
 }
+
+/// A generated scene (seed 1), written to a temporary folder, imported through glTF and the
+/// folder removed.
+pub fn generated_scene(
+    generator: aabench_renderer::scene::generate::Generator,
+) -> aabench_renderer::scene::Scene {
+    let dir = std::env::temp_dir().join(format!("aabench-{generator}-test-{}", std::process::id()));
+    let path = dir.join(format!("{generator}.glb"));
+    generator.write(1, &path).expect("write the scene");
+    let scene = aabench_renderer::scene::load_gltf(&path).expect("import the scene");
+    let _ = std::fs::remove_dir_all(&dir);
+    scene
+}
+
+/// `scene` on a renderer (and device) of its own at `width` × `height`: the rig a scene without
+/// lights of its own gets (`scenes.rs`) over `ambient`, plain colour, no stall.
+pub fn plain_renderer(
+    scene: &aabench_renderer::scene::Scene,
+    camera: &aabench_renderer::scene::Camera,
+    [width, height]: [u32; 2],
+    ambient: f32,
+) -> aabench_renderer::SceneRenderer {
+    let gpu = std::sync::Arc::new(aabench_renderer::Gpu::new().expect("a Vulkan adapter (lavapipe)"));
+    let lighting = aabench_renderer::scene::Lighting {
+        lights: aabench::scenes::default_rig(),
+        ambient: glam::Vec3::splat(ambient),
+        background: glam::Vec3::new(0.2, 0.3, 0.5),
+        exposure: 1.0,
+    };
+    let settings = aabench_renderer::RenderSettings {
+        width,
+        height,
+        stall_iterations: 0,
+        adaptive: Default::default(),
+        color: aabench_renderer::ColorSettings::plain(),
+    };
+    aabench_renderer::SceneRenderer::new(gpu, scene, camera, &lighting, settings).expect("scene upload")
+}

@@ -31,7 +31,7 @@ pub use mode::Mode;
 pub use passes::gbuffer::BACKGROUND_MATERIAL;
 pub use render::{
     DisplayImage, FrameImages, FrameTiming, GBufferImages, PassTime, PreparedMode, SceneRenderer,
-    ShadowDepths, Truth,
+    ShadowDepths, Truth, truth_in_one_piece,
 };
 pub use settings::{MAX_STALL_ITERATIONS, RenderSettings, loop_stall_limit};
 pub use technique::adaptive::{

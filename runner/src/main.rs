@@ -465,14 +465,9 @@ fn report(runs: &[PathBuf], history: Option<&Path>, verdict: Option<&Path>) -> u
             Ok(run) => run,
             Err(message) => return fail(message),
         };
-        let verdict_file = verdict.map_or_else(|| dir.join("verdict.json"), Path::to_path_buf);
-        let verdict: Option<compare::Verdict> = if verdict.is_some() || verdict_file.exists() {
-            match aabench::json::read_versioned(&verdict_file, compare::VERDICT_SCHEMA) {
-                Ok(verdict) => Some(verdict),
-                Err(message) => return fail(message),
-            }
-        } else {
-            None
+        let verdict = match verdict_of(&record, &dir, verdict) {
+            Ok(verdict) => verdict,
+            Err(message) => return fail(message),
         };
         match aabench::report::write(&dir, &record, verdict.as_ref(), &history) {
             Ok((path, left_out)) => {
@@ -485,6 +480,31 @@ fn report(runs: &[PathBuf], history: Option<&Path>, verdict: Option<&Path>) -> u
         }
     }
     exit::OK
+}
+
+/// The verdict a run's page shows: `given`, or else the run folder's verdict.json if there is
+/// one. A verdict of another run is refused when given, and left out with a warning when found
+/// in the folder (a copied or reused folder), so that no page shows a gate that did not judge it.
+fn verdict_of(
+    record: &RunRecord,
+    dir: &Path,
+    given: Option<&Path>,
+) -> Result<Option<compare::Verdict>, String> {
+    let file = given.map_or_else(|| dir.join("verdict.json"), Path::to_path_buf);
+    if given.is_none() && !file.exists() {
+        return Ok(None);
+    }
+    let verdict: compare::Verdict = aabench::json::read_versioned(&file, compare::VERDICT_SCHEMA)?;
+    if verdict.run_id == record.run_id || verdict.run_ids.contains(&record.run_id) {
+        return Ok(Some(verdict));
+    }
+    let message =
+        format!("{}: the verdict of run {}, not of run {}", file.display(), verdict.run_id, record.run_id);
+    if given.is_some() {
+        return Err(message);
+    }
+    tell!("aabench: warning: {message}: left out of the page");
+    Ok(None)
 }
 
 fn merge(runs: &[PathBuf], out: &Path) -> u8 {
@@ -556,6 +576,11 @@ fn list_modes() {
         }
     }
     say!("also: reference-1x1 (equals deferred-1x1; a self-check)");
+    say!(
+        "also: adaptive-MxM with any of these words, in this order: geometry or shading (one metric), \
+         area, cells or coverage (the reconstruction), stable (the counts; not with coverage); \
+         e.g. adaptive-2x2-shading-area-stable"
+    );
 }
 
 /// Mesa's device-select Vulkan layer prints "error: XDG_RUNTIME_DIR is invalid" on machines

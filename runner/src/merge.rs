@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::record::{Platform, RUN_SCHEMA, RunRecord, Status};
+use crate::record::{Platform, RUN_SCHEMA, RunRecord, SceneRecord, Status};
 
 /// Merges `shards` (each a record and its folder) into `out`, a new or empty folder: images
 /// copied, run.json written last, so a merge that fails midway leaves no run. The shards must
@@ -92,7 +92,14 @@ fn merged_record(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecor
     if !missing.is_empty() {
         return Err(format!("shards {} are missing", missing.join(", ")));
     }
-    let mut scenes: Vec<_> = shards.iter().flat_map(|(run, _)| run.scenes.iter().cloned()).collect();
+    // Where the shards ran on different machines, each scene keeps the machine that measured it.
+    let machine = common_machine(shards);
+    let scene_of = |run: &RunRecord, scene: &SceneRecord| SceneRecord {
+        machine: if machine.is_some() { None } else { run.platform.machine.clone() },
+        ..scene.clone()
+    };
+    let mut scenes: Vec<_> =
+        shards.iter().flat_map(|(run, _)| run.scenes.iter().map(|scene| scene_of(run, scene))).collect();
     scenes.sort_by(|a, b| a.manifest.cmp(&b.manifest));
     let mut names = std::collections::HashSet::new();
     if let Some(twice) = scenes.iter().find(|scene| !names.insert(scene.name.as_str())) {
@@ -113,7 +120,7 @@ fn merged_record(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecor
         tier: first.tier,
         aabench_version: first.aabench_version.clone(),
         build: first.build.clone(),
-        platform: Platform { machine: common_machine(shards), ..first.platform.clone() },
+        platform: Platform { machine, ..first.platform.clone() },
         settings: first.settings.clone(),
         shard: None,
         merged_from: shards.iter().map(|(run, _)| run.run_id.clone()).collect(),

@@ -157,6 +157,10 @@ pub struct SceneRecord {
     )]
     pub sequences: Vec<SequenceRecord>,
     pub modes: Vec<ModeRecord>,
+    /// The machine that measured the scene where the run's scenes were measured on different
+    /// ones (a merge of shards from several machines); otherwise the run's `platform.machine`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub machine: Option<Machine>,
 }
 
 /// The linear scale a scene's frames took before tonemapping.

@@ -163,6 +163,26 @@ fn graph_prints_a_modes_passes_ports_and_allocations() {
     assert!(stderr(&bad).contains("--mode"), "{}", stderr(&bad));
 }
 
+/// `aabench modes` lists the groups and says how the other adaptive ids are made, so that an
+/// id no group holds is still one the listing explains; `graph` takes its example and names it
+/// in full.
+#[test]
+fn modes_lists_the_groups_and_how_the_other_adaptive_ids_are_made() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("modes");
+    let output = ws.run(&["modes"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let text = String::from_utf8(output.stdout).unwrap();
+    assert!(text.contains("stable:\n  adaptive-2x2-stable\n"), "{text}");
+    let example = text.rsplit("e.g. ").next().unwrap().trim();
+    assert_eq!(example, "adaptive-2x2-shading-area-stable", "{text}");
+    let plane = ws.manifest("plane", "plane", |_| {});
+    let graph = ws.run(&["graph", plane.to_str().unwrap(), "--mode", example]);
+    assert_eq!(graph.status.code(), Some(0), "{}", stderr(&graph));
+    let heading = String::from_utf8(graph.stdout).unwrap();
+    assert!(heading.starts_with(&format!("plane {example} (quick tier")), "{heading}");
+}
+
 #[test]
 fn a_broken_manifest_fails_alone_and_the_run_exits_three() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());

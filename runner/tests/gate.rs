@@ -461,6 +461,38 @@ fn the_report_is_self_contained() {
     let links = check_links(&html, &run_dir);
     assert!(links > 15, "{links} links");
     markdown_of_the_same_run(&ws, &run_dir);
+    what_is_not_the_runs_own(&ws, &run_dir);
+}
+
+/// A folder where an image should be is left out of the page with a warning naming it, and
+/// another run's verdict is refused when given and left out with a warning when found beside.
+fn what_is_not_the_runs_own(ws: &Workspace, run_dir: &Path) {
+    let record = read_json(&run_dir.join("run.json"));
+    let image = record["scenes"][0]["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["mode"] == "reference-2x2")
+        .map(|m| m["images"]["display"].as_str().unwrap().to_string())
+        .unwrap();
+    std::fs::remove_file(run_dir.join(&image)).unwrap();
+    std::fs::create_dir(run_dir.join(&image)).unwrap();
+    let mut verdict = read_json(&run_dir.join("verdict.json"));
+    verdict["run_id"] = json!("20250101T000000Z-quick");
+    verdict["run_ids"] = json!(["20250101T000000Z-quick"]);
+    write_json(&run_dir.join("verdict.json"), &verdict);
+    let output = ws.run(&["report", &path_arg(run_dir)]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let log = stderr(&output);
+    assert!(log.contains(&format!("{image}: a folder where an image should be")), "{log}");
+    assert!(log.contains("the verdict of run 20250101T000000Z-quick, not of run"), "{log}");
+    let html = std::fs::read_to_string(run_dir.join("index.html")).unwrap();
+    assert!(!html.contains(&format!("src=\"{image}\"")), "the page links the folder");
+    assert!(!html.contains("no regression"), "the page shows another run's verdict");
+    let given =
+        ws.run(&["report", &path_arg(run_dir), "--verdict", &path_arg(&run_dir.join("verdict.json"))]);
+    assert_eq!(given.status.code(), Some(2), "{}", stderr(&given));
+    assert!(stderr(&given).contains("not of run"), "{}", stderr(&given));
 }
 
 /// The report of a small run opens in headless Chromium (Debian's `chromium` package) from
@@ -651,5 +683,25 @@ fn merged_shards_hold_the_pairs_of_the_unsharded_run_and_get_the_same_verdicts()
     assert_eq!(machines.status.code(), Some(0), "{}", stderr(&machines));
     let record = read_json(&ws.dir.join("machines/run.json"));
     assert!(record["platform"]["machine"].is_null(), "{}", record["platform"]);
-    assert!(!read_json(&merged.join("run.json"))["platform"]["machine"].is_null(), "one machine is kept");
+    // Each scene keeps the machine that measured it; one machine's run keeps it once.
+    let alu_of = |scene: &str| {
+        let scene = record["scenes"].as_array().unwrap().iter().find(|s| s["name"] == scene).unwrap();
+        scene["machine"]["alu_ns"].as_f64()
+    };
+    assert_eq!(alu_of("b-plane"), Some(alu * 2.0));
+    assert_eq!(
+        alu_of("a-edge"),
+        read_json(&first.join("run.json"))["platform"]["machine"]["alu_ns"].as_f64()
+    );
+    let one = read_json(&merged.join("run.json"));
+    assert!(!one["platform"]["machine"].is_null(), "one machine is kept");
+    assert!(one["scenes"].as_array().unwrap().iter().all(|s| s["machine"].is_null()), "and kept once");
+    let output = compare(&ws, &ws.dir.join("machines"), &ws.dir.join("gate-machines"));
+    let verdict = read_json(&ws.dir.join("gate-machines/verdict.json"));
+    assert!(
+        verdict["notes"].to_string().contains("its shards ran on different machines"),
+        "{}\n{}",
+        verdict["notes"],
+        String::from_utf8_lossy(&output.stdout)
+    );
 }

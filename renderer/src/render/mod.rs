@@ -10,7 +10,7 @@ mod truth;
 
 pub use images::{DisplayImage, FrameImages, FrameTiming, GBufferImages, PassTime, ShadowDepths};
 pub use prepared::PreparedMode;
-pub use truth::Truth;
+pub use truth::{Truth, truth_in_one_piece};
 
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};

@@ -85,6 +85,13 @@ impl SceneRenderer {
 /// derivatives 8, depth 4) and the supersampled HDR image (8).
 const TRUTH_BYTES_PER_SAMPLE: u64 = 36;
 
+/// Whether the truth of a `width` × `height` frame at `m` × `m` samples is rendered in one
+/// piece within `tile_bytes` (on a device whose texture sides allow it): if not, its tiles
+/// differ from one piece where samples near an edge flip, so the tiling is part of its identity.
+pub fn truth_in_one_piece(width: u32, height: u32, m: u32, tile_bytes: u64) -> bool {
+    u64::from(m * m) * TRUTH_BYTES_PER_SAMPLE * u64::from(width) * u64::from(height) <= tile_bytes
+}
+
 /// Splits a `width` × `height` frame into tiles whose m·w × m·h targets fit `max_side` and
 /// together take at most `budget` bytes (at least one row of pixels per tile): full-width
 /// bands where the width fits, a grid otherwise, sizes as even as the division allows.
@@ -146,5 +153,16 @@ mod tests {
         assert_eq!(wide.len(), 2, "{wide:?}");
         assert_eq!(check(1, 1, 8, 16384, 512 << 20).len(), 1);
         assert!(truth_tiles(4, 4, 8, 4, u64::MAX).is_err(), "one pixel at 8×8 exceeds a 4-texel limit");
+    }
+
+    /// What the truth's cache key is told about tiling matches how it is tiled.
+    #[test]
+    fn one_piece_is_one_tile() {
+        for (width, height, budget) in
+            [(256, 192, 128 << 20), (1024, 768, 128 << 20), (1024, 768, u64::MAX), (160, 120, 1 << 20)]
+        {
+            let tiles = check(width, height, 8, 16384, budget).len();
+            assert_eq!(truth_in_one_piece(width, height, 8, budget), tiles == 1, "{width}×{height}: {tiles}");
+        }
     }
 }

@@ -297,6 +297,9 @@ fn same_machine(run: &RunRecord, baselines: &BaselineSet) -> Result<(), String> 
     let blessed = baselines.baselines.first().ok_or("no baselines")?;
     match (&run.platform.machine, &blessed.platform.machine) {
         (Some(now), Some(then)) => now.same_as(then),
+        (None, _) if run.scenes.iter().any(|scene| scene.machine.is_some()) => {
+            Err("its shards ran on different machines (each scene records its own)".into())
+        }
         (None, _) => Err("the run did not record its machine".into()),
         (_, None) => Err("the baselines do not record their machine (blessed before aabench did)".into()),
     }

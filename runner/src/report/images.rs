@@ -8,8 +8,41 @@ use aabench_renderer::{Mode, Technique};
 
 use super::html::escape;
 use super::{CROP, ZOOM};
-use crate::record::{ModeRecord, SceneRecord};
+use crate::record::{ModeRecord, RunRecord, SceneRecord};
 use crate::truth::TRUTH_ID;
+
+/// A copy of `run` without the images that are not files in its folder (a folder or nothing
+/// where an image should be), so that the page links only what opens, and a line for each.
+pub(super) fn without_missing_images(run_dir: &Path, run: &RunRecord) -> (RunRecord, Vec<String>) {
+    let mut run = run.clone();
+    let mut left_out = Vec::new();
+    for scene in &mut run.scenes {
+        let truth = scene.truth.as_mut().map(|truth| &mut truth.image);
+        let modes = scene.modes.iter_mut().flat_map(|mode| {
+            let images = &mut mode.images;
+            [
+                &mut images.display,
+                &mut images.hdr,
+                &mut images.samples,
+                &mut images.difference,
+                &mut images.flip,
+            ]
+        });
+        for slot in truth.into_iter().chain(modes) {
+            let Some(path) = slot.as_deref().map(|relative| run_dir.join(relative)) else { continue };
+            if !path.is_file() {
+                let what = if path.is_dir() { "a folder" } else { "nothing" };
+                left_out.push(format!(
+                    "{}: {}: {what} where an image should be: left out",
+                    scene.name,
+                    path.display()
+                ));
+                *slot = None;
+            }
+        }
+    }
+    (run, left_out)
+}
 
 /// A mode's FLIP error map against the truth, where it has one.
 fn flip_figure(page: &mut String, mode: Option<&ModeRecord>) {

@@ -67,7 +67,8 @@ pub fn write(
     history: &[RunRecord],
 ) -> Result<(PathBuf, Vec<String>), String> {
     let mut page = String::new();
-    let mut left_out = Vec::new();
+    let (run, mut left_out) = images::without_missing_images(run_dir, run);
+    let run = &run;
     head(&mut page, run);
     summary(&mut page, run, verdict);
     tables::adaptive_costs(&mut page, run);

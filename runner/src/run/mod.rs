@@ -171,6 +171,7 @@ fn empty_scene_at(manifest: &Path) -> SceneRecord {
         truth: None,
         sequences: Vec::new(),
         modes: Vec::new(),
+        machine: None,
     }
 }
 

@@ -71,17 +71,18 @@ alternate() {
         for side in "${order[@]}"; do
             echo "ci/gate.sh: process $i of $processes, $side" >&2
             if [ "$side" = head ]; then
-                # Sequences are untimed and the same in every process: the first head process of
-                # the gate renders them, the others time the stills alone.
-                local sequences=off
-                if ((i == 1)) && [ "$dir" = "$gate_dir" ]; then sequences=on; fi
-                "$head_bin" run --tier quick --repetitions "$repetitions" --sequences "$sequences" \
+                # Quality and sequences are untimed and the same in every process of a build
+                # (compare checks the output hashes): the first head process of the gate
+                # measures them, the others time the modes alone.
+                local measures=(--quality off)
+                if ((i == 1)) && [ "$dir" = "$gate_dir" ]; then measures=(--sequences on); fi
+                "$head_bin" run --tier quick --repetitions "$repetitions" "${measures[@]}" \
                     --out "$dir/head" "$@"
                 local code=$?
                 if [ "$code" -ne 0 ] && [ "$run_code" -eq 0 ]; then run_code=$code; fi
             else
                 (cd "$base_src" && "$gate_dir/bin/aabench-base" run --tier quick --repetitions "$repetitions" \
-                    "${base_sequences[@]}" --out "$dir/base" "$@") ||
+                    "${base_timing[@]}" --out "$dir/base" "$@") ||
                     echo "ci/gate.sh: a base process exited $?; compare uses the base runs that finished" >&2
             fi
         done
@@ -129,19 +130,37 @@ else
     # tree is extracted with fresh times (`tar -m`): git archive stamps files with the commit's
     # time, which can be older than a previous gate's build of another base, and cargo would
     # then take that build's binary as up to date.
-    echo "ci/gate.sh: building the base ${base:0:12} to gate time against it on this machine" >&2
     base_src="$gate_dir/base-src"
     base_target="$PWD/target/gate-base"
     mkdir -p "$base_src" && git archive "$base" | tar -x -m -C "$base_src" || exit 2
-    (cd "$base_src" && CARGO_TARGET_DIR="$base_target" cargo build --release --locked -p aabench) || {
-        echo "ci/gate.sh: the base ${base:0:12} does not build" >&2
-        exit 2
-    }
-    cp "$base_target/release/aabench" "$gate_dir/bin/aabench-base" || exit 2
-    # A base that renders sequences renders them in none of its processes: they are untimed and
-    # only the head's first process measures them.
-    base_sequences=()
-    if "$gate_dir/bin/aabench-base" run --help | grep -q -- --sequences; then base_sequences=(--sequences off); fi
+    # Base binaries are kept by commit and toolchain ($AABENCH_GATE_BASE_CACHE, default
+    # target/gate-base/bins: a CI cache of that folder keeps them between jobs), so a second
+    # gate against the same base builds nothing.
+    toolchain=$( (rustc -vV && echo "${RUSTFLAGS:-}") | sha256sum | cut -c1-12)
+    cached_base="${AABENCH_GATE_BASE_CACHE:-$base_target/bins}/$base-$toolchain/aabench"
+    if [ -x "$cached_base" ]; then
+        echo "ci/gate.sh: the base ${base:0:12}, built before: $cached_base" >&2
+    else
+        echo "ci/gate.sh: building the base ${base:0:12} to gate time against it on this machine" >&2
+        (cd "$base_src" && CARGO_TARGET_DIR="$base_target" cargo build --release --locked -p aabench) || {
+            echo "ci/gate.sh: the base ${base:0:12} does not build" >&2
+            exit 2
+        }
+        # Copied in under a temporary name and renamed, so that a killed gate leaves no half binary.
+        mkdir -p "$(dirname "$cached_base")" &&
+            cp "$base_target/release/aabench" "$cached_base.tmp-$$" &&
+            mv "$cached_base.tmp-$$" "$cached_base" || exit 2
+    fi
+    cp "$cached_base" "$gate_dir/bin/aabench-base" || exit 2
+    # The base's processes time alone where its build can (`--quality off`, else without
+    # sequences where it renders them): only the head's first process measures quality.
+    base_timing=()
+    base_help=$("$gate_dir/bin/aabench-base" run --help)
+    if grep -q -- --quality <<<"$base_help"; then
+        base_timing=(--quality off)
+    elif grep -q -- --sequences <<<"$base_help"; then
+        base_timing=(--sequences off)
+    fi
     started=$(date +%s)
     run_code=0
     alternate "$gate_dir" "${run_args[@]}"

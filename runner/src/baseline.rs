@@ -254,6 +254,12 @@ fn short_records(measured: &[&SceneRecord]) -> Option<String> {
 
 /// Runs blessed together must be of one platform, tier, build and settings (repetitions aside).
 fn check_alike(runs: &[RunRecord]) -> Result<(), String> {
+    if let Some(run) = runs.iter().find(|run| !run.settings.quality) {
+        return Err(format!(
+            "run {} timed its modes alone (`--quality off`): a baseline needs their quality; bless runs that measured it",
+            run.run_id
+        ));
+    }
     let first = &runs[0];
     for run in &runs[1..] {
         let differs =

@@ -62,6 +62,11 @@ pub struct RunArgs {
     /// stills: off renders the stills alone (the gate's timing processes).
     #[arg(long, value_enum, default_value = "on")]
     pub sequences: Switch,
+    /// Whether each mode's image is measured (against the ground truth and the mode it is
+    /// compared with) and written: off times the modes alone, without the truth, TAA's stills,
+    /// images, quality or sequences (the gate's timing processes after its first).
+    #[arg(long, value_enum, default_value = "on")]
+    pub quality: Switch,
     /// Longest a single frame may take, in seconds.
     #[arg(
         long,
@@ -136,7 +141,8 @@ impl RunArgs {
                 warmup: args.warmup,
                 frame_timeout,
                 extra_samples: args.extra_samples.into(),
-                sequences: args.sequences == Switch::On,
+                sequences: args.sequences == Switch::On && args.quality == Switch::On,
+                quality: args.quality == Switch::On,
                 truth_cache: args.truth_cache.clone(),
                 shard,
                 memory_limit,
@@ -270,6 +276,9 @@ pub struct RunPlan {
     pub extra_samples: ExtraSamples,
     /// Whether scenes with a camera path are rendered as sequences too.
     pub sequences: bool,
+    /// Whether each mode's image is measured and written (`--quality`); without it the run
+    /// holds frame times, sample statistics and output hashes alone.
+    pub quality: bool,
     /// Where ground truths are cached; `None`: `cache/truth/` beside each manifest.
     pub truth_cache: Option<PathBuf>,
     /// The slice of the scenes this run renders, if not all.

@@ -104,6 +104,18 @@ pub struct RunSettings {
     /// sequences read as false).
     #[serde(default)]
     pub sequences: bool,
+    /// Whether each mode's image was measured against the truth and written (`--quality off`:
+    /// time alone; runs from before read as true).
+    #[serde(default = "measured_quality", skip_serializing_if = "is_measured")]
+    pub quality: bool,
+}
+
+fn measured_quality() -> bool {
+    true
+}
+
+fn is_measured(quality: &bool) -> bool {
+    *quality
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -67,6 +67,57 @@ fn checks_of<'a>(verdict: &'a Value, mode: &str, metric: &str) -> Vec<&'a Value>
         .collect()
 }
 
+/// A run that times its modes alone (`--quality off`, the gate's later processes) records
+/// frames, pass times, output hashes and the adaptive modes' costs, TAA's included, and no
+/// truth, image or quality; compare takes it after a run that measured quality, as one build
+/// (its hashes checked against that run's), and refuses it first; bless refuses it.
+#[test]
+fn a_run_that_times_alone_is_a_process_of_the_gate_and_no_baseline() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("gate-time-alone");
+    ws.manifest("edge", "edge", |_| {});
+    let modes = ["--modes", "deferred-1x1,taa,reference-2x2,adaptive-2x2", "--repetitions", "5"];
+    let measured = run(&ws, "measured", &modes);
+    assert_eq!(ws.run(&["bless", &path_arg(&measured)]).status.code(), Some(0));
+    let mut args = modes.to_vec();
+    args.extend(["--quality", "off"]);
+    let timed = run(&ws, "timed", &args);
+    let record = read_json(&timed.join("run.json"));
+    assert_eq!(record["settings"]["quality"], false);
+    let scene = &record["scenes"][0];
+    assert_eq!(scene["status"], "ok", "{}", scene["error"]);
+    assert!(scene["truth"].is_null(), "no truth: {}", scene["truth"]);
+    for mode in scene["modes"].as_array().unwrap() {
+        assert_eq!(mode["status"], "ok", "{}: {}", mode["mode"], mode["error"]);
+        assert_eq!(mode["frame_ms"]["samples"].as_array().unwrap().len(), 5, "{}", mode["mode"]);
+        assert!(mode["vs_ground_truth"].is_null() && mode["images"]["display"].is_null(), "{}", mode["mode"]);
+    }
+    assert!(mode(scene, "adaptive-2x2")["adaptive"].is_object(), "the adaptive cost is a time");
+    let measured_hash =
+        mode(&read_json(&measured.join("run.json"))["scenes"][0], "deferred-1x1")["output_hash"].clone();
+    assert_eq!(mode(scene, "deferred-1x1")["output_hash"], measured_hash);
+    let images = std::fs::read_dir(timed.join("edge")).map_or(0, |files| files.count());
+    assert_eq!(images, 0, "no image is written");
+
+    let both = ws.run(&[
+        "compare",
+        &path_arg(&measured),
+        &path_arg(&timed),
+        "--baseline",
+        "baselines",
+        "--out",
+        &path_arg(&ws.dir.join("both")),
+    ]);
+    assert_eq!(both.status.code(), Some(0), "{}", String::from_utf8_lossy(&both.stdout));
+    let first = compare(&ws, &timed, &ws.dir.join("first"));
+    assert_eq!(first.status.code(), Some(1), "{}", String::from_utf8_lossy(&first.stdout));
+    let verdict = read_json(&ws.dir.join("first/verdict.json"));
+    assert!(verdict.to_string().contains("timed its modes alone (`--quality off`)"), "{verdict}");
+    let bless = ws.run(&["bless", &path_arg(&timed)]);
+    assert_eq!(bless.status.code(), Some(2), "{}", stderr(&bless));
+    assert!(stderr(&bless).contains("a baseline needs their quality"), "{}", stderr(&bless));
+}
+
 /// A run against a baseline blessed from itself exits 0, and the next run takes its truth from
 /// the cache. Two runs bless together and compare pools them; runs that disagree on an image
 /// are refused, writing nothing. A baseline doctored 0.5 dB better in one mode makes that mode

@@ -273,6 +273,13 @@ fn run_problems(run: &RunRecord, baselines: &BaselineSet) -> Vec<String> {
     if run.scenes.is_empty() {
         problems.push("the run has no scenes: nothing was measured".into());
     }
+    if !run.settings.quality {
+        problems.push(
+            "the run timed its modes alone (`--quality off`): give a run that measured their quality first, \
+             and this one after it as another process"
+                .into(),
+        );
+    }
     if let Some(shard) = run.shard {
         problems.push(format!(
             "the run is shard {}/{} of a suite: join the shards with `aabench merge` and compare the merged run",

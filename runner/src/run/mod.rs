@@ -65,6 +65,7 @@ pub async fn execute(plan: &RunPlan, progress: Progress, cancel: Arc<AtomicBool>
             interleaving: "round-robin: each repetition renders every mode once, in plan order".into(),
             extra_samples: format!("{:?}", plan.extra_samples).to_lowercase(),
             sequences: plan.sequences,
+            quality: plan.quality,
         },
         shard: plan.shard,
         merged_from: Vec::new(),

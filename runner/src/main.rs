@@ -118,6 +118,18 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Join the verdicts of a sharded gate (each shard compared on its own machine) into one
+    /// summary.md, junit.xml and verdict.json. Exit 0: nothing regressed, 1: something did, or
+    /// a baseline's scene was in no shard, 2: the shards do not belong together (one missing or
+    /// given twice, another build, base, tier or platform).
+    MergeVerdicts {
+        /// The shards' verdict folders or verdict.json files.
+        #[arg(required = true)]
+        verdicts: Vec<PathBuf>,
+        /// Folder for the joined summary.md, junit.xml and verdict.json.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Print the pass graph of one mode of a scene: passes in order, their ports, the
     /// allocation each port got and its lifetime, and the bytes against one allocation per
     /// output and the lower bound.
@@ -192,6 +204,7 @@ fn main() -> ExitCode {
             report(&runs, history.as_deref(), verdict.as_deref())
         }
         Command::Merge { runs, out } => merge(&runs, &out),
+        Command::MergeVerdicts { verdicts, out } => merge_verdicts(&verdicts, &out),
         Command::Graph { manifest, mode, tier, extra_samples, dot } => {
             match print_graph(&manifest, &mode, tier, extra_samples.into(), dot) {
                 Ok(()) => exit::OK,
@@ -505,6 +518,26 @@ fn verdict_of(
     }
     tell!("aabench: warning: {message}: left out of the page");
     Ok(None)
+}
+
+fn merge_verdicts(paths: &[PathBuf], out_dir: &Path) -> u8 {
+    let read = |path: &PathBuf| {
+        let file = if path.is_dir() { path.join("verdict.json") } else { path.clone() };
+        aabench::json::read_versioned::<compare::Verdict>(&file, compare::VERDICT_SCHEMA).map(|v| (v, file))
+    };
+    let joined =
+        paths.iter().map(read).collect::<Result<Vec<_>, _>>().and_then(|v| compare::merge_verdicts(&v));
+    let verdict = match joined {
+        Ok(verdict) => verdict,
+        Err(message) => return fail(message),
+    };
+    match compare::outputs::write_all(&verdict, out_dir) {
+        Ok(_) => {
+            out(format_args!("{}", compare::outputs::summary(&verdict)));
+            if verdict.regressed { exit::REGRESSION } else { exit::OK }
+        }
+        Err(message) => fail(message),
+    }
 }
 
 fn merge(runs: &[PathBuf], out: &Path) -> u8 {

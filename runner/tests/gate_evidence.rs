@@ -111,7 +111,14 @@ fn a_compare_that_compared_less_than_its_baselines_fails_and_lenient_reports_it(
         r["finished_at"] = Value::Null;
     });
     std::fs::write(ws.dir.join("a-edge-file"), "not a folder").unwrap();
-    let cases: [(&str, &Path, &str, &str); 9] = [
+    // A shard is compared with the baselines of its own scenes (a sharded gate's job);
+    // `merge-verdicts` fails the baselines that no shard compared.
+    let (alone, verdict) = compare(&ws, &[&shard], "gate-shard", &[]);
+    assert_eq!(alone.status.code(), Some(0), "{}", String::from_utf8_lossy(&alone.stdout));
+    assert_eq!(verdict["shard"]["index"], 1);
+    let summary = std::fs::read_to_string(ws.dir.join("gate-shard/summary.md")).unwrap();
+    assert!(summary.contains("Shard 1/2 of the suite"), "{summary}");
+    let cases: [(&str, &Path, &str, &str); 8] = [
         ("missing folder", &full, "no-such-folder", "cannot be read"),
         ("a file", &full, "a-edge-file", "is not a folder"),
         ("empty folder", &full, "empty-baselines", "holds no baselines for the quick tier"),
@@ -119,7 +126,6 @@ fn a_compare_that_compared_less_than_its_baselines_fails_and_lenient_reports_it(
         ("missing scene", &drop_scene, "baselines", "the scene is not in the run"),
         ("missing mode", &drop_mode, "baselines", "not in the run"),
         ("no scenes", &no_scenes, "baselines", "the run has no scenes"),
-        ("shard", &shard, "baselines", "shard 1/2 of a suite"),
         ("unfinished", &unfinished, "baselines", "did not finish"),
     ];
     for (name, run, baselines, reason) in cases {

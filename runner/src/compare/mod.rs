@@ -20,11 +20,14 @@
 mod ab;
 pub mod outputs;
 mod quality;
+mod shards;
 mod time;
 mod verdict;
 
+pub use shards::merge_verdicts;
 pub use verdict::{
-    Against, CONFIDENCE, Check, FailOn, MIN_FRAMES, MIN_PROCESSES, Outcome, VERDICT_SCHEMA, Verdict,
+    Against, CONFIDENCE, Check, FailOn, MIN_FRAMES, MIN_PROCESSES, Outcome, ShardScope, VERDICT_SCHEMA,
+    Verdict,
 };
 
 use std::collections::BTreeMap;
@@ -209,6 +212,14 @@ pub fn compare(request: &Request) -> Verdict {
         counts,
         notes,
         checks,
+        build: run.build.clone(),
+        base_build: base.first().and_then(|b| b.build.clone()),
+        shard: run.shard.map(|shard| ShardScope {
+            index: shard.index,
+            count: shard.count,
+            scenes: run.scenes.iter().map(|s| s.name.clone()).collect(),
+            baseline_scenes: baselines.baselines.iter().map(|b| b.scene().name.clone()).collect(),
+        }),
     }
 }
 
@@ -279,12 +290,6 @@ fn run_problems(run: &RunRecord, baselines: &BaselineSet) -> Vec<String> {
              and this one after it as another process"
                 .into(),
         );
-    }
-    if let Some(shard) = run.shard {
-        problems.push(format!(
-            "the run is shard {}/{} of a suite: join the shards with `aabench merge` and compare the merged run",
-            shard.index, shard.count
-        ));
     }
     if run.finished_at.is_none() || matches!(run.status, Status::Running | Status::Interrupted) {
         problems.push(format!(

@@ -121,6 +121,16 @@ fn provenance(out: &mut String, verdict: &Verdict) {
         "nothing: no base build was measured, and the baselines were blessed on another machine".to_string()
     };
     let _ = writeln!(out, "Time is gated against {time}.\n");
+    if let Some(scope) = &verdict.shard {
+        let _ = writeln!(
+            out,
+            "Shard {}/{} of the suite: its {} scenes are compared; `aabench merge-verdicts` joins the shards' \
+             verdicts and fails a baseline that none of them compared.\n",
+            scope.index,
+            scope.count,
+            scope.scenes.len()
+        );
+    }
     if !verdict.confirm_run_ids.is_empty() {
         let _ = writeln!(
             out,

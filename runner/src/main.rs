@@ -83,6 +83,10 @@ enum Command {
         /// baseline.
         #[arg(long)]
         force: bool,
+        /// Why the paper's mode (adaptive-MxM) renders other bits than its baseline: required
+        /// when it does, and kept in the baselines written.
+        #[arg(long, value_name = "TEXT")]
+        why: Option<String>,
     },
     /// Decide per scene × mode × metric whether a run regressed against its baselines; write
     /// summary.md, junit.xml and verdict.json. Exit 0: nothing regressed, 1: something did, or
@@ -197,7 +201,9 @@ fn main() -> ExitCode {
     let code = match cli.command {
         Command::Run(args) => run_command(args),
         Command::GenScenes { paths, force } => gen_scenes(&paths, force),
-        Command::Bless { runs, baseline, force } => bless(&runs, &baseline, force),
+        Command::Bless { runs, baseline, force, why } => {
+            bless(&runs, &baseline, baseline::Consent { force, why: why.as_deref() })
+        }
         Command::Compare(args) => compare(&args),
         Command::Report { runs, markdown: true, figures, .. } => markdown_report(&runs, figures.as_deref()),
         Command::Report { runs, history, verdict, .. } => {
@@ -341,7 +347,7 @@ fn gen_scenes(paths: &[PathBuf], force: bool) -> u8 {
     code
 }
 
-fn bless(runs: &[PathBuf], root: &Path, force: bool) -> u8 {
+fn bless(runs: &[PathBuf], root: &Path, consent: baseline::Consent) -> u8 {
     let records: Result<Vec<_>, String> =
         runs.iter().map(|run| aabench::record::load_run(run).map(|(record, _)| record)).collect();
     let records = match records {
@@ -357,7 +363,7 @@ fn bless(runs: &[PathBuf], root: &Path, force: bool) -> u8 {
         );
     }
     let now = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();
-    match baseline::bless(&records, root, force, &now) {
+    match baseline::bless(&records, root, consent, &now) {
         Ok(blessed) => {
             for path in &blessed.written {
                 say!("blessed {}", path.display());

@@ -118,6 +118,45 @@ fn a_run_that_times_alone_is_a_process_of_the_gate_and_no_baseline() {
     assert!(stderr(&bless).contains("a baseline needs their quality"), "{}", stderr(&bless));
 }
 
+/// The paper's mode renders its blessed bits or fails the gate: a baseline whose adaptive-2x2
+/// holds other bits fails it (another mode's changed hash is only reported), a bless that would
+/// move them is refused without a reason, and one with `--why` writes it into the baseline.
+#[test]
+fn the_papers_mode_changes_its_bits_only_with_a_reason() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("gate-paper-bits");
+    ws.manifest("edge", "edge", |_| {});
+    let run_dir = run(&ws, "reports", &["--repetitions", "5"]);
+    assert_eq!(ws.run(&["bless", &path_arg(&run_dir)]).status.code(), Some(0));
+    let file = baseline_file(&ws, "edge");
+    let mut moved = read_json(&file);
+    for scene in moved["scenes"].as_array_mut().unwrap() {
+        for mode in scene["modes"].as_array_mut().unwrap() {
+            if mode["mode"] == "adaptive-2x2" || mode["mode"] == "reference-2x2" {
+                mode["output_hash"] = json!("0123456789abcdef");
+            }
+        }
+    }
+    write_json(&file, &moved);
+    let out = ws.dir.join("gate");
+    let output = compare(&ws, &run_dir, &out);
+    assert_eq!(output.status.code(), Some(1), "{}", String::from_utf8_lossy(&output.stdout));
+    let verdict = read_json(&out.join("verdict.json"));
+    let outcome = |mode: &str| checks_of(&verdict, mode, "output_hash")[0]["outcome"].clone();
+    assert_eq!((outcome("adaptive-2x2"), outcome("reference-2x2")), (json!("failed"), json!("unchanged")));
+
+    let refused = ws.run(&["bless", &path_arg(&run_dir)]);
+    assert_eq!(refused.status.code(), Some(2), "{}", stderr(&refused));
+    assert!(stderr(&refused).contains("adaptive-2x2 (0123456789abcdef → "), "{}", stderr(&refused));
+    assert_eq!(read_json(&file), moved, "nothing was written");
+    assert_eq!(ws.run(&["bless", &path_arg(&run_dir), "--why", " "]).status.code(), Some(2));
+    let why = "the evaluate pass reads the depth at the sample";
+    let blessed = ws.run(&["bless", &path_arg(&run_dir), "--why", why]);
+    assert_eq!(blessed.status.code(), Some(0), "{}", stderr(&blessed));
+    assert_eq!(read_json(&file)["why"], why);
+    assert_eq!(compare(&ws, &run_dir, &out).status.code(), Some(0));
+}
+
 /// A run against a baseline blessed from itself exits 0, and the next run takes its truth from
 /// the cache. Two runs bless together and compare pools them; runs that disagree on an image
 /// are refused, writing nothing. A baseline doctored 0.5 dB better in one mode makes that mode

@@ -68,6 +68,10 @@ pub struct Marker {
 }
 
 impl Technique {
+    /// Adaptive supersampling as the paper has it: both metrics, samples alike, counts per
+    /// frame (`adaptive-MxM`).
+    pub const PAPER: Technique = Technique::Adaptive(Metrics::Both, Reconstruction::Equal, Counts::PerFrame);
+
     /// The techniques that adaptive supersampling is measured against, in the order their modes
     /// are listed: what engineers ship, and the reference.
     pub const COMPARED: [Technique; 6] = [

@@ -12,7 +12,12 @@ use crate::baseline::BaselineSet;
 use crate::record::{RunRecord, SceneRecord, Status};
 use crate::stats::{Shift, Summary};
 
+use super::verdict::PASS_TIME;
 use super::{Against, CONFIDENCE, Check, Confirmation, MIN_PROCESSES, Outcome, decide};
+
+/// Passes shorter than this in the base build are not checked on their own: at a few tenths of
+/// a millisecond a pass is mostly submission and timer, and its slowdown cannot hide much.
+pub const PASS_MIN_MS: f64 = 0.5;
 
 /// The checks of every mode that ran ok in the first process of `runs` and in the base's
 /// processes: `relative_time`, `time_vs_reference` (adaptive modes) and `frame_time`, each
@@ -67,9 +72,43 @@ pub(super) fn checks(
                 median(record.mode(id)?.frame_ms.as_ref()?.samples.iter().map(|s| s.ln()).collect())
             };
             checks.extend(side.check(frame, bound, "frame time", "ms", template("frame_time")));
+            checks.extend(pass_checks(&side, id, bound, template));
         }
     }
     checks
+}
+
+/// One check per pass of mode `id` that takes at least [`PASS_MIN_MS`] in the base build, so
+/// that a regression inside a pass is caught where the frame hides it (a fifth of the frame
+/// slowed by a quarter moves the frame by 5 %). What is compared is the pass's time over the
+/// rest of its own frame: a process that lands slow or fast lands so in every pass of a frame,
+/// and the ratio cancels that, while a slower pass moves it by its whole slowdown (docs/gate.md
+/// has the false alarms and the slowdowns found on recorded gates).
+fn pass_checks(side: &Side, id: &str, bound: f64, template: impl Fn(&str) -> Check) -> Vec<Check> {
+    // Each frame's pass time and the rest of the frame, paired by frame.
+    let frames = |record: &SceneRecord, pass: &str| -> Option<Vec<(f64, f64)>> {
+        let mode = record.mode(id)?;
+        let pass = mode.passes.iter().find(|p| p.name == pass)?;
+        let frame = &mode.frame_ms.as_ref()?.samples;
+        Some(pass.ms.samples.iter().zip(frame).map(|(&pass, &frame)| (pass, frame - pass)).collect())
+    };
+    let Some(first) = side.head[0].mode(id) else { return Vec::new() };
+    first
+        .passes
+        .iter()
+        .filter(|pass| {
+            let base = side.base.iter().filter_map(|record| frames(record, &pass.name)).flatten();
+            median(base.map(|(pass, _)| pass).collect()).is_some_and(|ms| ms >= PASS_MIN_MS)
+        })
+        .filter_map(|pass| {
+            let per_process = |record: &SceneRecord| {
+                let ratios = frames(record, &pass.name)?.into_iter().filter(|&(_, rest)| rest > 0.0);
+                median(ratios.map(|(pass, rest)| pass.ln() - rest.ln()).collect())
+            };
+            let what = format!("{} pass time over the rest of its frame", pass.name);
+            side.check(per_process, bound, &what, "×", template(&format!("{PASS_TIME}{}", pass.name)))
+        })
+        .collect()
 }
 
 /// The manifests of the scenes of `run` with a time regression against the base build, each

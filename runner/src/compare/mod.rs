@@ -36,7 +36,7 @@ use crate::baseline::{Baseline, BaselineSet};
 use crate::gate::Tolerances;
 use crate::record::{ModeRecord, RunRecord, SceneRecord, Status};
 use time::decide;
-use verdict::TIME_METRICS;
+use verdict::is_time_metric;
 
 /// What `compare` decides on.
 #[derive(Debug, Clone, Copy)]
@@ -173,7 +173,7 @@ pub fn compare(request: &Request) -> Verdict {
         checks.extend(time);
     }
     for check in &mut checks {
-        if TIME_METRICS.contains(&check.metric.as_str()) {
+        if is_time_metric(&check.metric) {
             check.gated = match check.against {
                 Against::Baseline => baseline_time_gated,
                 Against::Base => fail_on != FailOn::Quality,

@@ -1,6 +1,8 @@
 //! Quality against the committed baselines: every gated metric of [`METRICS`] number to number
 //! within its tolerance, the shape of the sample-count distribution, and the output hash
-//! (reported, never failed: the metrics decide whether a changed image matters).
+//! (failed for the paper's mode, reported for the others: their metrics decide whether a changed image matters).
+
+use aabench_renderer::{Mode, Technique};
 
 use super::verdict::{Check, Outcome};
 use super::{ModeContext, show_percent};
@@ -104,10 +106,23 @@ impl ModeContext<'_> {
         })
     }
 
-    /// A changed output hash: reported, never failed.
+    /// A changed output hash: the paper's mode (`adaptive-MxM`, plain or stalled) must render
+    /// its blessed bits on their platform, so that a change to the method under study is never
+    /// waved through by tolerances (a change that is meant is blessed with `--why`); every other
+    /// mode's is reported, and its metrics decide.
     fn hash_check(&self) -> Option<Check> {
         let (now, then) = (self.mode.output_hash.as_ref()?, self.old.output_hash.as_ref()?);
-        (now != then).then(|| {
+        if now == then {
+            return None;
+        }
+        let paper = self.mode.mode.parse::<Mode>().is_ok_and(|mode| mode.technique == Technique::PAPER);
+        Some(if paper && self.same_platform {
+            let detail = format!(
+                "the paper's mode renders other bits than its baseline ({then} → {now}): a change to the method \
+                 under study fails the gate; if it is meant, bless it with `aabench bless --why`"
+            );
+            self.check("output_hash", Outcome::Failed, "", detail)
+        } else {
             let detail =
                 format!("the output changed ({then} → {now}); the metrics decide whether it matters");
             self.check("output_hash", Outcome::Unchanged, "", detail)

@@ -84,6 +84,14 @@ pub enum FailOn {
 /// The time metrics: noisy, decided on intervals.
 pub(super) const TIME_METRICS: [&str; 3] = ["relative_time", "time_vs_reference", "frame_time"];
 
+/// The metric of one pass's time against the base build: `pass_time:<pass>`.
+pub(super) const PASS_TIME: &str = "pass_time:";
+
+/// Whether `metric` is a time, decided on intervals and gated by `--fail-on`.
+pub(super) fn is_time_metric(metric: &str) -> bool {
+    TIME_METRICS.contains(&metric) || metric.starts_with(PASS_TIME)
+}
+
 pub use crate::gate::MIN_FRAMES;
 
 /// The fewest processes on each side from which a time check against the base build is
@@ -110,7 +118,8 @@ pub struct Check {
     /// `status`, `psnr_vs_truth`, `mse_vs_truth`, `flip_vs_truth`, `ssim_vs_truth`,
     /// `psnr_vs_reference`, `mse_vs_reference`, `shaded_percent`, `sample_histogram`, `output_hash`,
     /// `sequence_psnr_vs_truth`, `sequence_flip_vs_truth`, `flicker`, `instability`, `sequence_shaded_percent`,
-    /// `relative_time`, `time_vs_reference`, `frame_time`; `run` for the run as a whole.
+    /// `relative_time`, `time_vs_reference`, `frame_time`, `pass_time:<pass>` (against the base
+    /// build); `run` for the run as a whole.
     pub metric: String,
     /// What the check compares with: the committed baseline or the base build's processes.
     #[serde(default)]

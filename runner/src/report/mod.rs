@@ -34,7 +34,7 @@ const CROP: u32 = 64;
 const ZOOM: u32 = 4;
 
 /// The paper's adaptive supersampling: both metrics, samples alike, counts per frame.
-const PAPER: Technique = Technique::Adaptive(Metrics::Both, Reconstruction::Equal, Counts::PerFrame);
+const PAPER: Technique = Technique::PAPER;
 
 /// The paper's adaptive mode at `m` and its reconstructions beyond the paper, unstalled:
 /// `adaptive-MxM`, `-area`, `-cells`, `-coverage`.

@@ -214,13 +214,19 @@ pub fn compare(request: &Request) -> Verdict {
         checks,
         build: run.build.clone(),
         base_build: base.first().and_then(|b| b.build.clone()),
-        shard: run.shard.map(|shard| ShardScope {
-            index: shard.index,
-            count: shard.count,
-            scenes: run.scenes.iter().map(|s| s.name.clone()).collect(),
-            baseline_scenes: baselines.baselines.iter().map(|b| b.scene().name.clone()).collect(),
-        }),
+        shard: shard_scope(run, baselines),
     }
+}
+
+/// What a shard's verdict must say for `merge-verdicts` to join it: which shard, its scenes,
+/// and every scene the baselines hold.
+fn shard_scope(run: &RunRecord, baselines: &BaselineSet) -> Option<ShardScope> {
+    run.shard.map(|shard| ShardScope {
+        index: shard.index,
+        count: shard.count,
+        scenes: run.scenes.iter().map(|s| s.name.clone()).collect(),
+        baseline_scenes: baselines.baselines.iter().map(|b| b.scene().name.clone()).collect(),
+    })
 }
 
 /// Runs that cannot be compared together at all (exit 2): processes of the run, of the base,

@@ -29,6 +29,7 @@
 # less than its baselines hold), 2 an error, 3 a scene failed. With $GITHUB_STEP_SUMMARY set,
 # the summary is appended to it. AABENCH_GATE_FAIL_ON=all|quality overrides `--fail-on auto`.
 set -uo pipefail
+invoked_from=$PWD
 cd "$(dirname "$0")/.."
 source ci/lib.sh
 
@@ -41,10 +42,17 @@ while [ $# -gt 0 ]; do
         --base) base_ref=${2:?ci/gate.sh: --base needs a git revision}; shift 2 ;;
         --base=*) base_ref=${1#--base=}; shift ;;
         --shard) shard_args=(--shard "${2:?ci/gate.sh: --shard needs I/N}"); shift 2 ;;
+        --shard=*) shard_args=(--shard "${1#--shard=}"); shift ;;
         --verdict-out) verdict_out=${2:?ci/gate.sh: --verdict-out needs a folder}; shift 2 ;;
+        --verdict-out=*) verdict_out=${1#--verdict-out=}; shift ;;
         *) run_args+=("$1"); shift ;;
     esac
 done
+if [ -n "$verdict_out" ]; then
+    # Relative to where the gate was started; an earlier gate's verdict must not outlive this one.
+    case "$verdict_out" in /*) ;; *) verdict_out="$invoked_from/$verdict_out" ;; esac
+    rm -f "$verdict_out/summary.md" "$verdict_out/junit.xml" "$verdict_out/verdict.json"
+fi
 processes=${AABENCH_GATE_PROCESSES:-6}
 repetitions=${AABENCH_GATE_REPETITIONS:-3}
 fail_on=${AABENCH_GATE_FAIL_ON:-auto}
@@ -84,7 +92,7 @@ alternate() {
                 # Quality and sequences are untimed and the same in every process of a build
                 # (compare checks the output hashes): the first head process of the gate
                 # measures them, the others time the modes alone.
-                local measures=(--quality off)
+                local measures=("${head_timing[@]}")
                 if ((i == 1)) && [ "$dir" = "$gate_dir" ]; then measures=(--sequences on); fi
                 "$head_bin" run --tier quick --repetitions "$repetitions" "${measures[@]}" \
                     --out "$dir/head" "$@"
@@ -107,8 +115,8 @@ finished_runs() {
     done
 }
 
-# What cannot change a time: the baselines themselves and the documentation.
-code_paths=(. ':(exclude)baselines' ':(exclude)*.md' ':(exclude)docs')
+# What cannot change a time: the baselines themselves, the documentation and the CI workflows.
+code_paths=(. ':(exclude)baselines' ':(exclude)*.md' ':(exclude)docs' ':(exclude).github' ':(exclude)ci/lint')
 started=$(date +%s)
 if [ -z "$base" ]; then
     echo "ci/gate.sh: no base commit (no git history?): time is gated against the baselines only on the machine that blessed them" >&2
@@ -162,12 +170,15 @@ else
             mv "$cached_base.tmp-$$" "$cached_base" || exit 2
     fi
     cp "$cached_base" "$gate_dir/bin/aabench-base" || exit 2
-    # The base's processes time alone where its build can (`--quality off`, else without
-    # sequences where it renders them): only the head's first process measures quality.
+    # The timing processes time alone where the base's build can (`--quality off`); else both
+    # sides measure quality in every process and only leave out the sequences where the base
+    # renders them, so that the two builds do the same work between their timed rounds.
     base_timing=()
+    head_timing=(--sequences off)
     base_help=$("$gate_dir/bin/aabench-base" run --help)
     if grep -q -- --quality <<<"$base_help"; then
         base_timing=(--quality off)
+        head_timing=(--quality off)
     elif grep -q -- --sequences <<<"$base_help"; then
         base_timing=(--sequences off)
     fi

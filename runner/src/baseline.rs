@@ -98,6 +98,7 @@ pub fn bless(runs: &[RunRecord], root: &Path, consent: Consent, now: &str) -> Re
     let mut blessed = Blessed::default();
     let mut planned = Vec::new();
     let mut refusals = Vec::new();
+    let mut unexplained = Vec::new();
     for scene in &run.scenes {
         let measured: Vec<&SceneRecord> =
             runs.iter().filter_map(|r| r.scenes.iter().find(|s| s.name == scene.name)).collect();
@@ -123,14 +124,18 @@ pub fn bless(runs: &[RunRecord], root: &Path, consent: Consent, now: &str) -> Re
             Ok(_) => {}
         }
         if let (Some(moved), None) = (paper_moved(&target, scene), consent.why) {
-            return Err(format!(
-                "{}: the paper's mode renders other bits than this baseline holds: {moved}; say why with \
-                 --why \"…\" (kept in the baselines); nothing was written",
-                target.display()
-            ));
+            unexplained.push(format!("{}: {moved}", target.display()));
+            continue;
         }
         blessed.warnings.extend(short_records(&measured));
         planned.push((target, measured));
+    }
+    if !unexplained.is_empty() {
+        return Err(format!(
+            "the paper's mode renders other bits than these baselines hold:\n  {}\nsay why with --why \"…\" \
+             (kept in the baselines); nothing was written",
+            unexplained.join("\n  ")
+        ));
     }
     if !refusals.is_empty() {
         return Err(format!(
@@ -150,7 +155,8 @@ pub fn bless(runs: &[RunRecord], root: &Path, consent: Consent, now: &str) -> Re
                 platform: run.platform.clone(),
                 settings: run.settings.clone(),
                 scenes: measured.into_iter().cloned().collect(),
-                why: consent.why.map(String::from),
+                // A bless that says nothing keeps the reason of the one that moved the bits.
+                why: consent.why.map(String::from).or_else(|| load(&target).ok().and_then(|old| old.why)),
             };
             (target, baseline)
         })

@@ -189,8 +189,8 @@ struct CompareArgs {
     #[arg(long, value_enum, default_value = "auto")]
     fail_on: compare::FailOn,
     /// Report, not fail, what the run lacks: no baselines (or only another platform's), a
-    /// scene or mode the baselines hold, scenes at all; a shard; an unfinished run. For a
-    /// first bless or an exploratory compare, never for a gate.
+    /// scene or mode the baselines hold, scenes at all; quality (`run --quality off`); an
+    /// unfinished run. For a first bless or an exploratory compare, never for a gate.
     #[arg(long)]
     lenient: bool,
 }

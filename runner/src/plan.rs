@@ -277,7 +277,8 @@ pub struct RunPlan {
     /// Whether scenes with a camera path are rendered as sequences too.
     pub sequences: bool,
     /// Whether each mode's image is measured and written (`--quality`); without it the run
-    /// holds frame times, sample statistics and output hashes alone.
+    /// holds frame and pass times, adaptive costs and the output hashes of the modes without
+    /// history alone.
     pub quality: bool,
     /// Where ground truths are cached; `None`: `cache/truth/` beside each manifest.
     pub truth_cache: Option<PathBuf>,

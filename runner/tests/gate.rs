@@ -155,6 +155,9 @@ fn the_papers_mode_changes_its_bits_only_with_a_reason() {
     assert_eq!(blessed.status.code(), Some(0), "{}", stderr(&blessed));
     assert_eq!(read_json(&file)["why"], why);
     assert_eq!(compare(&ws, &run_dir, &out).status.code(), Some(0));
+    // A later bless of the same bits needs no reason and keeps the one given.
+    assert_eq!(ws.run(&["bless", &path_arg(&run_dir)]).status.code(), Some(0));
+    assert_eq!(read_json(&file)["why"], why);
 }
 
 /// A run against a baseline blessed from itself exits 0, and the next run takes its truth from

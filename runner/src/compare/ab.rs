@@ -19,6 +19,11 @@ use super::{Against, CONFIDENCE, Check, Confirmation, MIN_PROCESSES, Outcome, de
 /// a millisecond a pass is mostly submission and timer, and its slowdown cannot hide much.
 pub const PASS_MIN_MS: f64 = 0.5;
 
+/// Passes that take more than this share of their frame in the base build are not checked on
+/// their own: the frame's check sees their slowdown (a quarter more in half the frame moves it
+/// by an eighth), and the rest of their frame is too short to divide by steadily.
+pub const PASS_MAX_SHARE: f64 = 0.5;
+
 /// The checks of every mode that ran ok in the first process of `runs` and in the base's
 /// processes: `relative_time`, `time_vs_reference` (adaptive modes) and `frame_time`, each
 /// against the time-ratio tolerance of the scene's baseline (its run's when it has none).
@@ -78,8 +83,9 @@ pub(super) fn checks(
     checks
 }
 
-/// One check per pass of mode `id` that takes at least [`PASS_MIN_MS`] in the base build, so
-/// that a regression inside a pass is caught where the frame hides it (a fifth of the frame
+/// One check per pass of mode `id` that takes at least [`PASS_MIN_MS`] and at most
+/// [`PASS_MAX_SHARE`] of its frame in the base build, so that a regression inside a pass is
+/// caught where the frame hides it (a fifth of the frame
 /// slowed by a quarter moves the frame by 5 %). What is compared is the pass's time over the
 /// rest of its own frame: a process that lands slow or fast lands so in every pass of a frame,
 /// and the ratio cancels that, while a slower pass moves it by its whole slowdown (docs/gate.md
@@ -97,8 +103,11 @@ fn pass_checks(side: &Side, id: &str, bound: f64, template: impl Fn(&str) -> Che
         .passes
         .iter()
         .filter(|pass| {
-            let base = side.base.iter().filter_map(|record| frames(record, &pass.name)).flatten();
-            median(base.map(|(pass, _)| pass).collect()).is_some_and(|ms| ms >= PASS_MIN_MS)
+            let base: Vec<(f64, f64)> =
+                side.base.iter().filter_map(|record| frames(record, &pass.name)).flatten().collect();
+            let ms = median(base.iter().map(|&(pass, _)| pass).collect());
+            let share = median(base.iter().map(|&(pass, rest)| pass / (pass + rest)).collect());
+            ms.is_some_and(|ms| ms >= PASS_MIN_MS) && share.is_some_and(|share| share <= PASS_MAX_SHARE)
         })
         .filter_map(|pass| {
             let per_process = |record: &SceneRecord| {

@@ -49,8 +49,8 @@ pub struct Request<'a> {
     pub base: &'a [RunRecord],
     pub baselines: &'a BaselineSet,
     pub fail_on: FailOn,
-    /// Missing baselines, scenes, modes and platforms, shards and unfinished runs are
-    /// reported, not failed (a first bless, an exploratory compare).
+    /// Missing baselines, scenes, modes and platforms, runs that timed alone and unfinished
+    /// runs are reported, not failed (a first bless, an exploratory compare).
     pub lenient: bool,
     /// Fresh processes that measured again the scenes whose time regressed against `base`.
     pub confirmation: Option<Confirmation<'a>>,
@@ -124,8 +124,8 @@ fn scene_checks(runs: &[RunRecord], baselines: &BaselineSet, notes: &mut Vec<Str
             })),
         }
     }
-    // A shard covers only some scenes: the others are not missing (a strict compare has
-    // already failed the shard itself).
+    // A shard covers only some scenes: the others are not missing here (`merge-verdicts`
+    // fails a baseline that no shard compared).
     if run.shard.is_none() {
         for baseline in &baselines.baselines {
             let scene = baseline.scene();
@@ -287,7 +287,8 @@ fn run_problems(run: &RunRecord, baselines: &BaselineSet) -> Vec<String> {
         )),
         _ => {}
     }
-    if run.scenes.is_empty() {
+    // A shard may hold no scene (more shards than scenes): `merge-verdicts` checks the whole.
+    if run.scenes.is_empty() && run.shard.is_none() {
         problems.push("the run has no scenes: nothing was measured".into());
     }
     if !run.settings.quality {

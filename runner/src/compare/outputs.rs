@@ -74,7 +74,11 @@ pub fn summary(verdict: &Verdict) -> String {
     }
     outcome_tables(&mut out, verdict);
     let unchanged = verdict.counts.get(&Outcome::Unchanged).copied().unwrap_or(0);
-    let hashes = verdict.checks.iter().filter(|c| c.metric == "output_hash").count();
+    let hashes = verdict
+        .checks
+        .iter()
+        .filter(|c| c.metric == "output_hash" && c.outcome == Outcome::Unchanged)
+        .count();
     let hashes = if hashes > 0 {
         format!(" ({hashes} of them an output hash that changed while every metric stayed within tolerance)")
     } else {

@@ -20,7 +20,9 @@ pub fn merge_verdicts(shards: &[(Verdict, PathBuf)]) -> Result<Verdict, String> 
     let compared: Vec<&String> = scopes.iter().flat_map(|scope| &scope.scenes).collect();
     for scene in scopes[0].baseline_scenes.iter().filter(|scene| !compared.contains(scene)) {
         let detail = "the scene has a baseline, and no shard's run holds it (was its manifest removed?)";
-        checks.push(Check::new(scene, "*", "status", Outcome::Missing, detail.into()));
+        // As in `compare`: with `--lenient` a missing scene is reported, not failed.
+        let gated = !first.lenient;
+        checks.push(Check { gated, ..Check::new(scene, "*", "status", Outcome::Missing, detail.into()) });
     }
     let mut counts = BTreeMap::new();
     for check in &checks {
@@ -81,7 +83,6 @@ fn scopes(shards: &[(Verdict, PathBuf)]) -> Result<Vec<&ShardScope>, String> {
         }
         for (what, same) in [
             ("build", verdict.build == first.build),
-            ("base build", verdict.base_build == first.base_build),
             ("tier", verdict.tier == first.tier),
             ("baselines' platform", verdict.baseline_platform == first.baseline_platform),
             (
@@ -97,6 +98,14 @@ fn scopes(shards: &[(Verdict, PathBuf)]) -> Result<Vec<&ShardScope>, String> {
         if seen[scope.index as usize - 1].replace(scope).is_some() {
             return Err(format!("{}: shard {}/{count} is given twice", file.display(), scope.index));
         }
+    }
+    // A shard whose base processes all failed knows no base build (its verdict says why); the
+    // others must name one and the same.
+    let bases: std::collections::BTreeSet<&String> =
+        shards.iter().filter_map(|(verdict, _)| verdict.base_build.as_ref()).collect();
+    if bases.len() > 1 {
+        let bases: Vec<&str> = bases.into_iter().map(String::as_str).collect();
+        return Err(format!("the shards were gated against different base builds: {}", bases.join(", ")));
     }
     let missing: Vec<String> =
         (1..=count).filter(|i| seen[*i as usize - 1].is_none()).map(|i| format!("{i}/{count}")).collect();

@@ -9,7 +9,6 @@
 
 use std::path::{Path, PathBuf};
 
-use aabench_renderer::{Mode, Technique};
 use serde::{Deserialize, Serialize};
 
 use crate::plan::Tier;
@@ -363,7 +362,7 @@ fn paper_moved(target: &Path, scene: &SceneRecord) -> Option<String> {
     let moved: Vec<String> = scene
         .modes
         .iter()
-        .filter(|mode| mode.mode.parse::<Mode>().is_ok_and(|m| m.technique == Technique::PAPER))
+        .filter(|mode| mode.is_paper())
         .filter_map(|mode| {
             let (now, then) = (mode.output_hash.as_ref()?, old.mode(&mode.mode)?.output_hash.as_ref()?);
             (now != then).then(|| format!("{} ({then} → {now})", mode.mode))

@@ -275,6 +275,14 @@ pub struct ModeRecord {
 }
 
 impl ModeRecord {
+    /// Whether it is the paper's adaptive mode (`adaptive-MxM`, plain or stalled), whose bits
+    /// the gate holds to its baseline.
+    pub fn is_paper(&self) -> bool {
+        self.mode
+            .parse::<aabench_renderer::Mode>()
+            .is_ok_and(|mode| mode.technique == aabench_renderer::Technique::PAPER)
+    }
+
     /// Its sequence along the scene's first (the gate's) sequence, where it has one.
     pub fn sequence(&self) -> Option<&ModeSequence> {
         self.sequences.first()?.as_ref()

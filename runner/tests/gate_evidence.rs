@@ -310,6 +310,15 @@ fn time_is_gated_against_the_base_build_process_by_process() {
     }
     let frame = outcomes(&verdict, "frame_time", "base");
     assert!(frame.contains(&("reference-2x2-stalled", "regressed")), "{frame:?}");
+    // The whole frame slower, every pass alike: no pass of it is called slower on its own
+    // (an absolute pass time would call every one of them so).
+    let passes: Vec<&Value> = verdict["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["metric"].as_str().unwrap().starts_with("pass_time:"))
+        .collect();
+    assert!(!passes.is_empty() && passes.iter().all(|c| c["outcome"] != "regressed"), "{passes:?}");
     // Time against the committed baseline is reported, not gated, when the base decides.
     let gated_baseline_times = verdict["checks"]
         .as_array()

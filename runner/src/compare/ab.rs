@@ -85,8 +85,8 @@ pub(super) fn checks(
 
 /// One check per pass of mode `id` that takes at least [`PASS_MIN_MS`] and at most
 /// [`PASS_MAX_SHARE`] of its frame in the base build, so that a regression inside a pass is
-/// caught where the frame hides it (a fifth of the frame
-/// slowed by a quarter moves the frame by 5 %). What is compared is the pass's time over the
+/// caught where the frame hides it (a fifth of the frame slowed by a quarter moves the frame
+/// by 5 %). What is compared is the pass's time over the
 /// rest of its own frame: a process that lands slow or fast lands so in every pass of a frame,
 /// and the ratio cancels that, while a slower pass moves it by its whole slowdown (docs/gate.md
 /// has the false alarms and the slowdowns found on recorded gates).

@@ -30,8 +30,6 @@ pub use verdict::{
     Verdict,
 };
 
-use std::collections::BTreeMap;
-
 use crate::baseline::{Baseline, BaselineSet};
 use crate::gate::Tolerances;
 use crate::record::{ModeRecord, RunRecord, SceneRecord, Status};
@@ -186,10 +184,7 @@ pub fn compare(request: &Request) -> Verdict {
     if fail_on == FailOn::Quality {
         notes.push("time verdicts are reported, not failed".into());
     }
-    let mut counts = BTreeMap::new();
-    for check in &checks {
-        *counts.entry(check.outcome).or_insert(0) += 1;
-    }
+    let counts = Outcome::count(&checks);
     Verdict {
         schema: VERDICT_SCHEMA.into(),
         run_id: run.run_id.clone(),

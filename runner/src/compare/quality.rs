@@ -2,8 +2,6 @@
 //! within its tolerance, the shape of the sample-count distribution, and the output hash
 //! (failed for the paper's mode, reported for the others: their metrics decide whether a changed image matters).
 
-use aabench_renderer::{Mode, Technique};
-
 use super::verdict::{Check, Outcome};
 use super::{ModeContext, show_percent};
 use crate::gate::QualityTolerances;
@@ -115,8 +113,7 @@ impl ModeContext<'_> {
         if now == then {
             return None;
         }
-        let paper = self.mode.mode.parse::<Mode>().is_ok_and(|mode| mode.technique == Technique::PAPER);
-        Some(if paper && self.same_platform {
+        Some(if self.mode.is_paper() && self.same_platform {
             let detail = format!(
                 "the paper's mode renders other bits than its baseline ({then} → {now}): a change to the method \
                  under study fails the gate; if it is meant, bless it with `aabench bless --why`"

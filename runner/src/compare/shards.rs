@@ -24,10 +24,7 @@ pub fn merge_verdicts(shards: &[(Verdict, PathBuf)]) -> Result<Verdict, String> 
         let gated = !first.lenient;
         checks.push(Check { gated, ..Check::new(scene, "*", "status", Outcome::Missing, detail.into()) });
     }
-    let mut counts = BTreeMap::new();
-    for check in &checks {
-        *counts.entry(check.outcome).or_insert(0) += 1;
-    }
+    let counts = Outcome::count(&checks);
     let every = |ids: fn(&Verdict) -> &Vec<String>| -> Vec<String> {
         shards.iter().flat_map(|(verdict, _)| ids(verdict).iter().cloned()).collect()
     };

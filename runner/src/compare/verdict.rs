@@ -48,6 +48,15 @@ impl Outcome {
     ];
 
     /// True for the outcomes that make `compare` exit 1 when their check is gated.
+    /// How many of `checks` have each outcome.
+    pub fn count(checks: &[Check]) -> BTreeMap<Outcome, usize> {
+        let mut counts = BTreeMap::new();
+        for check in checks {
+            *counts.entry(check.outcome).or_insert(0) += 1;
+        }
+        counts
+    }
+
     pub fn fails(self) -> bool {
         matches!(self, Outcome::Regressed | Outcome::Failed | Outcome::Missing)
     }

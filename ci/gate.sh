@@ -16,8 +16,11 @@
 # The base is REF, or else the commit that last changed baselines/ (the build they were blessed
 # from). When the base's code differs from the working tree's, the gate builds the base beside
 # the head and runs both at the quick tier in alternating processes ($AABENCH_GATE_PROCESSES a
-# side, default 6, of $AABENCH_GATE_REPETITIONS rounds each, default 3); `aabench compare` then
-# decides time with the process as the unit. The scenes whose time regressed are measured again
+# side, default 4, of $AABENCH_GATE_REPETITIONS rounds each, default 3), after one head process
+# that measures quality and the sequences. The alternating processes time alone (`--quality
+# off`, where the base's build knows it) the modes the gate times (`aabench modes --tier quick
+# --timed-by-gate`: the unstalled ones and one stalled); `aabench compare` then decides time
+# with the process as the unit. The scenes whose time regressed are measured again
 # in as many fresh processes a side, and a time regression stands only where those find it
 # again (`compare --confirm-runs`). When the code is the base's (only baselines or
 # docs changed), time cannot have changed through the change: one run of 5 rounds is compared
@@ -53,7 +56,7 @@ if [ -n "$verdict_out" ]; then
     case "$verdict_out" in /*) ;; *) verdict_out="$invoked_from/$verdict_out" ;; esac
     rm -f "$verdict_out/summary.md" "$verdict_out/junit.xml" "$verdict_out/verdict.json"
 fi
-processes=${AABENCH_GATE_PROCESSES:-6}
+processes=${AABENCH_GATE_PROCESSES:-4}
 repetitions=${AABENCH_GATE_REPETITIONS:-3}
 fail_on=${AABENCH_GATE_FAIL_ON:-auto}
 
@@ -78,8 +81,9 @@ base=$(resolve_base) || exit 2
 
 # alternate DIR ARGS...: $processes processes a side of `run --tier quick ARGS...`, the head's
 # into DIR/head and the base's into DIR/base, in the order base head head base base head …, so
-# that a drift of the machine over the job weighs on both builds alike. A head process that
-# exits non-zero sets run_code; a base process that does is only reported.
+# that a drift of the machine over the job weighs on both builds alike. Each times the modes
+# that both builds time ($timing_modes). A head process that exits non-zero sets run_code; a
+# base process that does is only reported.
 alternate() {
     local dir=$1
     shift
@@ -89,22 +93,46 @@ alternate() {
         for side in "${order[@]}"; do
             echo "ci/gate.sh: process $i of $processes, $side" >&2
             if [ "$side" = head ]; then
-                # Quality and sequences are untimed and the same in every process of a build
-                # (compare checks the output hashes): the first head process of the gate
-                # measures them, the others time the modes alone.
-                local measures=("${head_timing[@]}")
-                if ((i == 1)) && [ "$dir" = "$gate_dir" ]; then measures=(--sequences on); fi
-                "$head_bin" run --tier quick --repetitions "$repetitions" "${measures[@]}" \
+                "$head_bin" run --tier quick --repetitions "$repetitions" "${head_timing[@]}" "${timing_modes[@]}" \
                     --out "$dir/head" "$@"
                 local code=$?
                 if [ "$code" -ne 0 ] && [ "$run_code" -eq 0 ]; then run_code=$code; fi
             else
                 (cd "$base_src" && "$gate_dir/bin/aabench-base" run --tier quick --repetitions "$repetitions" \
-                    "${base_timing[@]}" --out "$dir/base" "$@") ||
+                    "${base_timing[@]}" "${timing_modes[@]}" --out "$dir/base" "$@") ||
                     echo "ci/gate.sh: a base process exited $?; compare uses the base runs that finished" >&2
             fi
         done
     done
+}
+
+# measure_quality ARGS...: the head's process that measures every mode's quality and the
+# sequences, which compare checks against the baselines; it runs before the timing processes
+# and gives no time where the base's processes time alone (one timed round is enough for its
+# images and hashes).
+measure_quality() {
+    local rounds=(--repetitions 1)
+    if [ "${#base_timing[@]}" -eq 0 ] || [ "${base_timing[0]}" != --quality ]; then rounds=(--repetitions "$repetitions"); fi
+    echo "ci/gate.sh: the head's quality process" >&2
+    "$head_bin" run --tier quick "${rounds[@]}" --sequences on --out "$gate_dir/head" "$@"
+    run_code=$?
+}
+
+# timed_by_both: sets timing_modes to `--modes LIST`, the modes of the quick tier that the gate
+# times (`aabench modes --tier quick --timed-by-gate`) and the base build knows; to nothing
+# (every mode) where the base cannot list its modes.
+timed_by_both() {
+    timing_modes=()
+    local arg known
+    for arg in "${run_args[@]}"; do
+        case "$arg" in --modes | --modes=*) return 0 ;; esac
+    done
+    known=$("$gate_dir/bin/aabench-base" modes 2>/dev/null) || return 0
+    local ids=()
+    while read -r id; do
+        if grep -qxF "  $id" <<<"$known"; then ids+=("$id"); fi
+    done < <("$head_bin" modes --tier quick --timed-by-gate)
+    if [ "${#ids[@]}" -gt 0 ]; then timing_modes=(--modes "$(IFS=,; echo "${ids[*]}")"); fi
 }
 
 # finished_runs DIR: sets finished to the run folders under DIR that hold a run.json.
@@ -130,8 +158,9 @@ fi
 
 if [ "$strategy" != ab ]; then
     # Where the code is the base's, its time cannot have changed and is only reported: the run
-    # times 5 rounds, the fewest whose time checks compare (gate::MIN_FRAMES), not the tier's 25.
-    single_args=()
+    # times 5 rounds, the fewest whose time checks compare (gate::MIN_FRAMES). Without a base,
+    # one run's 25 rounds are gated against the baselines of the machine that blessed them.
+    single_args=(--repetitions 25)
     if [ "$strategy" = unchanged ]; then
         [ "$fail_on" = auto ] && fail_on=quality
         single_args=(--repetitions 5)
@@ -160,6 +189,14 @@ else
         echo "ci/gate.sh: the base ${base:0:12}, built before: $cached_base" >&2
     else
         echo "ci/gate.sh: building the base ${base:0:12} to gate time against it on this machine" >&2
+        # A first base build starts from a copy of the head's: the dependencies (most of a clean
+        # build) are the same crates built alike and stay fresh, while the workspace's crates,
+        # whose extracted sources are newer than anything built, compile again.
+        if [ ! -d "$base_target/release" ] && [ -d target/release ]; then
+            mkdir -p "$base_target" && cp -a --reflink=auto target/release "$base_target/release.tmp-$$" &&
+                mv "$base_target/release.tmp-$$" "$base_target/release" ||
+                rm -rf "$base_target/release.tmp-$$"
+        fi
         (cd "$base_src" && CARGO_TARGET_DIR="$base_target" cargo build --release --locked -p aabench) || {
             echo "ci/gate.sh: the base ${base:0:12} does not build" >&2
             exit 2
@@ -182,8 +219,9 @@ else
     elif grep -q -- --sequences <<<"$base_help"; then
         base_timing=(--sequences off)
     fi
+    timed_by_both
     started=$(date +%s)
-    run_code=0
+    measure_quality "${shard_args[@]}" "${run_args[@]}"
     alternate "$gate_dir" "${shard_args[@]}" "${run_args[@]}"
     head_runs=("$gate_dir"/head/*/)
     finished_runs "$gate_dir/base"

@@ -8,7 +8,6 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use crate::error::RenderError;
-use crate::shaders::{self, Features};
 
 /// A WGSL file compiled on the device, with the naga module it was reflected from.
 #[derive(Debug)]
@@ -58,22 +57,21 @@ impl Shader {
         device: &wgpu::Device,
         dir: Option<&Path>,
         file: &'static str,
-        features: Features,
+        text: &str,
     ) -> Result<Shader, RenderError> {
-        let text = shaders::compose_from(dir, file, features)?;
         // Errors name the file as read: the embedded copy, or the folder's.
         let shown = dir.map_or_else(|| format!("shaders/{file}"), |dir| dir.join(file).display().to_string());
-        let naga = naga::front::wgsl::parse_str(&text)
-            .map_err(|e| RenderError::Shader(e.emit_to_string_with_path(&text, &shown)))?;
+        let naga = naga::front::wgsl::parse_str(text)
+            .map_err(|e| RenderError::Shader(e.emit_to_string_with_path(text, &shown)))?;
         let info = naga::valid::Validator::new(
             naga::valid::ValidationFlags::all(),
             naga::valid::Capabilities::all(),
         )
         .validate(&naga)
-        .map_err(|e| RenderError::Shader(format!("{shown}: {}", e.emit_to_string(&text))))?;
+        .map_err(|e| RenderError::Shader(format!("{shown}: {}", e.emit_to_string(text))))?;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(file),
-            source: wgpu::ShaderSource::Wgsl(text.into()),
+            source: wgpu::ShaderSource::Wgsl(text.to_owned().into()),
         });
         Ok(Shader { file, module, naga, info })
     }
@@ -343,7 +341,8 @@ mod tests {
     #[test]
     fn bindings_are_matched_by_name_and_a_swap_is_refused_naming_the_variable() {
         let gpu = Gpu::new().expect("lavapipe");
-        let shader = Shader::new(&gpu.device, None, "adaptive.wgsl", Features::ALL).unwrap();
+        let text = crate::shaders::compose("adaptive.wgsl", crate::shaders::Features::ALL).unwrap();
+        let shader = Shader::new(&gpu.device, None, "adaptive.wgsl", &text).unwrap();
         let bindings = shader.bindings(&["fullscreen", "gather"]).unwrap();
         let names: Vec<&str> = bindings.iter().map(|b| b.name.as_str()).collect();
         assert_eq!(

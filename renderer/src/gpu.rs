@@ -1,6 +1,7 @@
 //! The Vulkan device (lavapipe on CI machines), the platform key recorded with every result,
 //! timed submission and texture readback.
 
+use std::any::Any;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -71,6 +72,9 @@ pub struct Gpu {
     pub queue: wgpu::Queue,
     pub platform: PlatformInfo,
     errors: Arc<Mutex<Vec<String>>>,
+    /// What the renderer keeps on the device from one scene to the next (its pipelines, see
+    /// `render::lend_pipelines`), of a type this layer does not know.
+    kept: Mutex<Option<Box<dyn Any + Send>>>,
 }
 
 impl Gpu {
@@ -126,7 +130,18 @@ impl Gpu {
             cpu_cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
             build_profile: if cfg!(debug_assertions) { "debug" } else { "release" }.into(),
         };
-        Ok(Gpu { adapter: adapter.clone(), device, queue, platform, errors })
+        let kept = Mutex::new(None);
+        Ok(Gpu { adapter: adapter.clone(), device, queue, platform, errors, kept })
+    }
+
+    /// Takes what a scene kept on the device for the next.
+    pub(crate) fn take_kept(&self) -> Option<Box<dyn Any + Send>> {
+        self.kept.lock().expect("kept").take()
+    }
+
+    /// Keeps `value` on the device for the next scene, in place of what was kept before.
+    pub(crate) fn keep(&self, value: Box<dyn Any + Send>) {
+        *self.kept.lock().expect("kept") = Some(value);
     }
 
     /// Whether this device renders `format` targets of `samples` samples per texel.

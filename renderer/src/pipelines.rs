@@ -8,7 +8,7 @@ use std::sync::Arc;
 use crate::bindings::Shader;
 use crate::error::RenderError;
 use crate::scene::DrawClass;
-use crate::shaders::Features;
+use crate::shaders::{self, Features};
 
 /// Pipeline override constants, by name, in the order given. Values are kept as f64 bits so
 /// that keys hash and compare exactly.
@@ -72,7 +72,9 @@ pub(crate) struct ComputeKey {
     pub layout: LayoutEntries,
 }
 
-/// Everything compiled for one scene, whose [`Features`] decide how each shader is composed.
+/// Everything compiled on one device. A scene's [`Features`] decide how each shader is
+/// composed; modules and pipelines are kept by the text they were compiled from, so a scene
+/// reuses whatever an earlier scene compiled from the same text (`render::lend_pipelines`).
 #[derive(Debug)]
 pub(crate) struct Pipelines {
     device: wgpu::Device,
@@ -81,13 +83,24 @@ pub(crate) struct Pipelines {
     features: Features,
     /// Where shader files are read from; `None`: `shaders::compose`'s default.
     shader_dir: Option<PathBuf>,
+    /// The modules of the current features, by file: a lookup without composing.
     shaders: HashMap<&'static str, Arc<Shader>>,
+    /// Every module compiled, by its composed text.
+    modules: HashMap<String, Arc<Shader>>,
     group_layouts: HashMap<Vec<wgpu::BindGroupLayoutEntry>, wgpu::BindGroupLayout>,
-    render: HashMap<RenderKey, wgpu::RenderPipeline>,
-    compute: HashMap<ComputeKey, wgpu::ComputePipeline>,
+    render: HashMap<(ModuleId, RenderKey), wgpu::RenderPipeline>,
+    compute: HashMap<(ModuleId, ComputeKey), wgpu::ComputePipeline>,
     constant_buffers: HashMap<(&'static str, u32), wgpu::Buffer>,
     texel_sampler: Option<wgpu::Sampler>,
     constant_textures: HashMap<&'static str, wgpu::Texture>,
+}
+
+/// A module's identity: the address of its [`Shader`], which the cache keeps for as long as it
+/// keeps pipelines made from it.
+type ModuleId = usize;
+
+fn module_id(shader: &Arc<Shader>) -> ModuleId {
+    Arc::as_ptr(shader) as ModuleId
 }
 
 impl Pipelines {
@@ -98,6 +111,7 @@ impl Pipelines {
             features,
             shader_dir: None,
             shaders: HashMap::new(),
+            modules: HashMap::new(),
             group_layouts: HashMap::new(),
             render: HashMap::new(),
             compute: HashMap::new(),
@@ -111,6 +125,7 @@ impl Pipelines {
     pub fn read_shaders_from(&mut self, dir: PathBuf) {
         self.shader_dir = Some(dir);
         self.shaders.clear();
+        self.modules.clear();
         self.render.clear();
         self.compute.clear();
     }
@@ -119,11 +134,37 @@ impl Pipelines {
         &self.device
     }
 
+    /// Render and compute pipelines compiled so far, for every scene that held these.
+    pub fn compiled(&self) -> usize {
+        self.render.len() + self.compute.len()
+    }
+
+    /// Composes shaders for `features` from now on (another scene's).
+    pub fn set_features(&mut self, features: Features) {
+        if features != self.features {
+            self.features = features;
+            self.shaders.clear();
+        }
+    }
+
+    /// Whether the shaders are the embedded ones (no [`Pipelines::read_shaders_from`]).
+    pub fn reads_embedded_shaders(&self) -> bool {
+        self.shader_dir.is_none()
+    }
+
     pub fn shader(&mut self, file: &'static str) -> Result<Arc<Shader>, RenderError> {
         if let Some(shader) = self.shaders.get(file) {
             return Ok(Arc::clone(shader));
         }
-        let shader = Arc::new(Shader::new(&self.device, self.shader_dir.as_deref(), file, self.features)?);
+        let text = shaders::compose_from(self.shader_dir.as_deref(), file, self.features)?;
+        let shader = match self.modules.get(&text) {
+            Some(shader) => Arc::clone(shader),
+            None => {
+                let shader = Arc::new(Shader::new(&self.device, self.shader_dir.as_deref(), file, &text)?);
+                self.modules.insert(text, Arc::clone(&shader));
+                shader
+            }
+        };
         self.shaders.insert(file, Arc::clone(&shader));
         Ok(shader)
     }
@@ -161,28 +202,31 @@ impl Pipelines {
         key: RenderKey,
         create: impl FnOnce(&wgpu::Device, &wgpu::PipelineLayout, &wgpu::ShaderModule) -> wgpu::RenderPipeline,
     ) -> Result<wgpu::RenderPipeline, RenderError> {
+        let shader = self.shader(key.shader)?;
+        let key = (module_id(&shader), key);
         if let Some(pipeline) = self.render.get(&key) {
             return Ok(pipeline.clone());
         }
-        let shader = self.shader(key.shader)?;
-        let layout = self.pipeline_layout(key.fragment.unwrap_or(key.vertex), &key.layout);
+        let layout = self.pipeline_layout(key.1.fragment.unwrap_or(key.1.vertex), &key.1.layout);
         let pipeline = create(&self.device, &layout, &shader.module);
         self.render.insert(key, pipeline.clone());
         Ok(pipeline)
     }
 
     pub fn compute(&mut self, key: ComputeKey) -> Result<wgpu::ComputePipeline, RenderError> {
+        let shader = self.shader(key.shader)?;
+        let key = (module_id(&shader), key);
         if let Some(pipeline) = self.compute.get(&key) {
             return Ok(pipeline.clone());
         }
-        let shader = self.shader(key.shader)?;
-        let layout = self.pipeline_layout(key.entry, &key.layout);
-        let constants = key.constants.pairs();
+        let compute = &key.1;
+        let layout = self.pipeline_layout(compute.entry, &compute.layout);
+        let constants = compute.constants.pairs();
         let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(key.entry),
+            label: Some(compute.entry),
             layout: Some(&layout),
             module: &shader.module,
-            entry_point: Some(key.entry),
+            entry_point: Some(compute.entry),
             compilation_options: wgpu::PipelineCompilationOptions {
                 constants: &constants,
                 ..Default::default()

@@ -5,12 +5,13 @@
 //! Stalled modes render the same image as their plain twins, and a stall longer than
 //! lavapipe's loop limit still runs every step. The ground truth rendered in one tile is
 //! reference-4x4 bit for bit, rendered in bands it shows no seams, and at 8×8 it is nearer
-//! reference-4x4 than reference-2x2.
+//! reference-4x4 than reference-2x2. A scene reuses the pipelines that earlier scenes on the
+//! device compiled, and renders the same bits with them.
 
 mod support;
 
 use aabench_renderer::scene::generate::Generator;
-use aabench_renderer::{ColorSettings, DisplayImage, RenderSettings};
+use aabench_renderer::{ColorSettings, DisplayImage, Gpu, RenderSettings, SceneRenderer};
 use support::*;
 
 #[test]
@@ -244,4 +245,36 @@ fn stalls_beyond_lavapipes_loop_limit_are_honoured_step_for_step() {
     }
     // Pixel (0, 0) starts the chain at 0, a fixed point; every other one tells the counts apart.
     assert_eq!(truncated_would_differ, (width * height - 1) as usize);
+}
+
+/// Pipelines outlive their scene: after two scenes, the device holds what both compiled, less
+/// the shaders they compose alike; a third scene of the same shaders compiles nothing; and
+/// every image is bit for bit what a device that compiled for that scene alone renders.
+#[test]
+fn a_scene_reuses_the_pipelines_of_the_scenes_before_it_and_renders_the_same_bits() {
+    let modes = ["deferred-1x1", "fxaa", "smaa", "msaa-4x", "reference-2x2", "adaptive-2x2"];
+    let _guard = gpu();
+    let fresh = || std::sync::Arc::new(Gpu::new().expect("a device"));
+    let renders = |gpu: &std::sync::Arc<Gpu>, generator: Generator| {
+        let (scene, camera) = generated(generator);
+        let mut renderer =
+            SceneRenderer::new(std::sync::Arc::clone(gpu), &scene, &camera, &lit(), settings(64, 48))
+                .unwrap();
+        let images: Vec<DisplayImage> =
+            modes.iter().map(|mode| render(&mut renderer, mode).display).collect();
+        (images, renderer.compiled_pipelines())
+    };
+    let (plain_alone, plain_compiled) = renders(&fresh(), Generator::Edge);
+    let (textured_alone, textured_compiled) = renders(&fresh(), Generator::Atrium);
+    let device = fresh();
+    let (plain, _) = renders(&device, Generator::Edge);
+    let (textured, both) = renders(&device, Generator::Atrium);
+    assert!(
+        textured_compiled < both && both < plain_compiled + textured_compiled,
+        "alone {plain_compiled} and {textured_compiled}, one after the other {both}"
+    );
+    let (again, compiled_again) = renders(&device, Generator::Edge);
+    assert_eq!(compiled_again, both, "the same shaders compiled again");
+    assert!(plain == plain_alone && again == plain_alone, "other bits than with pipelines of its own");
+    assert!(textured == textured_alone, "other bits than with pipelines of its own");
 }

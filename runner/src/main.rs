@@ -155,8 +155,16 @@ enum Command {
     },
     /// Print the Vulkan adapter and the platform key that results are filed under.
     Info,
-    /// List the mode ids and groups that --modes accepts.
-    Modes,
+    /// List the mode ids and groups that --modes accepts; with --tier, the modes that the tier
+    /// runs, one per line.
+    Modes {
+        #[arg(long, value_enum)]
+        tier: Option<Tier>,
+        /// Only the modes of the tier whose time the regression gate compares with the base
+        /// build (its timing processes render these).
+        #[arg(long, requires = "tier")]
+        timed_by_gate: bool,
+    },
 }
 
 #[derive(Debug, clap::Args)]
@@ -218,8 +226,15 @@ fn main() -> ExitCode {
             }
         }
         Command::Info => info(),
-        Command::Modes => {
+        Command::Modes { tier: None, .. } => {
             list_modes();
+            exit::OK
+        }
+        Command::Modes { tier: Some(tier), timed_by_gate } => {
+            let modes = if timed_by_gate { tier.gate_timed_modes() } else { tier.default_modes() };
+            for mode in modes {
+                say!("{mode}");
+            }
             exit::OK
         }
     };

@@ -26,8 +26,8 @@ pub fn default_frame_timeout() -> Duration {
 pub struct RunArgs {
     /// Manifests or folders of manifests [default: scenes/].
     pub paths: Vec<PathBuf>,
-    /// quick: 256×192 unless a manifest says (the stiff scenes: 160×120), 25 repetitions (the CI
-    /// gate); nightly: 1024×768, 7 repetitions.
+    /// quick: 256×192 unless a manifest says (the stiff scenes: 160×120), 15 repetitions (the
+    /// suite and the CI gate); nightly: 1024×768, 7 repetitions.
     #[arg(long, value_enum, default_value = "quick")]
     pub tier: Tier,
     /// Comma-separated mode ids or groups: baseline, adaptive, ablation, variant, stable [default: the tier's].
@@ -202,12 +202,15 @@ impl Tier {
         }
     }
 
-    /// Timed repetitions of every mode, after warm-up. The quick tier is the CI gate's: on
-    /// these machines one frame's time varies by about 10% from the next, so 25 repetitions
-    /// are what lets the gate catch a 25% slowdown with no false alarms (`docs/gate.md`).
+    /// Timed repetitions of every mode, after warm-up. The quick tier is the default suite's
+    /// and the one the gate compares with the baselines; its time against the base build the
+    /// gate decides from processes of its own, 3 rounds each (`docs/gate.md`). Where time is
+    /// gated by one run against the baselines of the machine that blessed them (no git
+    /// history), `ci/gate.sh` times 25 rounds: one frame's time varies by about 10 % from the next
+    /// on these machines.
     pub fn repetitions(self) -> u32 {
         match self {
-            Tier::Quick => 25,
+            Tier::Quick => 15,
             Tier::Nightly => 7,
         }
     }
@@ -238,6 +241,16 @@ impl Tier {
                 .filter(|m| !m.stalled && (nightly || (m.m == 4 && m.reconstruction() == Equal))),
         );
         modes
+    }
+
+    /// The modes that the gate's timing processes time (`aabench modes --tier T --timed-by-gate`):
+    /// the tier's unstalled modes and the cheapest stalled one. A stalled mode renders its
+    /// unstalled twin's image from the samples its twin shades (both gated exactly, with every
+    /// process's output hash), each shaded with the stall loop on top; what its time adds to its
+    /// twin's is that loop, which `deferred-1x1-stalled` times for all of them.
+    pub fn gate_timed_modes(self) -> Vec<Mode> {
+        let sentinel = Mode::new(aabench_renderer::Technique::Deferred, 1, true);
+        self.default_modes().into_iter().filter(|mode| !mode.stalled || *mode == sentinel).collect()
     }
 }
 
@@ -557,5 +570,17 @@ mod tests {
             .collect();
         assert_eq!(stable, ["adaptive-4x4-stable"]);
         assert!(Mode::stable_modes().iter().filter(|m| !m.stalled).all(|m| nightly.contains(m)));
+    }
+
+    #[test]
+    fn the_gate_times_every_unstalled_mode_and_one_stalled() {
+        for tier in [Tier::Quick, Tier::Nightly] {
+            let all = tier.default_modes();
+            let timed = tier.gate_timed_modes();
+            let stalled: Vec<String> = timed.iter().filter(|m| m.stalled).map(Mode::to_string).collect();
+            assert_eq!(stalled, ["deferred-1x1-stalled"]);
+            assert!(timed.iter().all(|m| all.contains(m)));
+            assert!(all.iter().filter(|m| !m.stalled).all(|m| timed.contains(m)), "{tier:?}");
+        }
     }
 }

@@ -181,6 +181,20 @@ fn modes_lists_the_groups_and_how_the_other_adaptive_ids_are_made() {
     assert_eq!(graph.status.code(), Some(0), "{}", stderr(&graph));
     let heading = String::from_utf8(graph.stdout).unwrap();
     assert!(heading.starts_with(&format!("plane {example} (quick tier")), "{heading}");
+    // With a tier: its modes, one id per line; the gate's timing processes time a subset.
+    let lines = |args: &[&str]| -> Vec<String> {
+        let output = ws.run(args);
+        assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+        String::from_utf8(output.stdout).unwrap().lines().map(str::to_string).collect()
+    };
+    let quick = lines(&["modes", "--tier", "quick"]);
+    let timed = lines(&["modes", "--tier", "quick", "--timed-by-gate"]);
+    assert_eq!(quick.len(), 29, "{quick:?}");
+    assert!(timed.iter().all(|id| quick.contains(id) && text.contains(&format!("  {id}\n"))), "{timed:?}");
+    assert!(
+        timed.contains(&"deferred-1x1-stalled".into()) && !timed.contains(&"adaptive-2x2-stalled".into())
+    );
+    assert_eq!(ws.run(&["modes", "--timed-by-gate"]).status.code(), Some(2), "--timed-by-gate needs --tier");
 }
 
 #[test]

@@ -109,6 +109,59 @@ fn pass_below(record: &Value, id: &str, most: f64) -> (usize, f64) {
     shares.enumerate().filter(|(_, share)| *share < most).max_by(|a, b| a.1.total_cmp(&b.1)).unwrap()
 }
 
+/// Against a base whose processes timed alone (`--quality off`), the run's process that
+/// measured quality (the gate's first) gives no time: it did other work between its rounds.
+/// Made 40 % slower, it moves no check; the checks count the processes that timed alone, and
+/// the mode that it alone rendered (a stalled one, which the gate does not time) is named.
+#[test]
+fn the_process_that_measured_quality_gives_no_time_against_a_base_that_timed_alone() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("quality-process");
+    ws.manifest("edge", "edge", |_| {});
+    let measured = run(&ws, "reports", "5");
+    assert_eq!(ws.run(&["bless", arg(&measured)]).status.code(), Some(0));
+    let timed_modes = "deferred-1x1,reference-2x2,adaptive-2x2";
+    let args = ["run", "--out", "alone", "--modes", timed_modes, "--repetitions", "3", "--quality", "off"];
+    let output = ws.run(&args);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let alone = std::fs::read_dir(ws.dir.join("alone")).unwrap().next().unwrap().unwrap().path();
+    let record = read_json(&alone.join("run.json"));
+    let copies = |side: &str| -> Vec<PathBuf> {
+        (0..4).map(|i| doctored(&ws, &format!("{side}-{i}"), &record, |_| {})).collect()
+    };
+    let (head, base) = (copies("head"), copies("base"));
+    let slow = doctored(&ws, "slow-measured", &read_json(&measured.join("run.json")), |r| {
+        for id in MODES.split(',') {
+            scale_mode(r, id, 1.4);
+        }
+    });
+    let mut runs = vec![slow.as_path()];
+    runs.extend(head.iter().map(PathBuf::as_path));
+    let base_args: Vec<&str> = std::iter::once("--base-runs").chain(base.iter().map(|p| arg(p))).collect();
+    let (output, verdict) = compare(&ws, &runs, "gate", &base_args);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stdout));
+    let frame = outcomes(&verdict, "frame_time", "base");
+    assert_eq!(frame.len(), 3, "{frame:?}");
+    assert!(frame.iter().all(|(_, outcome)| *outcome == "unchanged"), "{frame:?}");
+    let details: Vec<&str> = verdict["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["against"] == "base")
+        .map(|c| c["detail"].as_str().unwrap())
+        .collect();
+    assert!(
+        details.iter().all(|d| d.contains("over 4 processes of the base and 4 of the run")),
+        "{details:?}"
+    );
+    let notes = verdict["notes"].to_string();
+    assert!(notes.contains("slow-measured-quick measured quality too and gives no time"), "{notes}");
+    assert!(
+        notes.contains("not compared for these modes") && notes.contains("reference-2x2-stalled"),
+        "{notes}"
+    );
+}
+
 /// A missing, non-folder or empty baseline folder, another platform's baselines only, a
 /// missing scene, a missing mode, a run without scenes, a shard and an unfinished run each fail
 /// compare (exit 1) with the reason in summary.md, junit.xml and verdict.json, and pass with

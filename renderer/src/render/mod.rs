@@ -58,6 +58,30 @@ struct View {
     lighting: Lighting,
 }
 
+/// The pipelines that earlier scenes compiled on `gpu`, to compose shaders for `features` (while
+/// one scene holds them, another gets its own): a scene compiles only the shaders whose text no
+/// scene before it compiled (lavapipe spends about half a second a scene creating them all).
+fn lend_pipelines(gpu: &Gpu, features: crate::shaders::Features) -> Pipelines {
+    match gpu.take_kept().and_then(|kept| kept.downcast::<Pipelines>().ok()) {
+        Some(mut kept) => {
+            kept.set_features(features);
+            *kept
+        }
+        None => Pipelines::new(gpu.device.clone(), gpu.queue.clone(), features),
+    }
+}
+
+/// The scene's pipelines outlive it on the device, for the next scene, unless they were
+/// compiled from another shader tree than the embedded one.
+impl Drop for SceneRenderer {
+    fn drop(&mut self) {
+        if self.pipelines.reads_embedded_shaders() {
+            let empty = Pipelines::new(self.gpu.device.clone(), self.gpu.queue.clone(), self.needs.features);
+            self.gpu.keep(Box::new(std::mem::replace(&mut self.pipelines, empty)));
+        }
+    }
+}
+
 impl SceneRenderer {
     pub fn new(
         gpu: Arc<Gpu>,
@@ -78,7 +102,7 @@ impl SceneRenderer {
         }
         gpu.check()?;
         Ok(SceneRenderer {
-            pipelines: Pipelines::new(gpu.device.clone(), gpu.queue.clone(), needs.features),
+            pipelines: lend_pipelines(&gpu, needs.features),
             gpu,
             scene: gpu_scene,
             needs,
@@ -101,6 +125,12 @@ impl SceneRenderer {
     /// Bytes of the scene's texture array on the device (0 for an untextured scene).
     pub fn texture_bytes(&self) -> u64 {
         self.scene.texture_bytes
+    }
+
+    /// Pipelines compiled on the device so far, by this scene and the scenes before it whose
+    /// pipelines it reuses.
+    pub fn compiled_pipelines(&self) -> usize {
+        self.pipelines.compiled()
     }
 
     /// What the scene needs its frames to have.

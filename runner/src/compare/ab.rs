@@ -26,22 +26,25 @@ pub const PASS_MAX_SHARE: f64 = 0.5;
 
 /// The checks of every mode that ran ok in the first process of `runs` and in the base's
 /// processes: `relative_time`, `time_vs_reference` (adaptive modes) and `frame_time`, each
-/// against the time-ratio tolerance of the scene's baseline (its run's when it has none).
+/// against the time-ratio tolerance of the scene's baseline (its run's when it has none). The
+/// run's processes that did other work than the base's between their rounds (quality measured
+/// where the base timed alone) give no time: [`timing_processes`].
 pub(super) fn checks(
     runs: &[RunRecord],
     base: &[RunRecord],
     baselines: &BaselineSet,
     notes: &mut Vec<String>,
 ) -> Vec<Check> {
+    let timing = timing_processes(runs, base, notes);
+    let mut untimed = std::collections::BTreeSet::new();
     let mut checks = Vec::new();
     for scene in runs[0].scenes.iter().filter(|s| s.status == Status::Ok) {
-        let head = records(runs, &scene.name);
-        let then = records(base, &scene.name);
-        if then.is_empty() {
-            notes.push(format!(
-                "{}: not rendered ok by the base build: its time is not compared with it",
-                scene.name
-            ));
+        let head = records(&timing, &scene.name);
+        let then = records(&base.iter().collect::<Vec<_>>(), &scene.name);
+        if then.is_empty() || head.is_empty() {
+            let side = if then.is_empty() { "the base build" } else { "the run's timing processes" };
+            notes
+                .push(format!("{}: not rendered ok by {side}: its time is not compared with it", scene.name));
             continue;
         }
         let tolerance = baselines.scene(&scene.name).map_or(scene.gate, |b| b.scene().gate).time_ratio;
@@ -50,7 +53,9 @@ pub(super) fn checks(
         let bound = (1.0 + tolerance).ln();
         for mode in scene.modes.iter().filter(|m| m.status == Status::Ok) {
             let id = mode.mode.as_str();
-            if !then.iter().all(|s| s.mode(id).is_some_and(|m| m.status == Status::Ok)) {
+            let ok = |record: &&SceneRecord| record.mode(id).is_some_and(|m| m.status == Status::Ok);
+            if !then.iter().all(ok) || !head.iter().any(ok) {
+                untimed.insert(id.to_string());
                 continue;
             }
             let template = |metric: &str| Check {
@@ -79,6 +84,14 @@ pub(super) fn checks(
             checks.extend(side.check(frame, bound, "frame time", "ms", template("frame_time")));
             checks.extend(pass_checks(&side, id, bound, template));
         }
+    }
+    if !untimed.is_empty() {
+        let ids: Vec<String> = untimed.into_iter().collect();
+        notes.push(format!(
+            "time against the base build: not compared for these modes, which the base's processes or the \
+             run's timing processes did not time ok: {}",
+            ids.join(", ")
+        ));
     }
     checks
 }
@@ -160,8 +173,30 @@ pub(super) fn confirm(checks: &mut [Check], fresh: Confirmation, baselines: &Bas
     }
 }
 
+/// The run's processes whose time is compared with the base's: those that measured as the
+/// base's did. Where the base's processes timed their modes alone (`--quality off`), a process
+/// that also measured quality (the gate's first, which gives the verdict its quality) did other
+/// work between its rounds and is left out.
+fn timing_processes<'a>(
+    runs: &'a [RunRecord],
+    base: &[RunRecord],
+    notes: &mut Vec<String>,
+) -> Vec<&'a RunRecord> {
+    let alone = base.iter().all(|run| !run.settings.quality);
+    let (timing, measuring): (Vec<&RunRecord>, Vec<&RunRecord>) =
+        runs.iter().partition(|run| !alone || !run.settings.quality);
+    if !measuring.is_empty() {
+        let ids: Vec<&str> = measuring.iter().map(|run| run.run_id.as_str()).collect();
+        notes.push(format!(
+            "time against the base build: {} measured quality too and gives no time (the base's processes timed alone)",
+            ids.join(", ")
+        ));
+    }
+    timing
+}
+
 /// The records of scene `name` that ran ok, one per process that has it.
-fn records<'a>(runs: &'a [RunRecord], name: &str) -> Vec<&'a SceneRecord> {
+fn records<'a>(runs: &[&'a RunRecord], name: &str) -> Vec<&'a SceneRecord> {
     runs.iter()
         .filter_map(|run| run.scenes.iter().find(|s| s.name == name && s.status == Status::Ok))
         .collect()

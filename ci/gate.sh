@@ -111,10 +111,8 @@ alternate() {
 # and gives no time where the base's processes time alone (one timed round is enough for its
 # images and hashes).
 measure_quality() {
-    local rounds=(--repetitions 1)
-    if [ "${#base_timing[@]}" -eq 0 ] || [ "${base_timing[0]}" != --quality ]; then rounds=(--repetitions "$repetitions"); fi
     echo "ci/gate.sh: the head's quality process" >&2
-    "$head_bin" run --tier quick "${rounds[@]}" --sequences on --out "$gate_dir/head" "$@"
+    "$head_bin" run --tier quick --repetitions "$quality_rounds" --sequences on --out "$gate_dir/head" "$@"
     run_code=$?
 }
 
@@ -212,10 +210,12 @@ else
     # renders them, so that the two builds do the same work between their timed rounds.
     base_timing=()
     head_timing=(--sequences off)
+    quality_rounds=$repetitions
     base_help=$("$gate_dir/bin/aabench-base" run --help)
     if grep -q -- --quality <<<"$base_help"; then
         base_timing=(--quality off)
         head_timing=(--quality off)
+        quality_rounds=1
     elif grep -q -- --sequences <<<"$base_help"; then
         base_timing=(--sequences off)
     fi

@@ -26,6 +26,13 @@ fn run(ws: &Workspace, folder: &str, repetitions: &str) -> PathBuf {
     runs[0].clone()
 }
 
+/// [`run`] of 5 repetitions into `<workspace>/reports`, blessed as the workspace's baselines.
+fn blessed_run(ws: &Workspace) -> PathBuf {
+    let measured = run(ws, "reports", "5");
+    assert_eq!(ws.run(&["bless", arg(&measured)]).status.code(), Some(0));
+    measured
+}
+
 fn arg(path: &Path) -> &str {
     path.to_str().unwrap()
 }
@@ -118,8 +125,7 @@ fn the_process_that_measured_quality_gives_no_time_against_a_base_that_timed_alo
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let ws = Workspace::new("quality-process");
     ws.manifest("edge", "edge", |_| {});
-    let measured = run(&ws, "reports", "5");
-    assert_eq!(ws.run(&["bless", arg(&measured)]).status.code(), Some(0));
+    let measured = blessed_run(&ws);
     let timed_modes = "deferred-1x1,reference-2x2,adaptive-2x2";
     let args = ["run", "--out", "alone", "--modes", timed_modes, "--repetitions", "3", "--quality", "off"];
     let output = ws.run(&args);
@@ -172,8 +178,7 @@ fn a_compare_that_compared_less_than_its_baselines_fails_and_lenient_reports_it(
     let ws = Workspace::new("strict");
     ws.manifest("a-edge", "edge", |_| {});
     ws.manifest("b-plane", "plane", |_| {});
-    let full = run(&ws, "reports", "5");
-    assert_eq!(ws.run(&["bless", arg(&full)]).status.code(), Some(0));
+    let full = blessed_run(&ws);
     let (same, _) = compare(&ws, &[&full], "gate-same", &[]);
     assert_eq!(same.status.code(), Some(0), "{}", String::from_utf8_lossy(&same.stdout));
 
@@ -314,8 +319,7 @@ fn time_is_gated_against_the_base_build_process_by_process() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let ws = Workspace::new("base-build");
     ws.manifest("edge", "edge", |_| {});
-    let measured = run(&ws, "reports", "5");
-    assert_eq!(ws.run(&["bless", arg(&measured)]).status.code(), Some(0));
+    let measured = blessed_run(&ws);
     let mut record = read_json(&measured.join("run.json"));
     // At 64×48 a pass takes tenths of a millisecond, too short to be checked on its own:
     // adaptive-2x2's times are scaled on both sides so that the pass that slows below is not.
@@ -500,8 +504,7 @@ fn time_against_baselines_of_another_machine_is_informational() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let ws = Workspace::new("other-machine");
     ws.manifest("edge", "edge", |_| {});
-    let measured = run(&ws, "reports", "5");
-    assert_eq!(ws.run(&["bless", arg(&measured)]).status.code(), Some(0));
+    let measured = blessed_run(&ws);
     let record = read_json(&measured.join("run.json"));
     let machine = &record["platform"]["machine"];
     assert!(
@@ -563,8 +566,7 @@ fn the_truth_note_speaks_only_when_the_truth_image_changed() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let ws = Workspace::new("truth-note");
     ws.manifest("edge", "edge", |_| {});
-    let measured = run(&ws, "reports", "5");
-    assert_eq!(ws.run(&["bless", arg(&measured)]).status.code(), Some(0));
+    let measured = blessed_run(&ws);
     let record = read_json(&measured.join("run.json"));
     assert_eq!(record["scenes"][0]["truth"]["image_hash"].as_str().map(str::len), Some(16));
     // A new key (any source edit does that), the same image: no note.
@@ -644,8 +646,7 @@ fn fifos_in_place_of_runs_baselines_and_history_are_refused_at_once() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let ws = Workspace::new("fifos");
     ws.manifest("edge", "edge", |_| {});
-    let measured = run(&ws, "reports", "5");
-    assert_eq!(ws.run(&["bless", arg(&measured)]).status.code(), Some(0));
+    let measured = blessed_run(&ws);
     let fifo = |path: &Path| {
         let _ = std::fs::remove_file(path);
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();

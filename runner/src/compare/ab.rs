@@ -36,11 +36,12 @@ pub(super) fn checks(
     notes: &mut Vec<String>,
 ) -> Vec<Check> {
     let timing = timing_processes(runs, base, notes);
+    let base: Vec<&RunRecord> = base.iter().collect();
     let mut untimed = std::collections::BTreeSet::new();
     let mut checks = Vec::new();
     for scene in runs[0].scenes.iter().filter(|s| s.status == Status::Ok) {
         let head = records(&timing, &scene.name);
-        let then = records(&base.iter().collect::<Vec<_>>(), &scene.name);
+        let then = records(&base, &scene.name);
         if then.is_empty() || head.is_empty() {
             let side = if then.is_empty() { "the base build" } else { "the run's timing processes" };
             notes

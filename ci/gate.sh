@@ -17,9 +17,10 @@
 # from). When the base's code differs from the working tree's, the gate builds the base beside
 # the head and runs both at the quick tier in alternating processes ($AABENCH_GATE_PROCESSES a
 # side, default 4, of $AABENCH_GATE_REPETITIONS rounds each, default 3), after one head process
-# that measures quality and the sequences. The alternating processes time alone (`--quality
-# off`, where the base's build knows it) the modes the gate times (`aabench modes --tier quick
-# --timed-by-gate`: the unstalled ones and one stalled); `aabench compare` then decides time
+# that measures quality and the sequences while the base builds. The alternating processes
+# time alone (`--quality off`, where the base's build knows it) the modes the gate times
+# (`aabench modes --tier quick --timed-by-gate`: the unstalled ones and one stalled);
+# `aabench compare` then decides time
 # with the process as the unit. The scenes whose time regressed are measured again
 # in as many fresh processes a side, and a time regression stands only where those find it
 # again (`compare --confirm-runs`). When the code is the base's (only baselines or
@@ -106,13 +107,34 @@ alternate() {
     done
 }
 
-# measure_quality ARGS...: the head's process that measures every mode's quality and the
-# sequences, which compare checks against the baselines; it runs before the timing processes
-# and gives no time where the base's processes time alone (one timed round is enough for its
-# images and hashes).
+# start_quality ARGS...: starts the head's process that measures every mode's quality and the
+# sequences, which compare checks against the baselines, in the background (quality_pid, its
+# output in $gate_dir/quality.log). Where the base's processes time alone it gives no time, so
+# it renders one round without a warm-up and needs no machine to itself: it runs while the
+# base is built.
+start_quality() {
+    echo "ci/gate.sh: the head's quality process, while the base is made ready" >&2
+    "$head_bin" run --tier quick --repetitions 1 --warmup 0 --sequences on --out "$gate_dir/head" "$@" \
+        >"$gate_dir/quality.log" 2>&1 &
+    quality_pid=$!
+    # A gate that stops before it waits for the process (the base does not build) stops it too.
+    trap 'kill "$quality_pid" 2>/dev/null' EXIT
+}
+
+# finish_quality: waits for the quality process, shows its output and sets run_code.
+finish_quality() {
+    wait "$quality_pid"
+    run_code=$?
+    trap - EXIT
+    cat "$gate_dir/quality.log" >&2
+}
+
+# measure_quality ARGS...: against a base that measures quality in every process, the head's
+# quality process is one of the timed ones: it runs alone, after the build, with the timing
+# processes' rounds.
 measure_quality() {
-    echo "ci/gate.sh: the head's quality process" >&2
-    "$head_bin" run --tier quick --repetitions "$quality_rounds" --sequences on --out "$gate_dir/head" "$@"
+    echo "ci/gate.sh: the head's quality process, timed like the base's" >&2
+    "$head_bin" run --tier quick --repetitions "$repetitions" --sequences on --out "$gate_dir/head" "$@"
     run_code=$?
 }
 
@@ -143,7 +165,8 @@ finished_runs() {
 
 # What cannot change a time: the baselines themselves, the documentation and the CI workflows.
 code_paths=(. ':(exclude)baselines' ':(exclude)*.md' ':(exclude)docs' ':(exclude).github' ':(exclude)ci/lint')
-started=$(date +%s)
+began=$(date +%s)
+started=$began
 if [ -z "$base" ]; then
     echo "ci/gate.sh: no base commit (no git history?): time is gated against the baselines only on the machine that blessed them" >&2
     strategy=baselines
@@ -183,6 +206,7 @@ else
     # gate against the same base builds nothing.
     toolchain=$( (rustc -vV && echo "${RUSTFLAGS:-}") | sha256sum | cut -c1-12)
     cached_base="${AABENCH_GATE_BASE_CACHE:-$base_target/bins}/$base-$toolchain/aabench"
+    start_quality "${shard_args[@]}" "${run_args[@]}"
     if [ -x "$cached_base" ]; then
         echo "ci/gate.sh: the base ${base:0:12}, built before: $cached_base" >&2
     else
@@ -205,23 +229,24 @@ else
             mv "$cached_base.tmp-$$" "$cached_base" || exit 2
     fi
     cp "$cached_base" "$gate_dir/bin/aabench-base" || exit 2
+    started=$(date +%s)
+    finish_quality
     # The timing processes time alone where the base's build can (`--quality off`); else both
     # sides measure quality in every process and only leave out the sequences where the base
-    # renders them, so that the two builds do the same work between their timed rounds.
+    # renders them, so that the two builds do the same work between their timed rounds, and the
+    # head's quality process is measured again, alone and timed.
     base_timing=()
     head_timing=(--sequences off)
-    quality_rounds=$repetitions
     base_help=$("$gate_dir/bin/aabench-base" run --help)
     if grep -q -- --quality <<<"$base_help"; then
         base_timing=(--quality off)
         head_timing=(--quality off)
-        quality_rounds=1
-    elif grep -q -- --sequences <<<"$base_help"; then
-        base_timing=(--sequences off)
+    else
+        if grep -q -- --sequences <<<"$base_help"; then base_timing=(--sequences off); fi
+        rm -rf "$gate_dir/head"
+        measure_quality "${shard_args[@]}" "${run_args[@]}"
     fi
     timed_by_both
-    started=$(date +%s)
-    measure_quality "${shard_args[@]}" "${run_args[@]}"
     alternate "$gate_dir" "${shard_args[@]}" "${run_args[@]}"
     head_runs=("$gate_dir"/head/*/)
     finished_runs "$gate_dir/base"
@@ -265,6 +290,6 @@ fi
 if [ -n "${GITHUB_STEP_SUMMARY:-}" ] && [ -f "$run_dir/summary.md" ]; then
     cat "$run_dir/summary.md" >>"$GITHUB_STEP_SUMMARY"
 fi
-echo "ci/gate.sh: $strategy gate, $(($(date +%s) - started)) s after the builds" >&2
+echo "ci/gate.sh: $strategy gate, $(($(date +%s) - started)) s after the builds, $(($(date +%s) - began)) s with the base's" >&2
 echo "ci/gate.sh: $run_dir/summary.md, junit.xml, verdict.json, index.html (exit $code)" >&2
 exit "$code"

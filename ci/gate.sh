@@ -20,10 +20,9 @@
 # that measures quality and the sequences while the base builds. The alternating processes
 # time alone (`--quality off`, where the base's build knows it) the modes the gate times
 # (`aabench modes --tier quick --timed-by-gate`: the unstalled ones and one stalled);
-# `aabench compare` then decides time
-# with the process as the unit. The scenes whose time regressed are measured again
-# in as many fresh processes a side, and a time regression stands only where those find it
-# again (`compare --confirm-runs`). When the code is the base's (only baselines or
+# `aabench compare` then decides time with the process as the unit. The scenes whose time
+# regressed are measured again in as many fresh processes a side, and a time regression stands
+# only where those find it again (`compare --confirm-runs`). When the code is the base's (only baselines or
 # docs changed), time cannot have changed through the change: one run of 5 rounds is compared
 # with the baselines and its time is reported, not gated. Without a usable base (no git history), one
 # run is compared with the baselines and time is gated only on the machine that blessed them.

@@ -7,7 +7,7 @@ use aabench_renderer::scene::shadow::face_and_coordinates;
 use aabench_renderer::scene::{
     Camera, DrawClass, Light, LightKind, Lighting, Material, Scene, Shadow, Vertex,
 };
-use aabench_renderer::{FrameImages, Mode, SceneRenderer, Technique};
+use aabench_renderer::{FrameImages, Mode, RenderSettings, SceneRenderer, Technique};
 use glam::{DVec3, Vec3};
 use support::*;
 
@@ -139,13 +139,16 @@ fn occluder_scene() -> (Scene, Camera) {
 }
 
 fn render_floor(shadow: Option<Shadow>) -> FrameImages {
+    render_floor_in(shadow, &deferred().to_string(), settings(96, 96))
+}
+
+/// The occluder scene's frame in `mode`, lit from (0, 2, 0).
+fn render_floor_in(shadow: Option<Shadow>, mode: &str, settings: RenderSettings) -> FrameImages {
     let (scene, camera) = occluder_scene();
     let (gpu, _guard) = gpu();
     let lighting = light(Vec3::new(0.0, 2.0, 0.0), shadow);
-    let mut renderer = SceneRenderer::new(gpu, &scene, &camera, &lighting, settings(96, 96)).unwrap();
-    let prepared = renderer.prepare(deferred()).unwrap();
-    prepared.render().unwrap();
-    prepared.read_images().unwrap()
+    let mut renderer = SceneRenderer::new(gpu, &scene, &camera, &lighting, settings).unwrap();
+    render(&mut renderer, mode)
 }
 
 /// Per pixel of the middle row: the fraction of the light that reaches it, from the shadowed
@@ -196,4 +199,50 @@ fn pcf_gives_a_soft_edge_that_widens_with_the_radius() {
     let (narrow, wide) = (penumbra(0.03), penumbra(0.12));
     assert!(narrow >= 2, "a soft edge on both sides: {narrow} partly lit pixels");
     assert!(wide >= narrow + 4, "radius 0.12 gives {wide} partly lit pixels, 0.03 gives {narrow}");
+}
+
+/// Inside a penumbra, PCF's visibility steps by a twentieth of the light wherever an occluder's
+/// edge crosses a tap's ray, so one sample misses the steps inside its pixel while its
+/// neighbours look alike to the luma cross. `-coverage`'s shadow term asks for samples there:
+/// on the floor under a wide penumbra every partly lit pixel takes more than one sample (the
+/// metric without the term leaves some at one), the fully lit and fully shadowed floor keep
+/// the counts they take without it, and the penumbra's squared error against reference-4x4
+/// falls by more than half.
+#[test]
+fn the_shadow_term_samples_the_penumbrae_that_the_luma_cross_misses() {
+    let shadow = Some(Shadow { resolution: 256, bias: 0.05, radius: 0.12 });
+    let mode = "adaptive-4x4-coverage";
+    let with = render_floor_in(shadow, mode, settings(96, 96));
+    let mut off = settings(96, 96);
+    off.adaptive.c_shadow = 0.0;
+    let without = render_floor_in(shadow, mode, off);
+    let reference = render_floor_in(shadow, "reference-4x4", settings(96, 96));
+    let (shadowed, open) = (render_floor(shadow), render_floor(None));
+    // Each pixel's share of the light from deferred shading, whose sample is S's.
+    let ambient = 0.02 * 0.5;
+    let visibility = |p: usize| (shadowed.hdr[4 * p] - ambient) / (open.hdr[4 * p] - ambient);
+    let pixels = (with.width * with.height) as usize;
+    let partial: Vec<usize> = (0..pixels).filter(|&p| (0.02..0.98).contains(&visibility(p))).collect();
+    let counts = |image: &FrameImages| image.sample_counts.clone().expect("sample counts");
+    let (counts_with, counts_without) = (counts(&with), counts(&without));
+    assert!(partial.len() >= 100, "only {} partly lit pixels", partial.len());
+    let single = |counts: &[u8]| partial.iter().filter(|&&p| counts[p] == 1).count();
+    assert!(single(&counts_without) > 0, "the luma cross sampled the whole penumbra: the test shows nothing");
+    assert_eq!(single(&counts_with), 0, "partly lit pixels left at one sample");
+    let elsewhere = (0..pixels).filter(|p| !partial.contains(p));
+    assert!(
+        elsewhere.into_iter().all(|p| counts_with[p] == counts_without[p]),
+        "counts moved outside the penumbra"
+    );
+    let error = |image: &FrameImages| -> f64 {
+        let channel = |p: usize, c: usize| {
+            f64::from(image.display.rgba[4 * p + c]) - f64::from(reference.display.rgba[4 * p + c])
+        };
+        partial.iter().map(|&p| (0..3).map(|c| channel(p, c).powi(2)).sum::<f64>()).sum()
+    };
+    let (error_with, error_without) = (error(&with), error(&without));
+    assert!(
+        error_with < 0.5 * error_without,
+        "squared error in the penumbra {error_with} with the term, {error_without} without"
+    );
 }

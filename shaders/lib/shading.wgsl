@@ -226,19 +226,23 @@ fn shade_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f
 
 // A shaded sample: its radiance (alpha: the stall's result), the albedo it was shaded with and
 // the radiance's slope in that albedo, with which the `-coverage` variant carries the light of
-// one sample to the albedos of the samples it stands for. Passes that read only `color` leave
-// the slope's arithmetic to dead-code elimination; `color` is computed by the same operations
+// one sample to the albedos of the samples it stands for; and `penumbra`, how fast its light
+// can change across the surface where a shadow's filter straddles an occluder's edge: the
+// luminance that each light seeing the sample partly would give it unshadowed, over that
+// light's filter radius in world units (`-coverage`'s shadow term reads it). Passes that read only
+// `color` leave the rest to dead-code elimination; `color` is computed by the same operations
 // either way.
 struct Lit {
     color: vec4<f32>,
     albedo: vec3<f32>,
     slope: vec3<f32>,
+    penumbra: f32,
 }
 
 fn light_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f32) -> Lit {
     let stalled = stall(texel);
     if s.material == BACKGROUND {
-        return Lit(vec4<f32>(frame.background.rgb, stalled), vec3<f32>(0.0), vec3<f32>(0.0));
+        return Lit(vec4<f32>(frame.background.rgb, stalled), vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
     }
     let material = materials[s.material];
     let albedo = surface_albedo(s, footprint);
@@ -281,6 +285,7 @@ fn light_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f
 #endif
     radiance += emitted;
 #endif
+    var penumbra = 0.0;
     for (var i = 0u; i < LIGHT_COUNT; i += 1u) {
         let light = lights.entries[i];
         let ray = light_ray(light, position);
@@ -302,7 +307,11 @@ fn light_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f
 #endif
 #ifdef SHADOWS
             if light.shadow >= 0 {
-                let visible = shadow_visibility(light, position, s.normal, length(frame.eye.xyz - position));
+                let view_distance = length(frame.eye.xyz - position);
+                let visible = shadow_visibility(light, position, s.normal, view_distance);
+                if visible > 0.0 && visible < 1.0 {
+                    penumbra += luminance(contribution) / pcf_radius(light, view_distance);
+                }
                 contribution *= visible;
                 contribution_slope *= visible;
             }
@@ -314,5 +323,10 @@ fn light_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f
     // The HDR targets are f16: radiance past their largest value (a light 10⁵ times the others
     // on a glossy highlight) would be stored as +Inf. It is kept at HALF_MAX instead, which
     // the tonemap reads as "brighter than anything shown".
-    return Lit(vec4<f32>(min(radiance, vec3<f32>(HALF_MAX)), stalled), albedo, min(slope, vec3<f32>(HALF_MAX)));
+    return Lit(
+        vec4<f32>(min(radiance, vec3<f32>(HALF_MAX)), stalled),
+        albedo,
+        min(slope, vec3<f32>(HALF_MAX)),
+        min(penumbra, HALF_MAX),
+    );
 }

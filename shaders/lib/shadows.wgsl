@@ -25,12 +25,17 @@ const PCF_OFFSETS = array<vec3<f32>, 20>(
     vec3<f32>(0.0, 1.0, 1.0), vec3<f32>(0.0, -1.0, 1.0), vec3<f32>(0.0, -1.0, -1.0), vec3<f32>(0.0, 1.0, -1.0),
 );
 
+// The radius of the PCF disk around a point seen from `view_distance`, in world units.
+fn pcf_radius(light: Light, view_distance: f32) -> f32 {
+    return light.shadow_radius * (1.0 + view_distance / light.range);
+}
+
 // The fraction of the PCF taps that see `position` (with unit `normal` facing the light) lit by
 // `light`, seen from `view_distance`.
 fn shadow_visibility(light: Light, position: vec3<f32>, normal: vec3<f32>, view_distance: f32) -> f32 {
     let to_surface = position - light.position;
     let distance = length(to_surface);
-    let radius = light.shadow_radius * (1.0 + view_distance / light.range);
+    let radius = pcf_radius(light, view_distance);
     // The light's signed distance to the tangent plane (negative: the normal faces the light).
     let plane = dot(to_surface, normal);
     let near = light.shadow_near;

@@ -254,6 +254,7 @@ pub struct AdaptiveSpec {
     pub c_depth: Option<f32>,
     pub c_normal: Option<f32>,
     pub c_shading: Option<f32>,
+    pub c_shadow: Option<f32>,
     pub t_min: Option<f32>,
     pub t_edge: Option<f32>,
     /// `-stable` modes: the share of the window the metric may ask for fewer without the count
@@ -270,6 +271,7 @@ impl AdaptiveSpec {
             ("c_depth", adaptive.c_depth),
             ("c_normal", adaptive.c_normal),
             ("c_shading", adaptive.c_shading),
+            ("c_shadow", adaptive.c_shadow),
         ];
         for (name, value) in constants {
             if !(0.0..=MAX_METRIC_CONSTANT).contains(&value) {
@@ -304,6 +306,7 @@ impl AdaptiveSpec {
             c_depth: self.c_depth.unwrap_or(depth_metric.default_c_depth()),
             c_normal: self.c_normal.unwrap_or(d.c_normal),
             c_shading: self.c_shading.unwrap_or(d.c_shading),
+            c_shadow: self.c_shadow.unwrap_or(d.c_shadow),
             t_min: self.t_min.unwrap_or(d.t_min),
             t_edge: self.t_edge.unwrap_or(d.t_edge),
             stable: StableCounts {

@@ -109,6 +109,7 @@ fn malformed_manifests_name_the_file_and_the_field() {
     check(|j| j["adaptive"] = json!({"stable_hold": 1.5}), "adaptive.stable_hold", "[0, 1]");
     check(|j| j["adaptive"] = json!({"stable_decay": -1}), "adaptive.stable_decay", "[0, 1]");
     check(|j| j["adaptive"] = json!({"c_depth": -1}), "adaptive.c_depth", "within [0, 1e12]");
+    check(|j| j["adaptive"] = json!({"c_shadow": -0.5}), "adaptive.c_shadow", "within [0, 1e12]");
     check(
         |j| j["adaptive"] = json!({"c_normal": 1e13}),
         "adaptive.c_normal",

@@ -201,7 +201,13 @@ fn evaluate_coverage(@builtin(position) position: vec4<f32>) -> CoverageOut {
     if FORCE_ALL {
         shaded = window;
     } else if USE_SHADING {
-        let extra = min(floor(shading_k(pixel) * f32(total) + 0.5), f32(total - 1u));
+        var k = shading_k(pixel);
+#ifdef SHADOWS
+        if SHADOW_DETAIL {
+            k = max(k, shadow_k(pixel));
+        }
+#endif
+        let extra = min(floor(k * f32(total) + 0.5), f32(total - 1u));
         for (var rank = 1u; rank <= u32(extra); rank += 1u) {
             shaded |= 1u << window_cell(rank);
         }
@@ -257,7 +263,7 @@ fn shade_first_coverage(@builtin(position) position: vec4<f32>) -> ShadeOut {
     let cell = sample_cell(1u, 0u);
     let moved = move_on_surface(texel, cell.yz);
     let lit = light_surface(texel, moved.surface, moved.position, cell.w);
-    return ShadeOut(lit.color, vec4<f32>(lit.slope, 0.0));
+    return ShadeOut(lit.color, vec4<f32>(lit.slope, lit.penumbra));
 }
 
 // A listed sample, shaded for the cells it stands for. Where textures vary inside its pixel,
@@ -278,9 +284,41 @@ fn shade_group(@builtin(position) position: vec4<f32>) -> ShadeOut {
     return ShadeOut(color, vec4<f32>(lit.slope, 0.0));
 }
 
-// The slopes in albedo that shade_first_coverage and shade_group wrote beside their colours.
+// The slopes in albedo that shade_first_coverage and shade_group wrote beside their colours
+// (S's alpha: its light's penumbra, Lit.penumbra).
 @group(2) @binding(14) var first_slope: texture_2d<f32>;
 @group(2) @binding(15) var extra_slopes: texture_2d<f32>;
+
+// The shading metric also asks for samples where S lies in a shadow's penumbra (`-coverage`):
+// there the filtered visibility steps by a twentieth of the light (one PCF tap) wherever an
+// occluder's edge crosses a tap's ray, so S's one sample misses steps inside the pixel that
+// change it by less than the luma cross's thresholds notice, but by more than a code value.
+override SHADOW_DETAIL: bool;
+override C_SHADOW: f32;
+
+#ifdef SHADOWS
+
+// C_SHADOW times the luma range by which S's light can change across the pixel in a
+// penumbra: S's penumbra rate (light per world unit of the filter's radius) over the pixel's
+// reach on S's surface, spread over the √3 radii by which the filter's taps lean. Unlike the
+// luma cross, it is not held to T_MIN and T_EDGE: a penumbra's steps are small everywhere.
+fn shadow_k(pixel: vec2<i32>) -> f32 {
+    let rate = textureLoad(first_slope, pixel, 0).a;
+    if !(rate > 0.0) {
+        return 0.0;
+    }
+    let texel = window_texel(pixel, 0u);
+    let nm = load_normal_material(texel);
+    let depth = linear_depth(texel);
+    let v = normalize(frame.eye.xyz - world_position(texel, depth));
+    let reach = surface_reach(pixel_rays(pixel), nm.xyz, depth, v);
+    let spread = min(rate * reach * (1.0 / 1.7320508), HALF_MAX);
+    let lum = luminance(sanitize3(textureLoad(first, pixel, 0).rgb));
+    let exposure = frame.display.x;
+    let range = shown_luma((lum + 0.5 * spread) * exposure) - shown_luma(max(lum - 0.5 * spread, 0.0) * exposure);
+    return C_SHADOW * range;
+}
+#endif
 
 // The albedo of the sample at `texel` as the reference reads it; black for the background,
 // whose slope is 0.

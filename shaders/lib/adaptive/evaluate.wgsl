@@ -187,11 +187,27 @@ fn pixel_turn(pixel: vec2<i32>, material: i32, normal: vec3<f32>, depth: f32, v:
             min_cos = min(min_cos, dot(nm.xyz, normal));
         }
     }
-    let centre = view_ray(vec2<f32>(origin) + 0.5 * f32(M));
-    let half_diagonal = length(centre - view_ray(vec2<f32>(origin)));
-    let eye = half_diagonal / length(centre);
-    let reach = depth * half_diagonal / max(abs(dot(normal, v)), 0.25);
-    return Turn(acos(clamp(min_cos, -1.0, 1.0)) + 0.5 * eye, reach);
+    let rays = pixel_rays(pixel);
+    let eye = rays.half_diagonal / length(rays.centre);
+    return Turn(acos(clamp(min_cos, -1.0, 1.0)) + 0.5 * eye, surface_reach(rays, normal, depth, v));
+}
+
+// The view ray through the pixel's centre, and how far the ray through its corner lies from it.
+struct PixelRays {
+    centre: vec3<f32>,
+    half_diagonal: f32,
+}
+
+fn pixel_rays(pixel: vec2<i32>) -> PixelRays {
+    let origin = vec2<f32>(pixel * i32(M));
+    let centre = view_ray(origin + 0.5 * f32(M));
+    return PixelRays(centre, length(centre - view_ray(origin)));
+}
+
+// The pixel's half-diagonal on a surface of unit `normal` at view depth `depth` seen along `v`, in
+// world units: a grazing view stretches it (at most fourfold).
+fn surface_reach(rays: PixelRays, normal: vec3<f32>, depth: f32, v: vec3<f32>) -> f32 {
+    return depth * rays.half_diagonal / max(abs(dot(normal, v)), 0.25);
 }
 
 // A light whose lobe (about `a` radians wide) spans more than this many of the pixel's turns

@@ -132,12 +132,16 @@ pub(crate) fn add(frame: &mut Frame, variant: Variant, m: u32, stalled: bool) ->
         tonemap: frame.color.tonemap,
         counts,
         moving: frame.moving,
+        shadows: cubes.is_some(),
     };
-    let reads = evaluate_node.gbuffer_reads();
+    let (reads, penumbra) = (evaluate_node.gbuffer_reads(), evaluate_node.reads_penumbra());
     let g = &mut frame.graph;
     let evaluate = super::add(g, evaluate_node);
     g.connect_all(sources.gbuffer, evaluate, reads);
     g.connect(first, "first", evaluate, "first");
+    if penumbra {
+        g.connect(first, "first_slope", evaluate, "first_slope");
+    }
     g.retain(evaluate, "counts", Output::SampleCounts);
     if counts == Counts::Stable {
         if frame.moving {

@@ -173,6 +173,8 @@ pub(crate) struct EvaluateNode {
     /// Objects move: under `Stable`, the pass follows each window's nearest sample back by the
     /// G-buffer's motion vectors.
     pub moving: bool,
+    /// Lights cast shadows: under `Coverage`, the shading metric also reads S's penumbra.
+    pub shadows: bool,
 }
 
 impl EvaluateNode {
@@ -181,6 +183,18 @@ impl EvaluateNode {
     fn light_detail(&self) -> bool {
         matches!(self.reconstruction, Reconstruction::Cells | Reconstruction::Coverage)
             && self.metrics != Metrics::Geometry
+    }
+
+    /// Whether the pass reads the penumbra rate that S's shading wrote beside its slope
+    /// (`-coverage`, in a scene with shadows; the term is compiled in there, though a metric
+    /// without shading switches it off).
+    pub fn reads_penumbra(&self) -> bool {
+        self.reconstruction == Reconstruction::Coverage && self.shadows
+    }
+
+    /// Whether the shading metric asks for samples in the penumbrae that S lies in.
+    fn shadow_detail(&self) -> bool {
+        self.reads_penumbra() && self.metrics != Metrics::Geometry
     }
 
     /// The G-buffer ports the pass reads: normals and depths; the UVs in a textured scene (for
@@ -206,6 +220,9 @@ impl Node for EvaluateNode {
         if self.reconstruction == Reconstruction::Coverage {
             ports.push(Port::new("groups", groups(), Access::Attachment));
         }
+        if self.reads_penumbra() {
+            ports.push(Port::new("first_slope", first_slope(), Access::Loaded));
+        }
         if self.counts == Counts::Stable {
             ports.extend([
                 Port::new("count_history", count_history(), Access::Loaded),
@@ -226,6 +243,7 @@ impl Node for EvaluateNode {
             .flag("RELATIVE_DEPTH", s.depth_metric == DepthMetric::Relative)
             .with("C_NORMAL", s.c_normal)
             .with("C_SHADING", s.c_shading)
+            .with("C_SHADOW", s.c_shadow)
             .with("T_MIN", s.t_min)
             .with("T_EDGE", s.t_edge)
             .flag("USE_GEOMETRY", self.metrics != Metrics::Shading)
@@ -239,6 +257,7 @@ impl Node for EvaluateNode {
             )
             // Both variants also bound specular highlights inside the pixel from the lights.
             .flag("LIGHT_DETAIL", self.light_detail())
+            .flag("SHADOW_DETAIL", self.shadow_detail())
             .with("SURFACE_COS", SURFACE_COS)
             .with("SURFACE_GAP", SURFACE_GAP);
         let constants = match self.counts {

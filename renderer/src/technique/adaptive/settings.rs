@@ -58,6 +58,9 @@ pub struct AdaptiveSettings {
     pub c_normal: f32,
     /// Scales the luminance range r of the shade-first image.
     pub c_shading: f32,
+    /// Scales the luma range by which a penumbra can change S's light inside the pixel
+    /// (`-coverage` in scenes with shadows); not held to the thresholds below.
+    pub c_shadow: f32,
     /// The range r counts only above max(t_min, l_max · t_edge) (FXAA's two thresholds).
     pub t_min: f32,
     pub t_edge: f32,
@@ -76,6 +79,7 @@ impl Default for AdaptiveSettings {
             c_depth: DepthMetric::Relative.default_c_depth(),
             c_normal: 1.0,
             c_shading: 2.0,
+            c_shadow: 24.0,
             t_min: 1.0 / 32.0,
             t_edge: 1.0 / 8.0,
             force_all_samples: false,

@@ -312,11 +312,8 @@ fn shadow_k(pixel: vec2<i32>) -> f32 {
     let depth = linear_depth(texel);
     let v = normalize(frame.eye.xyz - world_position(texel, depth));
     let reach = surface_reach(pixel_rays(pixel), nm.xyz, depth, v);
-    let spread = min(rate * reach * (1.0 / 1.7320508), HALF_MAX);
-    let lum = luminance(sanitize3(textureLoad(first, pixel, 0).rgb));
-    let exposure = frame.display.x;
-    let range = shown_luma((lum + 0.5 * spread) * exposure) - shown_luma(max(lum - 0.5 * spread, 0.0) * exposure);
-    return C_SHADOW * range;
+    let half_spread = min(rate * reach * (0.5 / 1.7320508), HALF_MAX);
+    return C_SHADOW * shown_span(pixel, half_spread, half_spread);
 }
 #endif
 

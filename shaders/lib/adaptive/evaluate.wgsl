@@ -268,6 +268,12 @@ fn specular_range(pixel: vec2<i32>) -> f32 {
         above += weight * (highest - here);
         below += weight * (here - lowest);
     }
+    return shown_span(pixel, above, below);
+}
+
+// The metric's luma range from S's luminance lowered by `below` to it raised by `above`, as the
+// display shows them (shown_luma).
+fn shown_span(pixel: vec2<i32>, above: f32, below: f32) -> f32 {
     let exposure = frame.display.x;
     let lum = luminance(sanitize3(textureLoad(first, pixel, 0).rgb));
     return shown_luma((lum + above) * exposure) - shown_luma((lum - below) * exposure);

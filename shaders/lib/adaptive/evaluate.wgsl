@@ -57,12 +57,16 @@ fn add_depth_row(sums: ptr<function, DepthSums>, left: vec2<f32>, right: vec2<f3
 // The window's depth sums in row-major order, the order of a loop over its texels, so the
 // variance is the same bits as such a loop's.
 fn window_depths(origin: vec2<i32>) -> DepthSums {
-    var sums = DepthSums(linear_depth(origin), 0.0, 0.0);
+    var sums = DepthSums(0.0, 0.0, 0.0);
     for (var row = 0u; row < M; row += 2u) {
         let left = depth_block(origin + vec2<i32>(0, i32(row)));
         var right = vec4<f32>(0.0);
         if M > 2u {
             right = depth_block(origin + vec2<i32>(2, i32(row)));
+        }
+        if row == 0u {
+            // The window's first depth: its top-left texel, read in the first block.
+            sums.shift = left.w;
         }
         add_depth_row(&sums, left.wz, right.wz);
         if row + 1u < M {
@@ -84,13 +88,16 @@ fn geometry_k(pixel: vec2<i32>) -> f32 {
     let origin = pixel * i32(M);
     var covered = 0u;
     var normal_sum = vec3<f32>(0.0);
+    // Each normal is read once and kept for the cone's second loop: reading it again there cost
+    // more than keeping sixteen vectors (M ≤ 4).
+    var units: array<vec3<f32>, 16>;
     for (var i = 0u; i < n; i += 1u) {
         let nm = load_normal_material(origin + vec2<i32>(i32(i % M), i32(i / M)));
         let length_n = length(nm.xyz);
         covered += u32(i32(nm.w) != BACKGROUND);
-        normal_sum += select(vec3<f32>(0.0), nm.xyz / length_n, length_n > 1e-6);
+        units[i] = select(vec3<f32>(0.0), nm.xyz / length_n, length_n > 1e-6);
+        normal_sum += units[i];
     }
-    let depths = window_depths(origin);
     if covered == 0u {
         return 0.0;
     }
@@ -98,6 +105,8 @@ fn geometry_k(pixel: vec2<i32>) -> f32 {
         // A silhouette against the background.
         return 1.0;
     }
+    // Only a window that geometry covers reads its depths.
+    let depths = window_depths(origin);
     var variance = max(depths.square_sum - depths.sum * depths.sum / f32(n), 0.0) / f32(n);
     if RELATIVE_DEPTH {
         let mean = depths.shift + depths.sum / f32(n);
@@ -109,10 +118,7 @@ fn geometry_k(pixel: vec2<i32>) -> f32 {
         let mean_normal = normal_sum / sum_length;
         var min_cos = 1.0;
         for (var i = 0u; i < n; i += 1u) {
-            let normal = load_normal_material(origin + vec2<i32>(i32(i % M), i32(i / M))).xyz;
-            let length_n = length(normal);
-            let unit = select(vec3<f32>(0.0), normal / length_n, length_n > 1e-6);
-            min_cos = min(min_cos, abs(dot(unit, mean_normal)));
+            min_cos = min(min_cos, abs(dot(units[i], mean_normal)));
         }
         cone = sqrt(max(1.0 - min_cos, 0.0));
     }

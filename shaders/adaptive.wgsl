@@ -52,13 +52,23 @@ override CELLS: bool;
 // variant); S is shaded as under CELLS.
 override COVERAGE: bool;
 
+// Whether the scene has textures: only through them can S differ from the reference's sample
+// at rank 0, whose texture footprint is one G-buffer texel where S's spans the pixel
+// (`footprint`).
+#ifdef TEXTURED
+const TEXTURED_SCENE: bool = true;
+#else
+const TEXTURED_SCENE: bool = false;
+#endif
+
 // The first rank a pixel of n samples shades after S. A pixel that takes its whole window is
-// shaded exactly like the reference: rank 0 again, at the reference's footprint, instead of
-// reusing S (whose footprint spans the pixel). Any other pixel reuses S, as the paper does,
-// except under CELLS, where S stands for the whole pixel and so for no cell of one that takes
-// more samples (technique/adaptive: Reconstruction::reshades_first).
+// shaded exactly like the reference: in a scene with textures, rank 0 again at the reference's
+// footprint instead of reusing S; without textures S is that same sample (the same texel,
+// shaded alike) and is reused. Any other pixel reuses S, as the paper does, except under CELLS, where S stands for
+// the whole pixel and so for no cell of one that takes more samples (technique/adaptive:
+// Reconstruction::reshades_first).
 fn first_extra_rank(n: u32) -> u32 {
-    return select(1u, 0u, n == M * M || ((CELLS || COVERAGE) && n > 1u));
+    return select(1u, 0u, (TEXTURED_SCENE && n == M * M) || ((CELLS || COVERAGE) && n > 1u));
 }
 
 // Entry (n − 1)·M² + rank: the cell of sample `rank` among the first n, as (its share of the

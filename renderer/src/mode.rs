@@ -132,12 +132,13 @@ impl Mode {
         }
     }
 
-    /// Whether a pixel of `n` samples shades its first sample a second time: adaptive modes
-    /// whose S stands for the whole pixel (see [`Reconstruction::reshades_first`]); never
-    /// MSAA, whose pixels of four samples skip the shading at the centre.
-    pub fn reshades_first(&self, n: u32) -> bool {
+    /// Whether a pixel of `n` samples shades its first sample a second time, in a scene with
+    /// or without textures: adaptive modes whose S stands for the whole pixel or filters its
+    /// textures (see [`Reconstruction::reshades_first`]); never MSAA, whose pixels of four
+    /// samples skip the shading at the centre.
+    pub fn reshades_first(&self, n: u32, textured: bool) -> bool {
         match self.technique {
-            Technique::Adaptive(_, reconstruction, _) => reconstruction.reshades_first(self.m, n),
+            Technique::Adaptive(_, reconstruction, _) => reconstruction.reshades_first(self.m, n, textured),
             _ => false,
         }
     }

@@ -40,7 +40,7 @@ fn quality(c: &mut Criterion) {
     });
     let counts: Vec<u8> = (0..WIDTH * HEIGHT).map(|p| 1 + (p % 16) as u8).collect();
     c.bench_function("sample_stats 1024x768 at 4x4", |bench| {
-        bench.iter(|| metrics::sample_stats(black_box(&counts), ADAPTIVE_4X4).unwrap())
+        bench.iter(|| metrics::sample_stats(black_box(&counts), ADAPTIVE_4X4, true).unwrap())
     });
 }
 

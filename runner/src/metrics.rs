@@ -142,11 +142,13 @@ pub struct SampleStats {
     pub shaded: u64,
     /// M²·w·h.
     pub total: u64,
-    /// Pixels that took all M² samples. Their S is shaded again at the reference's footprint
-    /// (so they equal the reference), one sample of work that `shaded` does not count.
+    /// Pixels that took all M² samples. In a scene with textures their S is shaded again at
+    /// the reference's footprint (so they equal the reference), one sample of work that
+    /// `shaded` does not count; without textures S is that sample and is reused.
     pub full_pixels: u64,
     /// Pixels whose S was shaded again, one sample of work each that `shaded` does not count:
-    /// the full pixels, and under `-cells` every pixel of more than one sample.
+    /// the full pixels of a textured scene, and under `-cells` and `-coverage` every pixel of
+    /// more than one sample.
     #[serde(default)]
     pub reshaded: u64,
     /// Every shading evaluation over M²·w·h, in percent: (shaded + reshaded) / total.
@@ -155,9 +157,10 @@ pub struct SampleStats {
     pub histogram: Vec<u64>,
 }
 
-/// Statistics of a sample-count map of `mode`. Counts outside [1, M²] are a bug upstream:
+/// Statistics of a sample-count map of `mode` in a scene with or without textures (which
+/// decides whether full windows shade S again). Counts outside [1, M²] are a bug upstream:
 /// `Err` says so.
-pub fn sample_stats(counts: &[u8], mode: Mode) -> Result<SampleStats, String> {
+pub fn sample_stats(counts: &[u8], mode: Mode, textured: bool) -> Result<SampleStats, String> {
     let m = mode.m;
     let window = (m * m) as usize;
     let mut histogram = vec![0u64; window];
@@ -169,8 +172,10 @@ pub fn sample_stats(counts: &[u8], mode: Mode) -> Result<SampleStats, String> {
     }
     let shaded: u64 = counts.iter().map(|&n| u64::from(n)).sum();
     let full_pixels = histogram[window - 1];
-    let reshaded =
-        (1..=window as u32).filter(|&n| mode.reshades_first(n)).map(|n| histogram[n as usize - 1]).sum();
+    let reshaded = (1..=window as u32)
+        .filter(|&n| mode.reshades_first(n, textured))
+        .map(|n| histogram[n as usize - 1])
+        .sum();
     let total = (window * counts.len()) as u64;
     let percent = |count: u64| 100.0 * count as f64 / total.max(1) as f64;
     Ok(SampleStats {
@@ -289,18 +294,24 @@ mod tests {
         let adaptive = |reconstruction| {
             Mode::new(Technique::Adaptive(Metrics::Both, reconstruction, Counts::PerFrame), 2, false)
         };
-        let stats = sample_stats(&[1, 1, 4, 2], adaptive(Reconstruction::Equal)).unwrap();
+        let stats = sample_stats(&[1, 1, 4, 2], adaptive(Reconstruction::Equal), true).unwrap();
         assert_eq!(stats.histogram, vec![2, 1, 0, 1]);
-        assert_eq!((stats.shaded, stats.total, stats.full_pixels), (8, 16, 1));
+        assert_eq!((stats.shaded, stats.total, stats.full_pixels, stats.reshaded), (8, 16, 1, 1));
         assert_eq!((stats.shaded_percent, stats.work_percent), (50.0, 56.25));
-        let cells = sample_stats(&[1, 1, 4, 2], adaptive(Reconstruction::Cells)).unwrap();
-        assert_eq!((cells.shaded, cells.full_pixels, cells.reshaded), (8, 1, 2));
-        assert_eq!(cells.work_percent, 100.0 * 10.0 / 16.0);
+        // Without textures the full pixel reuses S: no work beyond its samples.
+        let plain = sample_stats(&[1, 1, 4, 2], adaptive(Reconstruction::Equal), false).unwrap();
+        assert_eq!((plain.full_pixels, plain.reshaded, plain.work_percent), (1, 0, 50.0));
+        // `-cells` shades S again in every pixel of more than one sample, textures or not.
+        for textured in [true, false] {
+            let cells = sample_stats(&[1, 1, 4, 2], adaptive(Reconstruction::Cells), textured).unwrap();
+            assert_eq!((cells.shaded, cells.full_pixels, cells.reshaded), (8, 1, 2));
+            assert_eq!(cells.work_percent, 100.0 * 10.0 / 16.0);
+        }
         // MSAA shades a pixel of four samples four times, not five.
-        let msaa = sample_stats(&[1, 1, 4, 4], Mode::new(Technique::Msaa, 2, false)).unwrap();
+        let msaa = sample_stats(&[1, 1, 4, 4], Mode::new(Technique::Msaa, 2, false), true).unwrap();
         assert_eq!((msaa.shaded, msaa.reshaded, msaa.work_percent), (10, 0, msaa.shaded_percent));
-        assert!(sample_stats(&[0], adaptive(Reconstruction::Equal)).is_err());
-        assert!(sample_stats(&[5], adaptive(Reconstruction::Equal)).is_err());
+        assert!(sample_stats(&[0], adaptive(Reconstruction::Equal), true).is_err());
+        assert!(sample_stats(&[5], adaptive(Reconstruction::Equal), true).is_err());
     }
 }
 

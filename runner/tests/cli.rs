@@ -72,12 +72,16 @@ fn a_run_writes_its_record_and_images_and_exits_zero() {
     assert_eq!(samples["histogram"].as_array().unwrap().len(), 4);
     assert!(adaptive["adaptive"]["speedup"].as_f64().unwrap() > 0.0);
     // The per-sample cost model: extra samples counted as the histogram says (n − 1 per pixel,
-    // plus one for each full pixel), their cost and the reference's, the list's and gather's
-    // shares of the frame.
+    // plus one for each full pixel that shades S again: none in a scene without textures, where
+    // S is the reference's first sample), their cost and the reference's, the list's and
+    // gather's shares of the frame.
     let cost = &adaptive["adaptive"]["samples"];
     let histogram: Vec<u64> =
         samples["histogram"].as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).collect();
-    let extra: u64 = histogram.iter().enumerate().map(|(i, n)| n * i as u64).sum::<u64>() + histogram[3];
+    assert_eq!(scene["textures"], 0);
+    assert!(histogram[3] > 0 && samples["full_pixels"].as_u64() == Some(histogram[3]), "{samples}");
+    assert_eq!(samples["reshaded"], 0, "{samples}");
+    let extra: u64 = histogram.iter().enumerate().map(|(i, n)| n * i as u64).sum::<u64>();
     assert_eq!(cost["extra_samples"].as_u64(), Some(extra), "{cost}");
     let ratio = cost["extra_sample_ns"].as_f64().unwrap() / cost["reference_sample_ns"].as_f64().unwrap();
     assert!((ratio - cost["extra_sample_cost"].as_f64().unwrap()).abs() < 1e-9 && ratio > 0.0, "{cost}");

@@ -52,6 +52,7 @@ pub(super) async fn finish_modes(
                 truth: truth.clone(),
                 scene_dir: scene.dir.clone(),
                 scene_name: scene.manifest.name.clone(),
+                textured: scene.textured,
             };
             Some(tokio::task::spawn_blocking(move || task.run()))
         })
@@ -88,7 +89,7 @@ fn timing_records(scene: &SceneRun, runs: &[ModeRun], interrupted: bool) -> Vec<
             (Some(own), Some(base)) if base > 0.0 => Some(own.median / base),
             _ => None,
         };
-        record.adaptive = adaptive_cost(modes, runs, *mode, run);
+        record.adaptive = adaptive_cost(modes, runs, *mode, run, scene.textured);
     }
     records
 }
@@ -103,6 +104,7 @@ struct ModeTask {
     truth: Option<Arc<metrics::Truth>>,
     scene_dir: std::path::PathBuf,
     scene_name: String,
+    textured: bool,
 }
 
 impl ModeTask {
@@ -123,7 +125,8 @@ impl ModeTask {
             Some((i, _)) => Some(display(i)),
             None => self.truth.as_deref().map(|truth| &truth.image),
         };
-        let samples = own.sample_counts.as_ref().map(|counts| metrics::sample_stats(counts, self.mode));
+        let samples =
+            own.sample_counts.as_ref().map(|counts| metrics::sample_stats(counts, self.mode, self.textured));
         let mut files = ImageFiles::default();
         let written = write_mode_images(
             &self.scene_dir,
@@ -276,8 +279,14 @@ fn frame_median(run: &ModeRun) -> Option<f64> {
 }
 
 /// Speed-up over the same-M reference with the same stall, and the cost limit (see
-/// [`AdaptiveCost`]).
-fn adaptive_cost(modes: &[Mode], runs: &[ModeRun], mode: Mode, run: &ModeRun) -> Option<AdaptiveCost> {
+/// [`AdaptiveCost`]), in a scene with or without textures.
+fn adaptive_cost(
+    modes: &[Mode],
+    runs: &[ModeRun],
+    mode: Mode,
+    run: &ModeRun,
+    textured: bool,
+) -> Option<AdaptiveCost> {
     if !matches!(mode.technique, Technique::Adaptive(..)) {
         return None;
     }
@@ -285,7 +294,7 @@ fn adaptive_cost(modes: &[Mode], runs: &[ModeRun], mode: Mode, run: &ModeRun) ->
     let reference_run = &runs[modes.iter().position(|m| *m == reference)?];
     let own = frame_median(run)?;
     let counts = run.images.as_ref()?.sample_counts.as_ref()?;
-    let stats = metrics::sample_stats(counts, mode).ok()?;
+    let stats = metrics::sample_stats(counts, mode, textured).ok()?;
     // Shading work beyond S, as a fraction of the reference's.
     let pixels = counts.len() as f64;
     let extra_fraction = ((stats.shaded + stats.reshaded) as f64 - pixels) / stats.total as f64;

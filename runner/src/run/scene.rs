@@ -36,6 +36,9 @@ pub(super) struct SceneRun<'a> {
     pub resolution: [u32; 2],
     /// The scene's folder in the run's: `<run>/<scene>/`.
     pub dir: PathBuf,
+    /// Whether a material samples a texture: where none does, an adaptive mode's full windows
+    /// reuse S (see `sample_stats`). Known once the scene is loaded.
+    pub textured: bool,
 }
 
 impl<'a> SceneRun<'a> {
@@ -48,7 +51,7 @@ impl<'a> SceneRun<'a> {
     ) -> SceneRun<'a> {
         let resolution = plan.tier.resolution(manifest);
         let dir = plan.run_dir.join(&manifest.name);
-        SceneRun { worker, plan, manifest, progress, cancel, resolution, dir }
+        SceneRun { worker, plan, manifest, progress, cancel, resolution, dir, textured: false }
     }
 
     /// Whether a signal asked the run to stop.
@@ -78,6 +81,7 @@ impl<'a> SceneRun<'a> {
             Err(error) => return fail(record, error),
         };
         let (still_camera, pivot) = (loaded.camera, loaded.pivot);
+        self.textured = loaded.scene.is_textured();
         match self.upload(loaded).await {
             Ok((budget, exposure)) => {
                 record.memory_limit_bytes = budget;

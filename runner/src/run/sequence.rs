@@ -253,7 +253,7 @@ async fn render_frames(
             match render(scene, index, mode.m, frame).await {
                 Ok(Ok(rendered)) => {
                     keep(index + 1, &rendered.display);
-                    state.add(*mode, rendered, &pair, flicker);
+                    state.add(*mode, rendered, &pair, flicker, scene.textured);
                 }
                 Ok(Err(error)) => state.error = Some(error),
                 // The worker is gone or stuck: no later frame can render.
@@ -438,11 +438,11 @@ impl ModeState {
     /// Adds a frame: its error against the truth's frame and, from the frame before, its error
     /// along the truth's motion (each pixel's flicker also added to `flicker`), and the change
     /// of its error, of its image and of its sample counts.
-    fn add(&mut self, mode: Mode, frame: ModeFrame, truth: &TruthPair, flicker: &mut [f64]) {
+    fn add(&mut self, mode: Mode, frame: ModeFrame, truth: &TruthPair, flicker: &mut [f64], textured: bool) {
         self.checks.add(frame.checks);
         // Counts outside the window are reported by the frame's checks.
         if let Some(stats) =
-            frame.counts.as_deref().and_then(|counts| metrics::sample_stats(counts, mode).ok())
+            frame.counts.as_deref().and_then(|counts| metrics::sample_stats(counts, mode, textured).ok())
         {
             self.shaded_percent.push(stats.shaded_percent);
         }

@@ -52,10 +52,12 @@ impl Reconstruction {
     }
 
     /// Whether a pixel of `n` of `m`² samples shades its first sample again instead of
-    /// reusing S: every full window does (to equal the reference), and under `Cells` and
-    /// `Coverage` every pixel of more than one sample.
-    pub fn reshades_first(self, m: u32, n: u32) -> bool {
-        n == m * m || (matches!(self, Reconstruction::Cells | Reconstruction::Coverage) && n > 1)
+    /// reusing S: under `Cells` and `Coverage` every pixel of more than one sample, and a full
+    /// window in a `textured` scene, to equal the reference (S filters textures over the whole
+    /// pixel). Without textures S is the reference's first sample, and a full window reuses it.
+    pub fn reshades_first(self, m: u32, n: u32, textured: bool) -> bool {
+        (textured && n == m * m)
+            || (matches!(self, Reconstruction::Cells | Reconstruction::Coverage) && n > 1)
     }
 }
 

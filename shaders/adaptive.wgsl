@@ -64,9 +64,9 @@ const TEXTURED_SCENE: bool = false;
 // The first rank a pixel of n samples shades after S. A pixel that takes its whole window is
 // shaded exactly like the reference: in a scene with textures, rank 0 again at the reference's
 // footprint instead of reusing S; without textures S is that same sample (the same texel,
-// shaded alike) and is reused. Any other pixel reuses S, as the paper does, except under CELLS, where S stands for
-// the whole pixel and so for no cell of one that takes more samples (technique/adaptive:
-// Reconstruction::reshades_first).
+// shaded alike) and is reused. Any other pixel reuses S, as the paper does, except under
+// CELLS, where S stands for the whole pixel and so for no cell of one that takes more samples
+// (technique/adaptive: Reconstruction::reshades_first).
 fn first_extra_rank(n: u32) -> u32 {
     return select(1u, 0u, (TEXTURED_SCENE && n == M * M) || ((CELLS || COVERAGE) && n > 1u));
 }

@@ -614,6 +614,11 @@ pub struct ModeSequence {
     /// still's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub frame_ms: Option<Summary>,
+    /// The mode whose frames these are, where this one rendered no path of its own: a stalled
+    /// mode whose still is its unstalled twin's to the bit (the stall changes the time, not the
+    /// image). Such a sequence has no `frame_ms`; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frames_of: Option<String>,
     /// What lag costs: the error where the frame before did not see the surface, at moving
     /// silhouettes and elsewhere, by the truth's motion (`temporal.rs`).
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -229,10 +229,19 @@ fn moving_thin(name: &str, size: [u32; 2]) -> Workspace {
 fn taa_flickers_less_than_deferred_on_a_moving_thin_scene_and_reports_what_lag_costs() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let ws = moving_thin("taa-thin", [128, 96]);
-    let output = ws.run(&["run", "--modes", "deferred-1x1,taa", "--repetitions", "2"]);
+    let output = ws.run(&["run", "--modes", "deferred-1x1,taa,taa-stalled", "--repetitions", "2"]);
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
     let scene = &ws.record()["scenes"][0];
     let (deferred, taa) = (sequence(scene, "deferred-1x1", 8), sequence(scene, "taa", 8));
+    // The stalled twin's still is taa's to the bit: it takes taa's frames instead of rendering
+    // the path again, and says so; it has no time of its own along the path.
+    let mut stalled = sequence(scene, "taa-stalled", 8).clone();
+    assert_eq!(stalled["frames_of"], "taa", "{stalled}");
+    assert!(stalled.get("frame_ms").is_none() && taa["frame_ms"]["samples"].as_array().unwrap().len() == 7);
+    let object = stalled.as_object_mut().unwrap();
+    object.remove("frames_of");
+    object.insert("frame_ms".into(), taa["frame_ms"].clone());
+    assert_eq!(&stalled, taa);
     let flicker = |s: &Value| s["flicker"].as_f64().unwrap();
     assert!(flicker(taa) < flicker(deferred), "taa {:e}, deferred-1x1 {:e}", flicker(taa), flicker(deferred));
     // Its path starts from its still, the last of its warm-up frames at the first camera.
@@ -262,6 +271,8 @@ fn taa_flickers_less_than_deferred_on_a_moving_thin_scene_and_reports_what_lag_c
     );
     let row = markdown.lines().find(|l| l.starts_with("| taa | ") && l.contains(" · ")).expect("taa's row");
     assert!(row.contains(&format!("{:.3}", flicker(taa) * 1e4)), "{row}");
+    let row = markdown.lines().find(|l| l.starts_with("| taa-stalled | ") && l.contains(" · ")).unwrap();
+    assert!(row.starts_with("| taa-stalled | taa's frames | "), "{row}");
     let plot = std::fs::read_to_string(ws.dir.join("figures/thin-front-flicker.svg")).unwrap();
     assert!(plot.contains("flicker against run time") && plot.contains("taa"), "{plot}");
     // Which technique: along the path, and the still without TAA.

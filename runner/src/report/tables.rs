@@ -66,13 +66,12 @@ pub fn sequence_cells(mode: &ModeRecord, index: usize) -> Option<Vec<String>> {
     });
     let metrics = vocabulary::columns(Table::Path)
         .map(|(metric, column)| vocabulary::cell(metric, column, mode, index));
-    Some(
-        [mode.mode.clone(), cell(sequence.frame_ms.as_ref().map(|f| format!("{:.1}", f.median)))]
-            .into_iter()
-            .chain(metrics)
-            .chain([cell(ghosting)])
-            .collect(),
-    )
+    // A stalled mode that took its twin's frames has no time of its own along the path.
+    let frame = match (&sequence.frame_ms, &sequence.frames_of) {
+        (Some(frame), _) => Some(format!("{:.1}", frame.median)),
+        (None, twin) => twin.as_ref().map(|twin| format!("{twin}'s frames")),
+    };
+    Some([mode.mode.clone(), cell(frame)].into_iter().chain(metrics).chain([cell(ghosting)]).collect())
 }
 
 /// The scene's modes along its sequence `index`.

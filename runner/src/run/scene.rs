@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use aabench_renderer::scene::Camera;
-use aabench_renderer::{DisplayImage, Mode, color};
+use aabench_renderer::{DisplayImage, color};
 
 use super::results::finish_modes;
 use super::rounds::ModeRun;
@@ -153,13 +153,7 @@ impl<'a> SceneRun<'a> {
                 Ok(cameras) => cameras,
                 Err((field, message)) => return self.warn(&format!("no sequence: {field}: {message}")),
             };
-            let modes: Vec<(Mode, bool)> = self
-                .plan
-                .modes
-                .iter()
-                .zip(runs.iter())
-                .map(|(mode, run)| (*mode, run.error.is_none()))
-                .collect();
+            let modes = sequence::PathMode::of(&self.plan.modes, runs);
             // The first speed's animations in `path/`, the others' in `path-2/`, `path-3/`, ….
             let folder = if index == 0 { "path".into() } else { format!("path-{}", index + 1) };
             let along = sequence::Along {

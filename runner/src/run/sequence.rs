@@ -1,6 +1,7 @@
 //! A scene's sequence: once its stills are timed, every mode renders each frame of the
 //! manifest's camera path (`motion.rs`) once, untimed, and is measured against the truth's frame
-//! at the same camera.
+//! at the same camera. A stalled mode whose still is its unstalled twin's to the bit renders no
+//! path of its own: it takes its twin's frames (the stall changes the time, not the image).
 //!
 //! **Flicker** is measured along the truth's own motion (`temporal.rs`): each pixel followed
 //! back to where its surface point lay in the frame before, by the scene's geometry probe
@@ -30,6 +31,7 @@ use aabench_renderer::scene::Camera;
 use aabench_renderer::taa::WARMUP_FRAMES;
 use aabench_renderer::{DisplayImage, Mode};
 
+use super::rounds::ModeRun;
 use super::scene::SceneRun;
 use crate::flicker::{self, TRUTH_STREAM, pixel_changes_of_error};
 use crate::metrics::{self, Decibels, FrameChecks};
@@ -60,6 +62,51 @@ pub struct ModeOutcome {
     pub sequence: Option<ModeSequence>,
     pub checks: FrameChecks,
     pub error: Option<String>,
+}
+
+impl ModeOutcome {
+    /// The outcome of a mode that takes the frames of `twin`, whose outcome this is: its
+    /// sequence without a time of its own.
+    fn of_twin(&self, twin: Mode) -> ModeOutcome {
+        let sequence = self.sequence.clone().map(|sequence| ModeSequence {
+            frame_ms: None,
+            frames_of: Some(twin.to_string()),
+            ..sequence
+        });
+        let error = self.error.as_ref().map(|error| format!("{twin}, whose frames it takes: {error}"));
+        ModeOutcome { sequence, checks: self.checks, error }
+    }
+}
+
+/// A mode as the sequence takes it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct PathMode {
+    pub mode: Mode,
+    /// Whether its stills succeeded: a mode whose stills failed is left out.
+    pub ready: bool,
+    /// The mode (its index) whose frames are this one's: set for a stalled mode whose still is
+    /// its unstalled twin's to the bit, which renders no path of its own.
+    pub frames_of: Option<usize>,
+}
+
+impl PathMode {
+    /// The scene's modes, from what their stills gave.
+    pub fn of(modes: &[Mode], runs: &[ModeRun]) -> Vec<PathMode> {
+        let hashed = |i: usize| runs[i].error.is_none() && !runs[i].hashes.is_empty();
+        let twin = |i: usize| {
+            let plain = Mode { stalled: false, ..modes[i] };
+            let t = modes.iter().position(|other| *other == plain)?;
+            (modes[i].stalled && hashed(i) && hashed(t) && runs[i].hashes == runs[t].hashes).then_some(t)
+        };
+        (0..modes.len())
+            .map(|i| PathMode { mode: modes[i], ready: runs[i].error.is_none(), frames_of: twin(i) })
+            .collect()
+    }
+
+    /// Whether it renders the path itself.
+    fn renders(&self) -> bool {
+        self.ready && self.frames_of.is_none()
+    }
 }
 
 /// A mode's frame: its time, display image, sample counts and checks.
@@ -102,13 +149,12 @@ struct ModeState {
     error: Option<String>,
 }
 
-/// Renders the scene's sequence with the prepared modes on the worker: `modes` pairs each with
-/// whether its stills succeeded (a mode whose stills failed is left out). Returns the scene's
+/// Renders the scene's sequence with the prepared modes on the worker. Returns the scene's
 /// record and each mode's outcome.
 pub(super) async fn run(
     scene: &mut SceneRun<'_>,
     along: Along<'_>,
-    modes: &[(Mode, bool)],
+    modes: &[PathMode],
 ) -> (SequenceRecord, Vec<ModeOutcome>) {
     let start = Instant::now();
     let fixed = matches!(along.motion.path, PathKind::Static | PathKind::Keyframes);
@@ -138,8 +184,7 @@ pub(super) async fn run(
     // Every mode's frames are spooled, to stream `index + 1`; the truth's to stream 0.
     let out_dir = scene.dir.join(along.folder);
     let size = scene.resolution;
-    let names =
-        std::iter::once(TRUTH_STREAM.to_string()).chain(modes.iter().map(|(mode, _)| mode.to_string()));
+    let names = std::iter::once(TRUTH_STREAM.to_string()).chain(modes.iter().map(|m| m.mode.to_string()));
     let mut spool = Spool::create(crate::spool::folder(&out_dir), size, names.collect());
     let mut flicker = vec![0.0; size[0] as usize * size[1] as usize];
     let rendered = render_frames(scene, &along, modes, &mut record, &mut states, (&mut spool, &mut flicker));
@@ -149,8 +194,9 @@ pub(super) async fn run(
     }
     let done = record.frames_done as usize;
     scene.status("sequence: FLIP and the worst-flickering region");
+    // A mode that takes its twin's frames shows in its twin's animation.
     let animated_streams: Vec<usize> =
-        (0..modes.len()).filter(|&i| animated(modes[i].0, modes)).map(|i| i + 1).collect();
+        (0..modes.len()).filter(|&i| modes[i].frames_of.is_none()).map(|i| i + 1).collect();
     let (delay_s, run_dir) = (along.motion.time_step_s, scene.plan.run_dir.clone());
     let cancel = Arc::clone(scene.cancel);
     let after = tokio::task::spawn_blocking(move || {
@@ -181,14 +227,14 @@ pub(super) async fn run(
         }
     }
     record.seconds = start.elapsed().as_secs_f64();
-    let outcomes = states.into_iter().map(|state| state.conclude(done, record.truth_change)).collect();
+    let mut outcomes: Vec<ModeOutcome> =
+        states.into_iter().map(|state| state.conclude(done, record.truth_change)).collect();
+    for (index, path_mode) in modes.iter().enumerate() {
+        if let Some(twin) = path_mode.frames_of {
+            outcomes[index] = outcomes[twin].of_twin(modes[twin].mode);
+        }
+    }
     (record, outcomes)
-}
-
-/// Whether the sequence animates `mode`'s region: every mode but a stalled one whose unstalled
-/// twin runs too (stalling changes the time, not the image).
-fn animated(mode: Mode, modes: &[(Mode, bool)]) -> bool {
-    !mode.stalled || !modes.iter().any(|(other, _)| *other == Mode { stalled: false, ..mode })
 }
 
 /// Renders frame after frame: the truth, then every mode. `record.frames_done` counts the
@@ -196,7 +242,7 @@ fn animated(mode: Mode, modes: &[(Mode, bool)]) -> bool {
 async fn render_frames(
     scene: &mut SceneRun<'_>,
     along: &Along<'_>,
-    modes: &[(Mode, bool)],
+    modes: &[PathMode],
     record: &mut SequenceRecord,
     states: &mut [ModeState],
     (spool, flicker): (&mut Result<Spool, String>, &mut [f64]),
@@ -217,7 +263,7 @@ async fn render_frames(
         if scene.cancelled() {
             return Err(format!("interrupted after {frame} of {frames} frames"));
         }
-        if modes.iter().zip(states.iter()).all(|((_, prepared), state)| !prepared || state.error.is_some()) {
+        if modes.iter().zip(states.iter()).all(|(mode, state)| !mode.renders() || state.error.is_some()) {
             return Err("no mode is left to render".into());
         }
         let status = |scene: &SceneRun, what: &str| {
@@ -244,9 +290,9 @@ async fn render_frames(
         let (truth_then, geometry_then) = track.previous.as_ref().map(|(t, g)| (t, g)).unzip();
         let flow = geometry_then.map(|then| Flow::between(&geometry, then));
         let pair = TruthPair { now: &truth, then: truth_then, flow: flow.as_ref() };
-        for (index, (mode, prepared)) in modes.iter().enumerate() {
+        for (index, PathMode { mode, .. }) in modes.iter().enumerate() {
             let state = &mut states[index];
-            if !prepared || state.error.is_some() {
+            if !modes[index].renders() || state.error.is_some() {
                 continue;
             }
             status(scene, &mode.to_string());
@@ -507,6 +553,7 @@ impl ModeState {
             count_changes: mean(&count_changes),
             shaded_percent: mean(&shaded_percent),
             frame_ms: crate::stats::Summary::new(frame_seconds.iter().map(|s| s * 1e3).collect()),
+            frames_of: None,
             flicker: temporal::mean(followed.flicker),
             ghosting: mean(&ghosting.iter().map(|g| g.disoccluded).collect::<Vec<_>>()).map(|disoccluded| {
                 Ghosting {
@@ -618,5 +665,32 @@ mod tests {
         assert!(error.contains("interrupted"), "{error}");
         drop(spool);
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_stalled_mode_takes_its_twins_frames_only_where_its_still_is_its_twins() {
+        let ids =
+            ["taa", "taa-stalled", "fxaa", "fxaa-stalled", "smaa-stalled", "msaa-4x", "msaa-4x-stalled"];
+        let modes: Vec<Mode> = ids.iter().map(|id| id.parse().unwrap()).collect();
+        let run = |hash: &str, error: Option<&str>| ModeRun {
+            hashes: vec![hash.into()],
+            error: error.map(Into::into),
+            ..ModeRun::default()
+        };
+        // fxaa's stall changed its image, smaa-stalled has no twin, msaa-4x failed.
+        let runs = [
+            run("a", None),
+            run("a", None),
+            run("b", None),
+            run("c", None),
+            run("d", None),
+            run("e", Some("x")),
+            run("e", None),
+        ];
+        let of = PathMode::of(&modes, &runs);
+        let frames_of: Vec<Option<usize>> = of.iter().map(|m| m.frames_of).collect();
+        assert_eq!(frames_of, [None, Some(0), None, None, None, None, None]);
+        let renders: Vec<bool> = of.iter().map(PathMode::renders).collect();
+        assert_eq!(renders, [true, false, true, true, true, false, true]);
     }
 }

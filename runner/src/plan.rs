@@ -244,13 +244,28 @@ impl Tier {
     }
 
     /// The modes that the gate's timing processes time (`aabench modes --tier T --timed-by-gate`):
-    /// the tier's unstalled modes and the cheapest stalled one. A stalled mode renders its
+    /// the paper's and the competitors' unstalled modes at every size, each adaptive variant at
+    /// its largest size, and the cheapest stalled mode. A variant's own code (another metric,
+    /// reconstruction or count rule) is the same shader at every M and takes the largest share
+    /// of the frame at the largest, where the gate sees a slowdown of it best; the passes it
+    /// shares with the paper's mode are timed there at every size. A stalled mode renders its
     /// unstalled twin's image from the samples its twin shades (both gated exactly, with every
     /// process's output hash), each shaded with the stall loop on top; what its time adds to its
     /// twin's is that loop, which `deferred-1x1-stalled` times for all of them.
     pub fn gate_timed_modes(self) -> Vec<Mode> {
-        let sentinel = Mode::new(aabench_renderer::Technique::Deferred, 1, true);
-        self.default_modes().into_iter().filter(|mode| !mode.stalled || *mode == sentinel).collect()
+        use aabench_renderer::Technique;
+        let sentinel = Mode::new(Technique::Deferred, 1, true);
+        let modes = self.default_modes();
+        let largest =
+            |technique: Technique| modes.iter().filter(|m| m.technique == technique).map(|m| m.m).max();
+        let timed = |mode: &Mode| match mode.technique {
+            _ if mode.stalled => *mode == sentinel,
+            Technique::Adaptive(..) if mode.technique != Technique::PAPER => {
+                Some(mode.m) == largest(mode.technique)
+            }
+            _ => true,
+        };
+        modes.iter().copied().filter(timed).collect()
     }
 }
 
@@ -573,14 +588,27 @@ mod tests {
     }
 
     #[test]
-    fn the_gate_times_every_unstalled_mode_and_one_stalled() {
+    fn the_gate_times_the_papers_and_the_competitors_modes_each_variant_once_and_one_stalled() {
+        use aabench_renderer::Technique;
         for tier in [Tier::Quick, Tier::Nightly] {
             let all = tier.default_modes();
             let timed = tier.gate_timed_modes();
             let stalled: Vec<String> = timed.iter().filter(|m| m.stalled).map(Mode::to_string).collect();
             assert_eq!(stalled, ["deferred-1x1-stalled"]);
             assert!(timed.iter().all(|m| all.contains(m)));
-            assert!(all.iter().filter(|m| !m.stalled).all(|m| timed.contains(m)), "{tier:?}");
+            let variant =
+                |m: &Mode| matches!(m.technique, Technique::Adaptive(..)) && m.technique != Technique::PAPER;
+            let unstalled = all.iter().filter(|m| !m.stalled);
+            assert!(unstalled.clone().filter(|m| !variant(m)).all(|m| timed.contains(m)), "{tier:?}");
+            // Every variant of the tier is timed, at its largest size alone.
+            for mode in unstalled.filter(|m| variant(m)) {
+                let sizes: Vec<u32> =
+                    timed.iter().filter(|t| t.technique == mode.technique).map(|t| t.m).collect();
+                assert_eq!(sizes, [4], "{mode}");
+            }
         }
+        let quick: Vec<String> = Tier::Quick.gate_timed_modes().iter().map(Mode::to_string).collect();
+        assert!(quick.contains(&"adaptive-4x4-cells".into()) && !quick.contains(&"adaptive-2x2-area".into()));
+        assert_eq!(quick.len(), 15, "{quick:?}");
     }
 }

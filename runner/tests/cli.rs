@@ -198,6 +198,8 @@ fn modes_lists_the_groups_and_how_the_other_adaptive_ids_are_made() {
     assert!(
         timed.contains(&"deferred-1x1-stalled".into()) && !timed.contains(&"adaptive-2x2-stalled".into())
     );
+    // A variant is timed at its largest size alone.
+    assert!(timed.contains(&"adaptive-4x4-area".into()) && !timed.contains(&"adaptive-3x3-area".into()));
     assert_eq!(ws.run(&["modes", "--timed-by-gate"]).status.code(), Some(2), "--timed-by-gate needs --tier");
 }
 

@@ -2,7 +2,7 @@
 //! every mode its still frame bit for bit and no instability; a thin wire under a slow pan
 //! flickers in deferred-1x1 far more than in reference-4x4, and the metric ranks them so; TAA
 //! flickers less than deferred-1x1 on the moving `thin` scene, every mode reports what lag
-//! costs, and the report shows every mode along the path, where it flickers most and which
+//! costs, its stalled twin takes its frames, and the report shows every mode along the path, where it flickers most and which
 //! technique to choose along it; stable counts flicker less than the paper's there, for the
 //! samples they add.
 

@@ -290,9 +290,9 @@ async fn render_frames(
         let (truth_then, geometry_then) = track.previous.as_ref().map(|(t, g)| (t, g)).unzip();
         let flow = geometry_then.map(|then| Flow::between(&geometry, then));
         let pair = TruthPair { now: &truth, then: truth_then, flow: flow.as_ref() };
-        for (index, PathMode { mode, .. }) in modes.iter().enumerate() {
-            let state = &mut states[index];
-            if !modes[index].renders() || state.error.is_some() {
+        for (index, path_mode) in modes.iter().enumerate() {
+            let (mode, state) = (&path_mode.mode, &mut states[index]);
+            if !path_mode.renders() || state.error.is_some() {
                 continue;
             }
             status(scene, &mode.to_string());

@@ -8,8 +8,9 @@ use std::time::{Duration, Instant};
 use crate::error::RenderError;
 
 /// Everything about the machine that makes timings and images comparable. Two results with
-/// the same [`PlatformInfo::key`] were produced by the same driver, thread count, CPU model and
-/// build profile.
+/// the same [`PlatformInfo::key`] were rendered by the same driver, compiler and arithmetic, so
+/// their images are the same bits; the CPU model and core count, which decide only their times,
+/// are recorded beside it (and `runner::machine` tells one machine from another).
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct PlatformInfo {
     pub adapter: String,
@@ -21,22 +22,53 @@ pub struct PlatformInfo {
     pub lp_num_threads: Option<String>,
     pub cpu_model: String,
     pub cpu_cores: usize,
+    /// Whether the CPU fuses multiply-add: llvmpipe's JIT emits `fmuladd`, which LLVM turns into
+    /// one rounding where the CPU can and two where it cannot. `None` in records made before
+    /// aabench recorded it.
+    #[serde(default)]
+    pub cpu_fma: Option<bool>,
     /// `release` or `debug`: CPU maths that feeds the GPU may differ by an ulp between them.
     pub build_profile: String,
 }
 
 impl PlatformInfo {
-    /// A file-name-safe key, e.g.
-    /// `llvmpipe-mesa-22.3.6-llvm-15.0.6-lp-auto-amd-epyc-7b13-2-cores-release`. The core count
-    /// is part of it: with `LP_NUM_THREADS` unset, lavapipe uses every core.
+    /// A file-name-safe key of what decides a render's bits, e.g.
+    /// `llvmpipe-mesa-22.3.6-llvm-15.0.6-256-bits-fma-release`: the driver and its version (Mesa
+    /// and the LLVM that compiles the shaders), the vector width llvmpipe compiles for (its
+    /// adapter name says it), whether the CPU fuses multiply-add, and the build profile. A GPU
+    /// is named by its adapter. The CPU model, core count and `LP_NUM_THREADS` are not part of
+    /// it: they change how fast lavapipe renders, not what (docs/gate.md says how that was
+    /// measured).
     pub fn key(&self) -> String {
-        let threads = self.lp_num_threads.as_deref().unwrap_or("auto");
-        let raw = format!(
-            "{} {} lp {} {} {} cores {}",
-            self.driver, self.driver_info, threads, self.cpu_model, self.cpu_cores, self.build_profile
-        );
+        let raw = if self.device_type == "cpu" {
+            let width =
+                vector_width(&self.adapter).map_or_else(|| self.adapter.clone(), |w| format!("{w} bits"));
+            let fma = match self.cpu_fma {
+                Some(true) => "fma",
+                Some(false) => "no fma",
+                None => "fma unknown",
+            };
+            format!("{} {} {width} {fma} {}", self.driver, self.driver_info, self.build_profile)
+        } else {
+            format!("{} {} {} {}", self.driver, self.driver_info, self.adapter, self.build_profile)
+        };
         slug(&raw)
     }
+}
+
+/// The vector width in an llvmpipe adapter's name, `llvmpipe (LLVM 15.0.6, 256 bits)`.
+fn vector_width(adapter: &str) -> Option<u32> {
+    let words: Vec<&str> =
+        adapter.split(|c: char| c.is_whitespace() || c == ',' || c == '(' || c == ')').collect();
+    words.windows(2).find(|pair| pair[1] == "bits").and_then(|pair| pair[0].parse().ok())
+}
+
+/// Whether the CPU has fused multiply-add (`fma` among the first processor's flags in
+/// `/proc/cpuinfo`); `None` where that cannot be read.
+fn cpu_fma() -> Option<bool> {
+    let info = std::fs::read_to_string("/proc/cpuinfo").ok()?;
+    let flags = info.lines().find(|line| line.starts_with("flags"))?.split_once(':')?.1;
+    Some(flags.split_whitespace().any(|flag| flag == "fma"))
 }
 
 /// Lowercases and keeps `[a-z0-9.]`, joining the other runs with single dashes.
@@ -128,6 +160,7 @@ impl Gpu {
             lp_num_threads: std::env::var("LP_NUM_THREADS").ok(),
             cpu_model: cpu_model(),
             cpu_cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            cpu_fma: cpu_fma(),
             build_profile: if cfg!(debug_assertions) { "debug" } else { "release" }.into(),
         };
         let kept = Mutex::new(None);
@@ -254,13 +287,60 @@ impl Gpu {
 
 #[cfg(test)]
 mod tests {
-    use super::slug;
+    use super::*;
+
+    fn lavapipe() -> PlatformInfo {
+        PlatformInfo {
+            adapter: "llvmpipe (LLVM 15.0.6, 256 bits)".into(),
+            driver: "llvmpipe".into(),
+            driver_info: "Mesa 22.3.6 (LLVM 15.0.6)".into(),
+            backend: "vulkan".into(),
+            device_type: "cpu".into(),
+            lp_num_threads: None,
+            cpu_model: "AMD EPYC".into(),
+            cpu_cores: 2,
+            cpu_fma: Some(true),
+            build_profile: "release".into(),
+        }
+    }
 
     #[test]
     fn slug_keeps_versions_and_joins_the_rest() {
         assert_eq!(
-            slug("llvmpipe Mesa 22.3.6 (LLVM 15.0.6) lp auto AMD EPYC 7B13 2 cores release"),
-            "llvmpipe-mesa-22.3.6-llvm-15.0.6-lp-auto-amd-epyc-7b13-2-cores-release"
+            slug("llvmpipe Mesa 22.3.6 (LLVM 15.0.6) 256 bits"),
+            "llvmpipe-mesa-22.3.6-llvm-15.0.6-256-bits"
         );
+    }
+
+    #[test]
+    fn the_key_names_what_decides_the_bits_and_not_the_cpu_that_ran_them() {
+        let base = lavapipe();
+        assert_eq!(base.key(), "llvmpipe-mesa-22.3.6-llvm-15.0.6-256-bits-fma-release");
+        let other_cpu = PlatformInfo {
+            cpu_model: "Intel(R) Xeon(R) Processor".into(),
+            cpu_cores: 8,
+            lp_num_threads: Some("1".into()),
+            ..lavapipe()
+        };
+        assert_eq!(other_cpu.key(), base.key(), "the CPU model, cores and threads decide time, not bits");
+        for (what, other) in [
+            ("Mesa", PlatformInfo { driver_info: "Mesa 24.0.1 (LLVM 17.0.6)".into(), ..lavapipe() }),
+            (
+                "vector width",
+                PlatformInfo { adapter: "llvmpipe (LLVM 15.0.6, 128 bits)".into(), ..lavapipe() },
+            ),
+            ("fused multiply-add", PlatformInfo { cpu_fma: Some(false), ..lavapipe() }),
+            ("profile", PlatformInfo { build_profile: "debug".into(), ..lavapipe() }),
+        ] {
+            assert_ne!(other.key(), base.key(), "{what}");
+        }
+        let gpu = PlatformInfo {
+            adapter: "NVIDIA H200".into(),
+            driver: "NVIDIA".into(),
+            driver_info: "560.35.03".into(),
+            device_type: "discretegpu".into(),
+            ..lavapipe()
+        };
+        assert_eq!(gpu.key(), "nvidia-560.35.03-nvidia-h200-release");
     }
 }

@@ -181,6 +181,7 @@ mod tests {
             lp_num_threads: None,
             cpu_model: "AMD EPYC".into(),
             cpu_cores: 2,
+            cpu_fma: Some(true),
             build_profile: "release".into(),
         }
     }

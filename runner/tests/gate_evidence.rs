@@ -194,6 +194,11 @@ fn a_compare_that_compared_less_than_its_baselines_fails_and_lenient_reports_it(
         r["scenes"][0]["modes"].as_array_mut().unwrap().retain(|m| m["mode"] != "adaptive-2x2");
     });
     let no_scenes = doctored(&ws, "no-scenes", &record, |r| r["scenes"] = json!([]));
+    // Baselines of another platform judge a run whose every image is theirs (another test):
+    // this one's first image is of other bits.
+    let other_bits = doctored(&ws, "other-bits", &record, |r| {
+        r["scenes"][0]["modes"][0]["output_hash"] = json!("0000000000000000");
+    });
     let shard = doctored(&ws, "shard", &record, |r| {
         r["shard"] = json!({ "index": 1, "count": 2 });
         r["scenes"].as_array_mut().unwrap().pop();
@@ -214,7 +219,7 @@ fn a_compare_that_compared_less_than_its_baselines_fails_and_lenient_reports_it(
         ("missing folder", &full, "no-such-folder", "cannot be read"),
         ("a file", &full, "a-edge-file", "is not a folder"),
         ("empty folder", &full, "empty-baselines", "holds no baselines for the quick tier"),
-        ("another platform", &full, "other-baselines", "only of `another-platform`"),
+        ("another platform", &other_bits, "other-baselines", "only of `another-platform`"),
         ("missing scene", &drop_scene, "baselines", "the scene is not in the run"),
         ("missing mode", &drop_mode, "baselines", "not in the run"),
         ("no scenes", &no_scenes, "baselines", "the run has no scenes"),
@@ -559,6 +564,43 @@ fn time_against_baselines_of_another_machine_is_informational() {
     });
     let (worse, _) = compare(&ws, &[&worse], "gate-worse", &[]);
     assert_eq!(worse.status.code(), Some(1), "{}", String::from_utf8_lossy(&worse.stdout));
+}
+
+#[test]
+fn baselines_of_another_key_judge_a_run_only_where_every_image_is_theirs() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("other-key");
+    ws.manifest("edge", "edge", |_| {});
+    let measured = blessed_run(&ws);
+    let record = read_json(&measured.join("run.json"));
+    // The same baselines under another platform key (another Mesa, say).
+    let root = ws.dir.join("baselines");
+    let key = record["platform"]["key"].as_str().unwrap();
+    std::fs::rename(root.join(key), root.join("llvmpipe-mesa-0.0.0-llvm-0.0.0-256-bits-fma-release"))
+        .unwrap();
+    let (same, verdict) = compare(&ws, &[&measured], "gate-same-bits", &[]);
+    assert_eq!(same.status.code(), Some(0), "{}", String::from_utf8_lossy(&same.stdout));
+    assert_eq!(verdict["same_platform"], false);
+    let notes = verdict["notes"].to_string();
+    assert!(notes.contains("every one of the 4 output hashes equals its baseline's"), "{notes}");
+    // One image of other bits: the run fails, naming the first (scene, mode) that differs.
+    let other = doctored(&ws, "other-bits", &record, |r| {
+        mode_mut(r, "reference-2x2")["output_hash"] = json!("0000000000000000");
+    });
+    let (differs, verdict) = compare(&ws, &[&other], "gate-other-bits", &[]);
+    assert_eq!(differs.status.code(), Some(1), "{}", String::from_utf8_lossy(&differs.stdout));
+    let failed: Vec<&str> = verdict["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["outcome"] == "failed")
+        .filter_map(|c| c["detail"].as_str())
+        .collect();
+    assert!(
+        failed.iter().any(|d| d.contains("no baselines of this run's platform")
+            && d.contains("1 of 4 output hashes differ, the first: edge reference-2x2")),
+        "{failed:?}"
+    );
 }
 
 #[test]

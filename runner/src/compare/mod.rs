@@ -157,6 +157,7 @@ pub fn compare(request: &Request) -> Verdict {
             run.platform.key
         ));
     }
+    notes.extend(Hashes::of(run, baselines).note());
     let machine = same_machine(run, baselines);
     let baseline_time_gated = baseline_time_gated(request, &machine, &mut notes);
     checks.extend(disagreements(runs));
@@ -275,11 +276,17 @@ fn run_problems(run: &RunRecord, baselines: &BaselineSet) -> Vec<String> {
         (Some(why), _) => problems.push(format!(
             "no baselines to compare with: {why} (bless runs of this build with `aabench bless`)"
         )),
-        (None, Some(key)) if !baselines.same_platform => problems.push(format!(
-            "no baselines of this run's platform `{}` for the {} tier, only of `{key}`: bless runs made here",
-            run.platform.key,
-            run.tier.name()
-        )),
+        // Baselines of another key still judge a run whose every image is theirs to the bit.
+        (None, Some(key)) if !baselines.same_platform => {
+            if let Err(first) = Hashes::of(run, baselines).all_equal() {
+                problems.push(format!(
+                    "no baselines of this run's platform `{}` for the {} tier, only of `{key}`, whose images \
+                     differ from this run's ({first}): bless runs made here",
+                    run.platform.key,
+                    run.tier.name()
+                ));
+            }
+        }
         _ => {}
     }
     // A shard may hold no scene (more shards than scenes): `merge-verdicts` checks the whole.
@@ -300,6 +307,58 @@ fn run_problems(run: &RunRecord, baselines: &BaselineSet) -> Vec<String> {
         ));
     }
     problems
+}
+
+/// The run's output hashes against the baselines': of every (scene, mode) that has one on
+/// both sides, how many are equal and the first that is not.
+struct Hashes {
+    compared: usize,
+    equal: usize,
+    first_different: Option<String>,
+}
+
+impl Hashes {
+    fn of(run: &RunRecord, baselines: &BaselineSet) -> Hashes {
+        let mut hashes = Hashes { compared: 0, equal: 0, first_different: None };
+        for scene in &run.scenes {
+            let Some(baseline) = baselines.scene(&scene.name) else { continue };
+            for mode in &scene.modes {
+                let old = baseline.scene().mode(&mode.mode).and_then(|old| old.output_hash.as_ref());
+                let (Some(now), Some(then)) = (&mode.output_hash, old) else { continue };
+                hashes.compared += 1;
+                if now == then {
+                    hashes.equal += 1;
+                } else if hashes.first_different.is_none() {
+                    hashes.first_different = Some(format!("{} {}: {then} → {now}", scene.name, mode.mode));
+                }
+            }
+        }
+        hashes
+    }
+
+    /// `Ok` when at least one hash was compared and all were equal; otherwise what differs.
+    fn all_equal(&self) -> Result<(), String> {
+        match &self.first_different {
+            Some(first) => Err(format!(
+                "{} of {} output hashes differ, the first: {first}",
+                self.compared - self.equal,
+                self.compared
+            )),
+            None if self.compared == 0 => Err("no output hash to compare".into()),
+            None => Ok(()),
+        }
+    }
+
+    /// The verdict's note on the images: all the blessed bits, or where they first differ.
+    fn note(&self) -> Option<String> {
+        (self.compared > 0).then(|| match self.all_equal() {
+            Ok(()) => format!(
+                "every one of the {} output hashes equals its baseline's: the images are the blessed bits",
+                self.compared
+            ),
+            Err(why) => why,
+        })
+    }
 }
 
 /// Whether the run's machine is the one that blessed the baselines: the same platform key, CPU

@@ -37,4 +37,4 @@ pub use settings::{MAX_STALL_ITERATIONS, RenderSettings, loop_stall_limit};
 pub use technique::adaptive::{
     AdaptiveSettings, Counts, ExtraSamples, Metrics, Reconstruction, StableCounts,
 };
-pub use technique::{Marker, Shape, Technique, adaptive, smaa, taa};
+pub use technique::{Technique, adaptive, smaa, taa};

@@ -17,6 +17,7 @@ use std::path::Path;
 use crate::images;
 use crate::record::FlickerRegion;
 use crate::spool::{Spool, Square};
+use crate::temporal;
 
 /// The side of the region, in pixels (smaller frames: their side).
 pub const SIDE: u32 = 64;
@@ -79,7 +80,7 @@ fn strip_start<'a>(truth: &[Vec<u8>], modes: impl Iterator<Item = &'a [Vec<u8>]>
     let mut pairs = vec![0u64; truth.len()];
     for crops in modes {
         for f in 1..truth.len() {
-            pairs[f] += change_of_error(&crops[f], &crops[f - 1], &truth[f], &truth[f - 1]);
+            pairs[f] += temporal::change_of_error(&crops[f], &crops[f - 1], &truth[f], &truth[f - 1]);
         }
     }
     let length = length as usize;
@@ -91,28 +92,6 @@ fn strip_start<'a>(truth: &[Vec<u8>], modes: impl Iterator<Item = &'a [Vec<u8>]>
         }
     }
     best as u32
-}
-
-/// Σ over pixels and colour channels of ((a − b) − (t − u))² of RGBA8 images of one size.
-fn change_of_error(a: &[u8], b: &[u8], t: &[u8], u: &[u8]) -> u64 {
-    pixel_changes_of_error(a, b, t, u).sum()
-}
-
-/// Per pixel of four RGBA images of one size (code values of any width), Σ over its colour
-/// channels of ((a − b) − (t − u))², in squared code steps: how much the error image a − t
-/// changed at the pixel from the frame (b, u) before.
-pub fn pixel_changes_of_error<'x, T: Copy + Into<i64>>(
-    a: &'x [T],
-    b: &'x [T],
-    t: &'x [T],
-    u: &'x [T],
-) -> impl Iterator<Item = u64> + 'x {
-    assert!([b, t, u].iter().all(|i| i.len() == a.len()), "images of different sizes");
-    let step = |x: T, y: T| x.into() - y.into();
-    let pixels = a.chunks_exact(4).zip(b.chunks_exact(4)).zip(t.chunks_exact(4).zip(u.chunks_exact(4)));
-    pixels.map(move |((p, q), (r, s))| {
-        (0..3).map(|i| (step(p[i], q[i]) - step(r[i], s[i])).pow(2) as u64).sum()
-    })
 }
 
 #[cfg(test)]
@@ -136,7 +115,7 @@ mod tests {
             0,
             "no flicker: the first frames"
         );
-        assert_eq!(change_of_error(&grey(3), &grey(1), &grey(2), &grey(2)), 12, "alpha left out");
+        assert_eq!(temporal::change_of_error(&grey(3), &grey(1), &grey(2), &grey(2)), 12, "alpha left out");
     }
 
     #[test]

@@ -17,6 +17,10 @@
 //! unjittered sample's linear view depth and motion. Pixels without geometry see the background,
 //! which lies at infinity: they follow the direction they look in from one camera to the other,
 //! and were hidden where the frame before had geometry all around that place.
+//!
+//! The frame-to-frame arithmetic that every temporal measure shares lives here too: the change
+//! of the error image in place (`change_of_error`, what the uncompensated instability and the
+//! flicker square sum), the squared change of an image, and the means.
 
 use aabench_renderer::scene::Camera;
 use aabench_renderer::{DisplayImage, GBufferImages};
@@ -103,6 +107,49 @@ impl PairError {
 /// A sum over a count, where there is a count.
 pub fn mean((sum, count): (f64, u64)) -> Option<f64> {
     (count > 0).then(|| sum / count as f64)
+}
+
+/// The mean of `values`, where there are any.
+pub fn mean_of(values: &[f64]) -> Option<f64> {
+    (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
+}
+
+/// Σ over pixels and colour channels (alpha left out) of ((a − b) − (t − u))² of four RGBA
+/// images of one size (code values of any width), in squared code steps: how much the error
+/// image a − t changed from the frame (b, u) before, pixel by pixel in place.
+pub fn change_of_error<T: Copy + Into<i64>>(a: &[T], b: &[T], t: &[T], u: &[T]) -> u64 {
+    pixel_changes_of_error(a, b, t, u).sum()
+}
+
+/// [`change_of_error`] pixel by pixel.
+pub fn pixel_changes_of_error<'x, T: Copy + Into<i64>>(
+    a: &'x [T],
+    b: &'x [T],
+    t: &'x [T],
+    u: &'x [T],
+) -> impl Iterator<Item = u64> + 'x {
+    assert!([b, t, u].iter().all(|i| i.len() == a.len()), "images of different sizes");
+    let step = |x: T, y: T| x.into() - y.into();
+    let pixels = a.chunks_exact(4).zip(b.chunks_exact(4)).zip(t.chunks_exact(4).zip(u.chunks_exact(4)));
+    pixels.map(move |((p, q), (r, s))| {
+        (0..3).map(|i| (step(p[i], q[i]) - step(r[i], s[i])).pow(2) as u64).sum()
+    })
+}
+
+/// Σ over pixels and colour channels (alpha left out) of (a − b)² of two display images of
+/// one size, in squared code steps (exact in integers).
+pub fn squared_difference(a: &DisplayImage, b: &DisplayImage) -> u64 {
+    assert_eq!(a.rgba.len(), b.rgba.len(), "images of different sizes");
+    let pixel = |p: &[u16], q: &[u16]| (0..3).map(|c| u64::from(p[c].abs_diff(q[c])).pow(2)).sum::<u64>();
+    a.rgba.chunks_exact(4).zip(b.rgba.chunks_exact(4)).map(|(p, q)| pixel(p, q)).sum()
+}
+
+/// A sum of squared code steps over `frames` images like `image`, as a mean over values in
+/// [0, 1].
+pub fn per_value(sum: u64, image: &DisplayImage, frames: usize) -> f64 {
+    let scale = f64::from(image.max_code());
+    let values = (image.rgba.len() / 4 * 3 * frames).max(1) as f64;
+    sum as f64 / (scale * scale) / values
 }
 
 impl Geometry {

@@ -1,9 +1,11 @@
 //! Every metric a mode's record holds, in one table: its id, what people call it, where in the
-//! record it is read, how the gate decides it and with which tolerance, and its column in the
-//! report's tables. `compare` and the report (HTML and Markdown) loop over [`METRICS`]; a new
-//! metric is its function, one row here, one record field and its test.
+//! record it is read, how the gate decides it and with which tolerance, which way is better,
+//! its column in the report's tables and its error-against-run-time plot. `compare`, the
+//! console, the report (HTML and Markdown), its plots and its rankings loop over [`METRICS`] or
+//! name a row; a new metric is its function, one row here, one record field and its test. The
+//! times, which the gate decides on intervals instead, are [`TimeMetric`].
 
-use crate::gate::QualityTolerances;
+use crate::gate::{QualityTolerances, Tolerance};
 use crate::record::{ModeRecord, ModeSequence};
 
 /// The part of a mode's record a metric is read from. Each is present or absent as a whole: a
@@ -74,9 +76,20 @@ pub enum Rule {
 }
 
 impl Rule {
-    /// Which way is better: up for a level in dB, down for an error or a share of samples.
+    /// Which way a check's change counts as an improvement: up for a level in dB, down for an
+    /// error's distance from perfect or a share of samples (see [`Rule::better`] for values).
     pub fn higher_is_better(self) -> bool {
         self == Rule::Decibels
+    }
+
+    /// Whether the value `a` is better than `b`: a higher level, an error nearer perfect, a
+    /// smaller share.
+    pub fn better(self, a: f64, b: f64) -> bool {
+        match self {
+            Rule::Decibels => a > b,
+            Rule::Relative { perfect } => (a - perfect).abs() < (b - perfect).abs(),
+            Rule::Points => a < b,
+        }
     }
 
     /// The unit a check of this rule gives its change in.
@@ -93,10 +106,41 @@ impl Rule {
 #[derive(Debug, Clone, Copy)]
 pub struct Gate {
     pub rule: Rule,
-    /// The tolerance in force, from the scene's tolerances.
-    pub tolerance: fn(&QualityTolerances) -> f64,
+    /// The tolerance it is decided with.
+    pub tolerance: Tolerance,
     /// A value as a check's detail shows it.
     pub show: fn(f64) -> String,
+}
+
+impl Gate {
+    /// The tolerance in force among `tolerances`.
+    pub fn threshold(&self, tolerances: &QualityTolerances) -> f64 {
+        tolerances.get(self.tolerance)
+    }
+}
+
+/// A metric's error-against-run-time plot: every mode at its frame time (along the path, for a
+/// sequence's metric: one plot per speed) against its value.
+#[derive(Debug, Clone, Copy)]
+pub struct Plot {
+    /// What the plot is called after the scene's name; a sequence's adds its speed.
+    pub title: &'static str,
+    pub axis: &'static str,
+    /// What a value is multiplied by on the axis.
+    pub scale: f64,
+    /// The figure's file name after the scene's, `front-flip`; a sequence's after the first
+    /// speed adds the speed's number, `front-flicker-2`.
+    pub file: &'static str,
+    pub front: Front,
+}
+
+/// Which modes a plot draws on its front.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Front {
+    /// The front run.json records (by PSNR against the truth, with intervals).
+    Recorded,
+    /// The modes that no faster mode of the same stall beats, by medians.
+    Medians,
 }
 
 /// The report's tables: the still's, and the one along the camera path.
@@ -137,7 +181,48 @@ pub struct Metric {
     pub gate: Option<Gate>,
     /// Its column in the report; `None`: gated, not tabled.
     pub column: Option<Column>,
+    /// Its error-against-run-time plot; `None`: not plotted.
+    pub plot: Option<Plot>,
 }
+
+/// The still's PSNR against the truth: what the still's ranking orders modes by.
+pub const PSNR_VS_TRUTH: Metric = Metric {
+    id: "psnr_vs_truth",
+    label: "PSNR against the truth",
+    source: Source::Truth,
+    read: Read::Mode(|mode| Some(mode.vs_ground_truth.as_ref()?.psnr_db.value())),
+    gate: Some(Gate { rule: Rule::Decibels, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
+    column: Some(Column { table: Table::Still, header: "PSNR vs truth", cell: decibels }),
+    plot: None,
+};
+
+/// The still's FLIP against the truth.
+pub const FLIP_VS_TRUTH: Metric = Metric {
+    id: "flip_vs_truth",
+    label: "FLIP against the truth",
+    source: Source::Truth,
+    read: Read::Mode(|mode| mode.vs_ground_truth.as_ref()?.flip),
+    gate: Some(Gate { rule: ERROR, tolerance: Tolerance::FlipRelative, show: five_decimals }),
+    column: Some(Column { table: Table::Still, header: "FLIP vs truth", cell: four_decimals }),
+    plot: Some(Plot {
+        title: "FLIP against run time",
+        axis: "mean FLIP against the truth (log)",
+        scale: 1.0,
+        file: "front-flip",
+        front: Front::Medians,
+    }),
+};
+
+/// The mean PSNR along a camera path: what a path's ranking orders modes by.
+pub const SEQUENCE_PSNR_VS_TRUTH: Metric = Metric {
+    id: "sequence_psnr_vs_truth",
+    label: "mean PSNR against the truth's frames",
+    source: Source::Sequence,
+    read: Read::Along(|sequence| Some(sequence.mean_psnr_db.value())),
+    gate: Some(Gate { rule: Rule::Decibels, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
+    column: Some(Column { table: Table::Path, header: "PSNR along the path", cell: decibels }),
+    plot: None,
+};
 
 /// Every metric, in the order of the report's columns within each table (the gate checks them
 /// in this order too).
@@ -147,19 +232,27 @@ pub const METRICS: [Metric; 14] = [
         label: "samples shaded",
         source: Source::Samples,
         read: Read::Mode(|mode| Some(mode.samples.as_ref()?.shaded_percent)),
-        gate: Some(Gate { rule: Rule::Points, tolerance: |t| t.shaded_percent, show: percent }),
+        gate: Some(Gate { rule: Rule::Points, tolerance: Tolerance::ShadedPercent, show: percent }),
         column: Some(Column { table: Table::Still, header: "samples %", cell: one_decimal }),
+        plot: None,
     },
     Metric {
         id: "mse_vs_truth",
         label: "MSE against the truth",
         source: Source::Truth,
         read: Read::Mode(|mode| Some(mode.vs_ground_truth.as_ref()?.mse)),
-        gate: Some(Gate { rule: ERROR, tolerance: |t| t.mse_relative, show: mse_e5 }),
+        gate: Some(Gate { rule: ERROR, tolerance: Tolerance::MseRelative, show: mse_e5 }),
         column: Some(Column {
             table: Table::Still,
             header: "MSE ×1e-5 vs truth",
             cell: |v| format!("{:.3}", v * 1e5),
+        }),
+        plot: Some(Plot {
+            title: "error against run time",
+            axis: "MSE against the truth ×1e-5 (log)",
+            scale: 1e5,
+            file: "front",
+            front: Front::Recorded,
         }),
     },
     Metric {
@@ -167,25 +260,12 @@ pub const METRICS: [Metric; 14] = [
         label: "PSNR against the reference",
         source: Source::Reference,
         read: Read::Mode(|mode| Some(mode.vs_reference.as_ref()?.psnr_db.value())),
-        gate: Some(Gate { rule: Rule::Decibels, tolerance: |t| t.psnr_db, show: decibels_3 }),
+        gate: Some(Gate { rule: Rule::Decibels, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
         column: Some(Column { table: Table::Still, header: "PSNR vs ref", cell: decibels }),
+        plot: None,
     },
-    Metric {
-        id: "psnr_vs_truth",
-        label: "PSNR against the truth",
-        source: Source::Truth,
-        read: Read::Mode(|mode| Some(mode.vs_ground_truth.as_ref()?.psnr_db.value())),
-        gate: Some(Gate { rule: Rule::Decibels, tolerance: |t| t.psnr_db, show: decibels_3 }),
-        column: Some(Column { table: Table::Still, header: "PSNR vs truth", cell: decibels }),
-    },
-    Metric {
-        id: "flip_vs_truth",
-        label: "FLIP against the truth",
-        source: Source::Truth,
-        read: Read::Mode(|mode| mode.vs_ground_truth.as_ref()?.flip),
-        gate: Some(Gate { rule: ERROR, tolerance: |t| t.flip_relative, show: five_decimals }),
-        column: Some(Column { table: Table::Still, header: "FLIP vs truth", cell: four_decimals }),
-    },
+    PSNR_VS_TRUTH,
+    FLIP_VS_TRUTH,
     Metric {
         id: "ssim_vs_truth",
         label: "SSIM against the truth",
@@ -193,42 +273,39 @@ pub const METRICS: [Metric; 14] = [
         read: Read::Mode(|mode| mode.vs_ground_truth.as_ref()?.ssim),
         gate: Some(Gate {
             rule: Rule::Relative { perfect: 1.0 },
-            tolerance: |t| t.ssim_relative,
+            tolerance: Tolerance::SsimRelative,
             show: five_decimals,
         }),
         column: Some(Column { table: Table::Still, header: "SSIM vs truth", cell: four_decimals }),
+        plot: None,
     },
     Metric {
         id: "mse_vs_reference",
         label: "MSE against the reference",
         source: Source::Reference,
         read: Read::Mode(|mode| Some(mode.vs_reference.as_ref()?.mse)),
-        gate: Some(Gate { rule: ERROR, tolerance: |t| t.mse_relative, show: mse_e5 }),
+        gate: Some(Gate { rule: ERROR, tolerance: Tolerance::MseRelative, show: mse_e5 }),
         column: None,
+        plot: None,
     },
     Metric {
         id: "sequence_shaded_percent",
         label: "samples shaded along the path",
         source: Source::Sequence,
         read: Read::Along(|sequence| sequence.shaded_percent),
-        gate: Some(Gate { rule: Rule::Points, tolerance: |t| t.shaded_percent, show: percent }),
+        gate: Some(Gate { rule: Rule::Points, tolerance: Tolerance::ShadedPercent, show: percent }),
         column: Some(Column { table: Table::Path, header: "samples %", cell: one_decimal }),
+        plot: None,
     },
-    Metric {
-        id: "sequence_psnr_vs_truth",
-        label: "mean PSNR against the truth's frames",
-        source: Source::Sequence,
-        read: Read::Along(|sequence| Some(sequence.mean_psnr_db.value())),
-        gate: Some(Gate { rule: Rule::Decibels, tolerance: |t| t.psnr_db, show: decibels_3 }),
-        column: Some(Column { table: Table::Path, header: "PSNR along the path", cell: decibels }),
-    },
+    SEQUENCE_PSNR_VS_TRUTH,
     Metric {
         id: "sequence_flip_vs_truth",
         label: "mean FLIP against the truth's frames",
         source: Source::Sequence,
         read: Read::Along(|sequence| sequence.mean_flip),
-        gate: Some(Gate { rule: ERROR, tolerance: |t| t.flip_relative, show: five_decimals }),
+        gate: Some(Gate { rule: ERROR, tolerance: Tolerance::FlipRelative, show: five_decimals }),
         column: Some(Column { table: Table::Path, header: "FLIP along the path", cell: four_decimals }),
+        plot: None,
     },
     Metric {
         // An error of squared code values, as MSE is: the MSE tolerance.
@@ -236,11 +313,18 @@ pub const METRICS: [Metric; 14] = [
         label: "flicker along the truth's motion",
         source: Source::Sequence,
         read: Read::Along(|sequence| sequence.flicker),
-        gate: Some(Gate { rule: ERROR, tolerance: |t| t.mse_relative, show: |v| format!("{v:.4e}") }),
+        gate: Some(Gate { rule: ERROR, tolerance: Tolerance::MseRelative, show: |v| format!("{v:.4e}") }),
         column: Some(Column {
             table: Table::Path,
             header: "flicker ×1e-4",
             cell: |v| format!("{:.3}", v * 1e4),
+        }),
+        plot: Some(Plot {
+            title: "flicker against run time",
+            axis: "flicker along the camera path (log)",
+            scale: 1.0,
+            file: "front-flicker",
+            front: Front::Medians,
         }),
     },
     Metric {
@@ -249,8 +333,9 @@ pub const METRICS: [Metric; 14] = [
         label: "uncompensated change of error",
         source: Source::Sequence,
         read: Read::Along(|sequence| Some(sequence.instability)),
-        gate: Some(Gate { rule: ERROR, tolerance: |t| t.mse_relative, show: |v| format!("{v:.4e}") }),
+        gate: Some(Gate { rule: ERROR, tolerance: Tolerance::MseRelative, show: |v| format!("{v:.4e}") }),
         column: None,
+        plot: None,
     },
     Metric {
         id: "change_ratio",
@@ -259,6 +344,7 @@ pub const METRICS: [Metric; 14] = [
         read: Read::Along(|sequence| sequence.change_ratio),
         gate: None,
         column: Some(Column { table: Table::Path, header: "change ratio", cell: two_decimals }),
+        plot: None,
     },
     Metric {
         id: "count_changes",
@@ -271,6 +357,7 @@ pub const METRICS: [Metric; 14] = [
             header: "count changes %",
             cell: |v| format!("{:.2}", v * 100.0),
         }),
+        plot: None,
     },
 ];
 
@@ -281,12 +368,52 @@ impl Metric {
         self.value_at(mode, 0)
     }
 
+    /// Whether `a` is a better value of this metric than `b`, where the gate has a rule for it.
+    pub fn better(&self, a: f64, b: f64) -> Option<bool> {
+        Some(self.gate?.rule.better(a, b))
+    }
+
     /// Its value in `mode`'s record, a sequence's metric along the scene's sequence `index`.
     pub fn value_at(&self, mode: &ModeRecord, index: usize) -> Option<f64> {
         match self.read {
             Read::Mode(read) => read(mode),
             Read::Along(read) => read(mode.sequence_at(index)?),
         }
+    }
+}
+
+/// A time of a mode. Times are noisy, so the gate decides each on the interval of its shift,
+/// not against a tolerance: the first three against the committed baselines and the base
+/// build, a pass's only against the base build.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TimeMetric {
+    /// The frame time over the geometric mean of the round's other unstalled modes.
+    Relative,
+    /// An adaptive mode's frame time over its reference's in the same round.
+    VsReference,
+    /// The frame time itself.
+    Frame,
+    /// One pass's time over the rest of its frame.
+    Pass,
+}
+
+impl TimeMetric {
+    /// The id a check carries; a pass's is this and the pass's name, `pass_time:shade`.
+    pub fn id(self) -> &'static str {
+        match self {
+            TimeMetric::Relative => "relative_time",
+            TimeMetric::VsReference => "time_vs_reference",
+            TimeMetric::Frame => "frame_time",
+            TimeMetric::Pass => "pass_time:",
+        }
+    }
+
+    /// The time metric a check's id names, where it names one.
+    pub fn of(id: &str) -> Option<TimeMetric> {
+        [TimeMetric::Relative, TimeMetric::VsReference, TimeMetric::Frame]
+            .into_iter()
+            .find(|time| time.id() == id)
+            .or_else(|| id.starts_with(TimeMetric::Pass.id()).then_some(TimeMetric::Pass))
     }
 }
 
@@ -361,6 +488,36 @@ mod tests {
             let named = metric(id).unwrap_or_else(|| panic!("{source:?} names {id}, no metric"));
             assert!(named.source == source && named.gate.is_some(), "{id}");
         }
+    }
+
+    #[test]
+    fn a_better_value_is_a_higher_level_an_error_nearer_perfect_or_a_smaller_share() {
+        assert_eq!(PSNR_VS_TRUTH.better(30.0, 29.0), Some(true));
+        assert_eq!(FLIP_VS_TRUTH.better(0.02, 0.01), Some(false));
+        let ssim = metric("ssim_vs_truth").unwrap();
+        assert_eq!(ssim.better(0.99, 0.98), Some(true), "nearer 1");
+        assert_eq!(metric("shaded_percent").unwrap().better(40.0, 50.0), Some(true));
+        assert_eq!(metric("change_ratio").unwrap().better(1.0, 2.0), None, "not gated: no rule");
+    }
+
+    #[test]
+    fn the_first_plot_is_the_stills_error_and_every_plot_has_a_direction() {
+        let plotted: Vec<&Metric> = METRICS.iter().filter(|m| m.plot.is_some()).collect();
+        assert_eq!(plotted[0].id, "mse_vs_truth", "the report's first plot, whose absence it reports");
+        assert_eq!(plotted[0].plot.unwrap().front, Front::Recorded, "run.json's front is by the still");
+        for metric in plotted {
+            assert!(metric.better(1.0, 2.0).is_some(), "{}: a front needs a direction", metric.id);
+        }
+    }
+
+    #[test]
+    fn time_metrics_are_named_by_their_ids_and_a_pass_by_its_prefix() {
+        for time in [TimeMetric::Relative, TimeMetric::VsReference, TimeMetric::Frame] {
+            assert_eq!(TimeMetric::of(time.id()), Some(time));
+            assert!(metric(time.id()).is_none(), "{} is no quality metric", time.id());
+        }
+        assert_eq!(TimeMetric::of("pass_time:shade"), Some(TimeMetric::Pass));
+        assert_eq!(TimeMetric::of("psnr_vs_truth"), None);
     }
 
     #[test]

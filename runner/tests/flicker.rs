@@ -130,7 +130,7 @@ fn measure(frames: &[DisplayImage], truth: &[DisplayImage], flows: &[Flow]) -> M
         mse += pairs.flat_map(|(a, t)| (0..3).map(move |c| (value(a[c]) - value(t[c])).powi(2))).sum::<f64>();
         if f > 0 {
             sums.add(&flows[f - 1].error([&frames[f], &truth[f]], [&frames[f - 1], &truth[f - 1]], &mut map));
-            let changes = aabench::flicker::pixel_changes_of_error(
+            let changes = aabench::temporal::pixel_changes_of_error(
                 &frames[f].rgba,
                 &frames[f - 1].rgba,
                 &truth[f].rgba,

@@ -2,7 +2,8 @@
 //! every module uses only modules of earlier layers (so no module uses another that uses it
 //! back, directly or through others), and the list names every module there is. A module's uses
 //! are read from its source files: every `crate::name` and every name in a `crate::{…}` group,
-//! outside `#[cfg(test)]` modules, doc comments and comments.
+//! outside `#[cfg(test)]` modules, doc comments and comments. Inside each folder module, its
+//! children use each other in no cycle either, read from `crate::`, `super::` and `self::` paths.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -39,7 +40,16 @@ fn production_code(source: &str) -> String {
     while let Some(at) = rest.find("#[cfg(test)]") {
         out.push_str(&rest[..at]);
         let after = &rest[at..];
-        let Some(open) = after.find('{') else { return out };
+        // An item without a block (`#[cfg(test)] mod tests;`) ends at its semicolon.
+        let semicolon = after.find(';').unwrap_or(after.len());
+        let Some(open) = after.find('{') else {
+            rest = &after[(semicolon + 1).min(after.len())..];
+            continue;
+        };
+        if semicolon < open {
+            rest = &after[semicolon + 1..];
+            continue;
+        }
         let mut depth = 0usize;
         let mut end = after.len();
         for (i, c) in after[open..].char_indices() {
@@ -338,4 +348,305 @@ fn every_source_file_is_in_the_code_map_and_every_test_it_names_exists() {
             "ARCHITECTURE.md names {reference}, which {file} lacks"
         );
     }
+}
+
+// Inside a folder module the same rule holds among its children: `run/scene.rs` may use
+// `run/rounds.rs` or be used by it, not both. A folder's `mod.rs` is the children's parent, not
+// one of them: a child that uses an item `mod.rs` defines uses its parent; one that uses an item
+// `mod.rs` only imports (`use rounds::ModeRun;`, `pub use verdict::Check;`) uses that child.
+
+/// Module → the modules it uses.
+type Graph = BTreeMap<String, BTreeSet<String>>;
+
+/// Module path → the names its `use` declarations bring in → the paths they stand for.
+type Imports = BTreeMap<Vec<String>, BTreeMap<String, Vec<String>>>;
+
+/// A module's path from the crate root: `scene/import/files.rs` → `scene::import::files`,
+/// `scene/import/mod.rs` → `scene::import`, `lib.rs` → the root.
+fn module_path(relative: &str) -> Vec<String> {
+    let mut path: Vec<String> = relative.trim_end_matches(".rs").split('/').map(String::from).collect();
+    if path == ["lib"] || path.last().is_some_and(|last| last == "mod") {
+        path.pop();
+    }
+    path
+}
+
+/// The paths of a path tree, given the text at its start and the module path its first segment
+/// is relative to: `super::{a::B, c as d}` from `m::n` gives `m::a::B` (named `B`) and `m::c`
+/// (named `d`). `super` goes up, `self` stays, `crate` starts at the root; a glob names the
+/// module. Returns the paths with the name each brings in, and the length of text read.
+fn path_tree(text: &str, prefix: Vec<String>, out: &mut Vec<(Vec<String>, String)>) -> usize {
+    let trimmed = text.trim_start();
+    if let Some(mut rest) = trimmed.strip_prefix('{') {
+        loop {
+            rest = rest.trim_start();
+            if let Some(after) = rest.strip_prefix('}') {
+                return text.len() - after.len();
+            }
+            let used = path_tree(rest, prefix.clone(), out);
+            rest = rest[used..].trim_start();
+            match rest.strip_prefix(',') {
+                Some(after) => rest = after,
+                None if rest.starts_with('}') => {}
+                // Nothing this reader understands: leave the group.
+                None => return text.len() - rest.len(),
+            }
+        }
+    }
+    if let Some(after) = trimmed.strip_prefix('*') {
+        out.push((prefix, "*".to_string()));
+        return text.len() - after.len();
+    }
+    let name = ident(trimmed);
+    if name.is_empty() {
+        return 0;
+    }
+    let mut path = prefix;
+    match name {
+        "super" => {
+            path.pop();
+        }
+        "crate" => path.clear(),
+        "self" => {}
+        _ => path.push(name.to_string()),
+    }
+    let mut rest = &trimmed[name.len()..];
+    if let Some(next) = rest.strip_prefix("::")
+        && (next.starts_with(['{', '*']) || !ident(next).is_empty())
+    {
+        return text.len() - next.len() + path_tree(next, path, out);
+    }
+    // A leaf, renamed or not.
+    let mut alias = path.last().cloned().unwrap_or_default();
+    if let Some(renamed) = rest.trim_start().strip_prefix("as ") {
+        let renamed = renamed.trim_start();
+        alias = ident(renamed).to_string();
+        rest = &renamed[alias.len()..];
+    }
+    out.push((path, alias));
+    text.len() - rest.len()
+}
+
+/// Whether `text[at..]` starts a token: nothing of a name or a path right before it.
+fn token_start(text: &str, at: usize) -> bool {
+    !text[..at].ends_with(|c: char| c.is_alphanumeric() || c == '_' || c == ':')
+}
+
+/// The production source files of a crate, relative to its `src` with `/` between folders,
+/// and their text: the crate root and every module it declares, outside `#[cfg(test)]`.
+fn crate_sources(src: &Path) -> BTreeMap<String, String> {
+    files_under(src, "rs")
+        .into_iter()
+        .filter(|f| f != "main.rs")
+        .map(|f| {
+            let text = std::fs::read_to_string(src.join(&f)).unwrap();
+            (f, text)
+        })
+        .collect()
+}
+
+/// Every module of a crate, and for each, the names its `use` declarations bring in with the
+/// paths they stand for (those of the crate; other crates' are left out). `sources` maps each
+/// file, relative to `src`, to its text; only modules declared outside `#[cfg(test)]` count.
+fn modules_and_imports(sources: &BTreeMap<String, String>) -> (BTreeSet<Vec<String>>, Imports) {
+    let code: BTreeMap<Vec<String>, String> =
+        sources.iter().map(|(file, text)| (module_path(file), production_code(text))).collect();
+    let mut modules = BTreeSet::from([Vec::new()]);
+    let mut queue = vec![Vec::<String>::new()];
+    while let Some(module) = queue.pop() {
+        let Some(text) = code.get(&module) else { continue };
+        for (at, _) in text.match_indices("mod ") {
+            let name = ident(&text[at + 4..]);
+            let after = text[at + 4 + name.len()..].trim_start();
+            if token_start(text, at) && !name.is_empty() && after.starts_with([';', '{']) {
+                let mut child = module.clone();
+                child.push(name.to_string());
+                if modules.insert(child.clone()) {
+                    queue.push(child);
+                }
+            }
+        }
+    }
+    let mut imports = Imports::new();
+    for (module, text) in &code {
+        if !modules.contains(module) {
+            continue;
+        }
+        for (at, _) in text.match_indices("use ") {
+            if !token_start(text, at) {
+                continue;
+            }
+            let tree = &text[at + 4..];
+            let first = ident(tree.trim_start());
+            let mut child = module.clone();
+            child.push(first.to_string());
+            if !(matches!(first, "crate" | "super" | "self") || modules.contains(&child)) {
+                continue;
+            }
+            let mut paths = Vec::new();
+            path_tree(tree, module.clone(), &mut paths);
+            for (path, name) in paths {
+                imports.entry(module.clone()).or_default().insert(name, path);
+            }
+        }
+    }
+    (modules, imports)
+}
+
+/// The module a path lands in: the longest run of modules it names from the root, after the
+/// names that modules only import are followed to where they come from.
+fn landing_module(path: &[String], modules: &BTreeSet<Vec<String>>, imports: &Imports) -> Vec<String> {
+    let mut path = path.to_vec();
+    let mut depth = 0;
+    for _ in 0..64 {
+        while depth < path.len() && modules.contains(&path[..=depth]) {
+            depth += 1;
+        }
+        let imported = path.get(depth).and_then(|name| imports.get(&path[..depth])?.get(name));
+        match imported {
+            Some(target) if target.as_slice() != &path[..=depth] => {
+                path = target.iter().chain(&path[depth + 1..]).cloned().collect();
+                depth = 0;
+            }
+            _ => break,
+        }
+    }
+    path.truncate(depth);
+    path
+}
+
+/// For each folder module (the root left out: the layers above order it), its children and
+/// the children each uses: read from every `crate::…`, `super::…` and `self::…` path (groups
+/// included) outside `#[cfg(test)]` modules and comments, each resolved to the module it lands
+/// in. A file inside a child (`scene/import/files.rs` for `scene`) speaks for that child.
+fn folder_graphs(sources: &BTreeMap<String, String>) -> BTreeMap<Vec<String>, Graph> {
+    let (modules, imports) = modules_and_imports(sources);
+    let mut graphs: BTreeMap<Vec<String>, Graph> = BTreeMap::new();
+    for module in &modules {
+        if let Some((child, folder)) = module.split_last()
+            && !folder.is_empty()
+        {
+            graphs.entry(folder.to_vec()).or_default().entry(child.clone()).or_default();
+        }
+    }
+    for (file, text) in sources {
+        let module = module_path(file);
+        if !modules.contains(&module) {
+            continue;
+        }
+        let code = production_code(text);
+        let mut read_to = 0;
+        for (at, _) in code.match_indices(['c', 's']) {
+            let rest = &code[at..];
+            if at < read_to
+                || !token_start(&code, at)
+                || !["crate::", "super::", "self::"].iter().any(|k| rest.starts_with(k))
+            {
+                continue;
+            }
+            let mut paths = Vec::new();
+            read_to = at + path_tree(rest, module.clone(), &mut paths);
+            for (path, _) in paths {
+                let target = landing_module(&path, &modules, &imports);
+                let shared = module.iter().zip(&target).take_while(|(a, b)| a == b).count();
+                if shared == 0 || shared == module.len() || shared == target.len() {
+                    // The root's children, the file's own folder or below it, or an ancestor.
+                    continue;
+                }
+                let graph = graphs.entry(module[..shared].to_vec()).or_default();
+                graph.entry(module[shared].clone()).or_default().insert(target[shared].clone());
+            }
+        }
+    }
+    graphs
+}
+
+/// Every cycle of a graph that passes no node twice, each from its first node by name: all of
+/// them, so that a failure names every one to break.
+fn cycles(graph: &Graph) -> Vec<Vec<String>> {
+    fn extend(graph: &Graph, path: &mut Vec<String>, found: &mut Vec<Vec<String>>) {
+        let start = path[0].clone();
+        for next in graph.get(path.last().unwrap()).into_iter().flatten() {
+            if *next == start {
+                found.push(path.iter().chain([next]).cloned().collect());
+            } else if *next > start && !path.contains(next) {
+                path.push(next.clone());
+                extend(graph, path, found);
+                path.pop();
+            }
+        }
+    }
+    let mut found = Vec::new();
+    for node in graph.keys() {
+        extend(graph, &mut vec![node.clone()], &mut found);
+    }
+    found
+}
+
+/// Each cycle among the children of a folder module, as `folder: a → b → a`.
+fn folder_cycles(sources: &BTreeMap<String, String>) -> Vec<String> {
+    let mut found = Vec::new();
+    for (folder, graph) in folder_graphs(sources) {
+        for circle in cycles(&graph) {
+            found.push(format!("{}: {}", folder.join("/"), circle.join(" → ")));
+        }
+    }
+    found
+}
+
+#[test]
+fn the_folder_reader_sees_uses_between_siblings_and_finds_their_cycles() {
+    let sources: BTreeMap<String, String> = [
+        ("lib.rs", "mod error;\npub mod run;\npub use run::Record;\n"),
+        ("error.rs", "pub struct Error;\n"),
+        (
+            "run/mod.rs",
+            "mod scene;\nmod rounds;\nmod results;\nmod memory;\n#[cfg(test)]\nmod tests;\n\
+             pub use results::Record;\nuse scene::Scene;\npub struct Plan;\nfn go() { rounds::go(); }\n",
+        ),
+        // Through a group, past a comment and a test module.
+        (
+            "run/scene.rs",
+            "use super::{\n    rounds::{self, Round},\n    Plan,\n};\nuse crate::error::Error; // super::memory\n\
+             #[cfg(test)]\nmod tests {\n    use super::super::memory;\n}\n",
+        ),
+        // Through a name `mod.rs` imports, and through `crate::` to the re-export of a re-export.
+        ("run/rounds.rs", "pub fn go() { let _: super::Scene; let _: Option<crate::Record>; }\n"),
+        // A circle of its own: results ↔ memory, through `crate::run::` and `super::super::`.
+        ("run/results.rs", "pub struct Record;\nfn f() { crate::run::memory::free(); }\n"),
+        ("run/memory.rs", "pub fn free() { let _ = super::super::run::results::Record; }\n"),
+        ("run/tests.rs", "use super::scene::Scene;\nuse super::rounds;\n"),
+    ]
+    .into_iter()
+    .map(|(file, text)| (file.to_string(), text.to_string()))
+    .collect();
+    let graphs = folder_graphs(&sources);
+    let run = &graphs[&vec!["run".to_string()]];
+    let set = |names: &[&str]| names.iter().map(|n| n.to_string()).collect::<BTreeSet<String>>();
+    assert_eq!(run["scene"], set(&["rounds"]), "the graph: {run:#?}");
+    assert_eq!(run["rounds"], set(&["results", "scene"]), "the graph: {run:#?}");
+    assert_eq!(run["results"], set(&["memory"]));
+    assert_eq!(run["memory"], set(&["results"]));
+    assert!(!run.contains_key("tests"), "test modules are left out: {run:#?}");
+    assert_eq!(folder_cycles(&sources), ["run: memory → results → memory", "run: rounds → scene → rounds"]);
+    let graph: Graph = [
+        ("a".to_string(), set(&["b"])),
+        ("b".into(), set(&["a", "c"])),
+        ("c".into(), set(&["a"])),
+        ("d".into(), set(&["a"])),
+    ]
+    .into();
+    assert_eq!(cycles(&graph), [vec!["a", "b", "a"], vec!["a", "b", "c", "a"]]);
+}
+
+#[test]
+fn no_folder_module_has_an_import_cycle_between_its_children() {
+    let mut found = Vec::new();
+    for crate_src in ["renderer/src", "runner/src"] {
+        let sources = crate_sources(&workspace().join(crate_src));
+        let graphs = folder_graphs(&sources);
+        assert!(graphs.len() >= 4, "{crate_src}: only {} folder modules found", graphs.len());
+        found.extend(folder_cycles(&sources).into_iter().map(|c| format!("{crate_src}/{c}")));
+    }
+    assert!(found.is_empty(), "modules of one folder use each other in a cycle:\n{}", found.join("\n"));
 }

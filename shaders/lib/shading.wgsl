@@ -219,6 +219,64 @@ fn surface_albedo(s: Surface, footprint: f32) -> vec3<f32> {
     return albedo;
 }
 
+// The metalness and roughness that shading reads for surface `s`: the material's factors,
+// times its metallic-roughness texture filtered over `footprint`; roughness kept in [0.03, 1].
+struct Finish {
+    metallic: f32,
+    roughness: f32,
+}
+
+fn surface_finish(s: Surface, footprint: f32) -> Finish {
+    let material = materials[s.material];
+#ifdef METALLIC_ROUGHNESS
+    var metallic = material.metallic;
+    var rough = material.roughness;
+    if material.metallic_roughness_texture >= 0 {
+        let coords = surface_coords(s, SLOT_METALLIC_ROUGHNESS, footprint);
+        let texel = sample_filtered(scene_data_textures, material.metallic_roughness_texture, coords);
+        rough *= texel.g;
+        metallic *= texel.b;
+    }
+    let roughness = clamp(rough, 0.03, 1.0);
+#else
+    let metallic = material.metallic;
+    let roughness = clamp(material.roughness, 0.03, 1.0);
+#endif
+    return Finish(metallic, roughness);
+}
+
+// The ambient light that reaches surface `s`: the frame's, times the material's occlusion
+// texture filtered over `footprint` at its strength.
+fn surface_ambient(s: Surface, footprint: f32) -> vec3<f32> {
+#ifdef OCCLUSION
+    let material = materials[s.material];
+    var ambient = frame.ambient.rgb;
+    if material.occlusion_texture >= 0 {
+        let coords = surface_coords(s, SLOT_OCCLUSION, footprint);
+        let occlusion = sample_filtered(scene_data_textures, material.occlusion_texture, coords).r;
+        ambient *= 1.0 + material.occlusion_strength * (occlusion - 1.0);
+    }
+    return ambient;
+#else
+    return frame.ambient.rgb;
+#endif
+}
+
+#ifdef EMISSIVE
+// The radiance that surface `s` emits: the material's factor, times its emissive texture
+// filtered over `footprint`.
+fn surface_emitted(s: Surface, footprint: f32) -> vec3<f32> {
+    let material = materials[s.material];
+    var emitted = material.emissive;
+#ifdef TEXTURED
+    if material.emissive_texture >= 0 {
+        emitted *= sample_filtered(scene_textures, material.emissive_texture, surface_coords(s, SLOT_EMISSIVE, footprint)).rgb;
+    }
+#endif
+    return emitted;
+}
+#endif
+
 // Shading of surface `s` at `position`; `texel` seeds the stall.
 fn shade_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f32) -> vec4<f32> {
     return light_surface(texel, s, position, footprint).color;
@@ -244,46 +302,18 @@ fn light_surface(texel: vec2<i32>, s: Surface, position: vec3<f32>, footprint: f
     if s.material == BACKGROUND {
         return Lit(vec4<f32>(frame.background.rgb, stalled), vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
     }
-    let material = materials[s.material];
     let albedo = surface_albedo(s, footprint);
-#ifdef METALLIC_ROUGHNESS
-    var metallic = material.metallic;
-    var rough = material.roughness;
-    if material.metallic_roughness_texture >= 0 {
-        let coords = surface_coords(s, SLOT_METALLIC_ROUGHNESS, footprint);
-        let texel = sample_filtered(scene_data_textures, material.metallic_roughness_texture, coords);
-        rough *= texel.g;
-        metallic *= texel.b;
-    }
-    let roughness = clamp(rough, 0.03, 1.0);
-#else
-    let metallic = material.metallic;
-    let roughness = clamp(material.roughness, 0.03, 1.0);
-#endif
+    let finish = surface_finish(s, footprint);
+    let metallic = finish.metallic;
+    let roughness = finish.roughness;
     let a = roughness * roughness;
     let a2 = a * a;
     let v = normalize(frame.eye.xyz - position);
-#ifdef OCCLUSION
-    var ambient = frame.ambient.rgb;
-    if material.occlusion_texture >= 0 {
-        let coords = surface_coords(s, SLOT_OCCLUSION, footprint);
-        let occlusion = sample_filtered(scene_data_textures, material.occlusion_texture, coords).r;
-        ambient *= 1.0 + material.occlusion_strength * (occlusion - 1.0);
-    }
+    let ambient = surface_ambient(s, footprint);
     var radiance = ambient * albedo;
     var slope = ambient;
-#else
-    var radiance = frame.ambient.rgb * albedo;
-    var slope = frame.ambient.rgb;
-#endif
 #ifdef EMISSIVE
-    var emitted = material.emissive;
-#ifdef TEXTURED
-    if material.emissive_texture >= 0 {
-        emitted *= sample_filtered(scene_textures, material.emissive_texture, surface_coords(s, SLOT_EMISSIVE, footprint)).rgb;
-    }
-#endif
-    radiance += emitted;
+    radiance += surface_emitted(s, footprint);
 #endif
     var penumbra = 0.0;
     for (var i = 0u; i < LIGHT_COUNT; i += 1u) {

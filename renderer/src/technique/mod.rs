@@ -48,25 +48,6 @@ pub enum Technique {
     Adaptive(Metrics, Reconstruction, Counts),
 }
 
-/// The shape of a technique's points on the error-against-time plots.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Shape {
-    Square,
-    Cross,
-    /// A square with a cross inside.
-    CrossedSquare,
-    Triangle,
-    Circle,
-}
-
-/// How a technique's points look on the plots: related techniques share a shape, filled for
-/// the one that the hollow ones are measured against.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Marker {
-    pub shape: Shape,
-    pub filled: bool,
-}
-
 impl Technique {
     /// Adaptive supersampling as the paper has it: both metrics, samples alike, counts per
     /// frame (`adaptive-MxM`).
@@ -175,25 +156,6 @@ impl Technique {
     pub fn carries_history(self) -> bool {
         self.is_jittered() || matches!(self, Technique::Adaptive(_, _, Counts::Stable))
     }
-
-    /// Its points on the plots: squares for the one-sample techniques (deferred shading filled,
-    /// SMAA hollow, TAA crossed), a cross for FXAA, triangles for the M×M grid (the reference
-    /// filled, MSAA hollow), discs for the paper's adaptive modes and circles for the variants
-    /// beyond it.
-    pub fn marker(self) -> Marker {
-        let (shape, filled) = match self {
-            Technique::Deferred => (Shape::Square, true),
-            Technique::Fxaa => (Shape::Cross, false),
-            Technique::Smaa => (Shape::Square, false),
-            Technique::Taa => (Shape::CrossedSquare, false),
-            Technique::Reference => (Shape::Triangle, true),
-            Technique::Msaa => (Shape::Triangle, false),
-            Technique::Adaptive(_, reconstruction, counts) => {
-                (Shape::Circle, reconstruction == Reconstruction::Equal && counts == Counts::PerFrame)
-            }
-        };
-        Marker { shape, filled }
-    }
 }
 
 pub(crate) type FrameGraph = Graph<Box<dyn Node>>;
@@ -278,6 +240,10 @@ pub(crate) fn add_post_process(frame: &mut Frame, technique: Technique, display:
     match technique {
         Technique::Fxaa => fxaa::add(frame, display),
         Technique::Smaa => smaa::add(frame, display),
-        _ => display,
+        Technique::Deferred
+        | Technique::Msaa
+        | Technique::Taa
+        | Technique::Reference
+        | Technique::Adaptive(..) => display,
     }
 }

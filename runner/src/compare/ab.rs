@@ -11,9 +11,11 @@
 use crate::baseline::BaselineSet;
 use crate::record::{RunRecord, SceneRecord, Status};
 use crate::stats::{Shift, Summary};
+use crate::vocabulary::TimeMetric;
 
-use super::verdict::PASS_TIME;
-use super::{Against, CONFIDENCE, Check, Confirmation, MIN_PROCESSES, Outcome, decide};
+use super::request::Confirmation;
+use super::time::decide;
+use super::verdict::{Against, CONFIDENCE, Check, MIN_PROCESSES, Outcome};
 
 /// Passes shorter than this in the base build are not checked on their own: at a few tenths of
 /// a millisecond a pass is mostly submission and timer, and its slowdown cannot hide much.
@@ -70,19 +72,19 @@ pub(super) fn checks(
                 median(samples.iter().zip(&anchor).map(|(s, a)| s.ln() - a).collect())
             };
             let what = "frame time over the geometric mean of the round's other unstalled modes";
-            checks.extend(side.check(relative, bound, what, "×", template("relative_time")));
+            checks.extend(side.check(relative, bound, what, "×", template(TimeMetric::Relative.id())));
             if let Some(cost) = &mode.adaptive {
                 let reference = cost.reference.as_str();
                 let ratio = |record: &SceneRecord| {
                     median(record.paired_ratios(id, reference)?.iter().map(|r| r.ln()).collect())
                 };
                 let what = format!("frame time over {reference}'s in the same round");
-                checks.extend(side.check(ratio, bound, &what, "×", template("time_vs_reference")));
+                checks.extend(side.check(ratio, bound, &what, "×", template(TimeMetric::VsReference.id())));
             }
             let frame = |record: &SceneRecord| {
                 median(record.mode(id)?.frame_ms.as_ref()?.samples.iter().map(|s| s.ln()).collect())
             };
-            checks.extend(side.check(frame, bound, "frame time", "ms", template("frame_time")));
+            checks.extend(side.check(frame, bound, "frame time", "ms", template(TimeMetric::Frame.id())));
             checks.extend(pass_checks(&side, id, bound, template));
         }
     }
@@ -129,7 +131,13 @@ fn pass_checks(side: &Side, id: &str, bound: f64, template: impl Fn(&str) -> Che
                 median(ratios.map(|(pass, rest)| pass.ln() - rest.ln()).collect())
             };
             let what = format!("{} pass time over the rest of its frame", pass.name);
-            side.check(per_process, bound, &what, "×", template(&format!("{PASS_TIME}{}", pass.name)))
+            side.check(
+                per_process,
+                bound,
+                &what,
+                "×",
+                template(&format!("{}{}", TimeMetric::Pass.id(), pass.name)),
+            )
         })
         .collect()
 }

@@ -18,12 +18,15 @@
 //! still recorded and shown; the gate uses the steadier anchor.
 
 mod ab;
+mod mode;
 pub mod outputs;
 mod quality;
+mod request;
 mod shards;
 mod time;
 mod verdict;
 
+pub use request::{Confirmation, Request};
 pub use shards::merge_verdicts;
 pub use verdict::{
     Against, CONFIDENCE, Check, FailOn, MIN_FRAMES, MIN_PROCESSES, Outcome, ShardScope, VERDICT_SCHEMA,
@@ -31,44 +34,9 @@ pub use verdict::{
 };
 
 use crate::baseline::{Baseline, BaselineSet};
-use crate::gate::Tolerances;
 use crate::record::{ModeRecord, RunRecord, SceneRecord, Status};
-use time::decide;
+use mode::ModeContext;
 use verdict::is_time_metric;
-
-/// What `compare` decides on.
-#[derive(Debug, Clone, Copy)]
-pub struct Request<'a> {
-    /// The run under test: one process, or several of one build (the first gives the quality
-    /// numbers; their images must agree; their frames are pooled for time against baselines).
-    pub runs: &'a [RunRecord],
-    /// Processes of the base build measured on the same machine in the same job, ideally
-    /// alternating with `runs`: time is gated against them with the process as the unit.
-    pub base: &'a [RunRecord],
-    pub baselines: &'a BaselineSet,
-    pub fail_on: FailOn,
-    /// Missing baselines, scenes, modes and platforms, runs that timed alone and unfinished
-    /// runs are reported, not failed (a first bless, an exploratory compare).
-    pub lenient: bool,
-    /// Fresh processes that measured again the scenes whose time regressed against `base`.
-    pub confirmation: Option<Confirmation<'a>>,
-}
-
-/// A second, independent measurement of the scenes whose time regressed against the base
-/// build: fresh processes of both builds, alternating, run after a first compare named them.
-///
-/// Each time check is a 95% interval, and a gate makes some two thousand of them, strongly
-/// correlated within a scene (a process that lands slow on a scene lands slow on its modes). A
-/// false alarm somewhere is then no rare event: a gate of code that cannot have changed a
-/// scene's time once failed on it, every mode of that scene 10–30% slower in the head's six
-/// processes. A regression found in the first processes therefore stands only when the fresh
-/// processes, decided on their own, find it again; the chance that both are false is the
-/// product of two small ones, while a real slowdown is found again as a matter of course.
-#[derive(Debug, Clone, Copy)]
-pub struct Confirmation<'a> {
-    pub runs: &'a [RunRecord],
-    pub base: &'a [RunRecord],
-}
 
 /// Whether time against the committed baselines may fail the gate: with `--fail-on auto`, only
 /// without base runs and on the machine that blessed them. Says why not in a note.
@@ -553,33 +521,6 @@ fn sequence_lengths(scene: &SceneRecord, then: &SceneRecord) -> Vec<Check> {
         }
     }
     checks
-}
-
-/// One mode of the run and the same mode in the baseline.
-struct ModeContext<'a> {
-    scene: &'a SceneRecord,
-    /// The scene in every process of the run: time checks pool their rounds.
-    processes: &'a [&'a SceneRecord],
-    /// The baseline's records of the scene, one per blessed run: time checks pool their rounds.
-    baselines: &'a [SceneRecord],
-    mode: &'a ModeRecord,
-    /// The mode in the first baseline record: its quality numbers.
-    old: &'a ModeRecord,
-    tolerances: Tolerances,
-    same_platform: bool,
-    /// The modes whose geometric mean anchors `relative_time`.
-    anchor_modes: &'a [&'a str],
-}
-
-impl ModeContext<'_> {
-    /// A check of this mode's `metric`, gated, against the baseline, its change in `unit`.
-    fn check(&self, metric: &str, outcome: Outcome, unit: &str, detail: String) -> Check {
-        Check { unit: unit.into(), ..Check::new(&self.scene.name, &self.mode.mode, metric, outcome, detail) }
-    }
-}
-
-pub(crate) fn show_percent(fraction: f64) -> String {
-    if fraction.is_finite() { format!("{:+.1}%", fraction * 100.0) } else { "+∞".into() }
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
-use super::{Against, Check, FailOn, Outcome, Verdict};
+use super::verdict::{Against, Check, FailOn, Outcome, Verdict};
 use crate::markup::escape as xml;
 
 /// Writes summary.md, junit.xml, verdict.json and, when it names scenes, to-confirm.txt into

@@ -2,9 +2,9 @@
 //! within its tolerance, the shape of the sample-count distribution, and the output hash
 //! (failed for the paper's mode, reported for the others: their metrics decide whether a changed image matters).
 
+use super::mode::{ModeContext, show_percent};
 use super::verdict::{Check, Outcome};
-use super::{ModeContext, show_percent};
-use crate::gate::QualityTolerances;
+use crate::gate::{QualityTolerances, Tolerance};
 use crate::vocabulary::{Gate, METRICS, Metric, Rule, Source};
 
 impl ModeContext<'_> {
@@ -48,7 +48,7 @@ impl ModeContext<'_> {
             }
             _ => return None,
         };
-        let threshold = (gate.tolerance)(tolerance);
+        let threshold = gate.threshold(tolerance);
         let (change, moved) = match gate.rule {
             Rule::Decibels => {
                 // Two infinities (identical images both times) are no change.
@@ -92,14 +92,14 @@ impl ModeContext<'_> {
     fn histogram_check(&self, tolerance: &QualityTolerances) -> Option<Check> {
         let (now, then) = (self.mode.samples.as_ref()?, self.old.samples.as_ref()?);
         let distance = total_variation(&now.histogram, &then.histogram);
-        let outcome = if distance > tolerance.histogram { Outcome::Regressed } else { Outcome::Unchanged };
+        let threshold = tolerance.get(Tolerance::Histogram);
+        let outcome = if distance > threshold { Outcome::Regressed } else { Outcome::Unchanged };
         let detail = format!(
-            "the distribution of samples per pixel moved by {distance:.4} (total variation; tolerance {})",
-            tolerance.histogram
+            "the distribution of samples per pixel moved by {distance:.4} (total variation; tolerance {threshold})"
         );
         Some(Check {
             change: Some(distance),
-            threshold: Some(tolerance.histogram),
+            threshold: Some(threshold),
             ..self.check("sample_histogram", outcome, "total variation", detail)
         })
     }

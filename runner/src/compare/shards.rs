@@ -8,7 +8,7 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use super::{Check, Outcome, ShardScope, Verdict};
+use super::verdict::{Check, Outcome, ShardScope, Verdict};
 
 /// The joined verdict of `shards` (each with the file it was read from), or why they do not
 /// belong together.

@@ -2,10 +2,11 @@
 //! round's other unstalled modes, adaptive over its reference) and, on the baseline's own
 //! platform, absolute frame times, each decided on the interval of its shift.
 
+use super::mode::{ModeContext, show_percent};
 use super::verdict::{CONFIDENCE, Check, MIN_FRAMES, Outcome};
-use super::{ModeContext, show_percent};
 use crate::record::SceneRecord;
 use crate::stats::Shift;
+use crate::vocabulary::TimeMetric;
 
 impl ModeContext<'_> {
     pub(super) fn time_checks(&self) -> Vec<Check> {
@@ -30,7 +31,7 @@ impl ModeContext<'_> {
                 samples.iter().zip(anchors).map(|(s, a)| relative(s, a)).collect()
             };
             checks.extend(self.time_check(
-                "relative_time",
+                TimeMetric::Relative.id(),
                 &relatives(&now, &now_anchors).concat(),
                 &relatives(&then, &then_anchors),
                 threshold,
@@ -39,13 +40,13 @@ impl ModeContext<'_> {
             ));
         }
         if let Some(cost) = &self.mode.adaptive {
-            checks.extend(self.ratio_check("time_vs_reference", &cost.reference, threshold));
+            checks.extend(self.ratio_check(TimeMetric::VsReference.id(), &cost.reference, threshold));
         }
         if self.same_platform {
             let log = |samples: &Vec<f64>| samples.iter().map(|s| s.ln()).collect::<Vec<_>>();
             let now_log: Vec<f64> = now.iter().flat_map(log).collect();
             checks.extend(self.time_check(
-                "frame_time",
+                TimeMetric::Frame.id(),
                 &now_log,
                 &then.iter().map(log).collect::<Vec<_>>(),
                 self.tolerances.absolute_time,

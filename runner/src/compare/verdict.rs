@@ -90,15 +90,9 @@ pub enum FailOn {
     Quality,
 }
 
-/// The time metrics: noisy, decided on intervals.
-pub(super) const TIME_METRICS: [&str; 3] = ["relative_time", "time_vs_reference", "frame_time"];
-
-/// The metric of one pass's time against the base build: `pass_time:<pass>`.
-pub(super) const PASS_TIME: &str = "pass_time:";
-
 /// Whether `metric` is a time, decided on intervals and gated by `--fail-on`.
 pub(super) fn is_time_metric(metric: &str) -> bool {
-    TIME_METRICS.contains(&metric) || metric.starts_with(PASS_TIME)
+    crate::vocabulary::TimeMetric::of(metric).is_some()
 }
 
 pub use crate::gate::MIN_FRAMES;

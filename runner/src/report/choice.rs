@@ -10,6 +10,7 @@ use std::fmt::Write;
 
 use super::html::escape;
 use crate::record::{ModeRecord, ModeSequence, RunRecord, SceneRecord};
+use crate::vocabulary::{Metric, PSNR_VS_TRUTH, SEQUENCE_PSNR_VS_TRUTH};
 
 /// What a ranking measures a mode by.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -40,19 +41,32 @@ impl Basis {
         }
     }
 
-    /// A mode's PSNR and frame time (median, ms) on this basis, where it has both and may be
+    /// The metric this basis ranks modes by.
+    fn metric(self) -> &'static Metric {
+        match self {
+            Basis::Still => &PSNR_VS_TRUTH,
+            Basis::Path(_) => &SEQUENCE_PSNR_VS_TRUTH,
+        }
+    }
+
+    /// Whether the level `a` is better than `b` on this basis.
+    fn better(self, a: f64, b: f64) -> bool {
+        self.metric().better(a, b).expect("a ranking metric is gated: it has a direction")
+    }
+
+    /// A mode's level and frame time (median, ms) on this basis, where it has both and may be
     /// ranked on it.
     fn measure(self, mode: &ModeRecord) -> Option<(f64, f64)> {
         match self {
             Basis::Still => {
                 let temporal = mode.parsed().is_some_and(|m| m.is_jittered());
-                let psnr = mode.vs_ground_truth.as_ref()?.psnr_db.value();
-                (!temporal).then_some((psnr, mode.frame_ms.as_ref()?.median))
+                let level = self.metric().value(mode)?;
+                (!temporal).then_some((level, mode.frame_ms.as_ref()?.median))
             }
             Basis::Path(index) => {
                 let sequence = mode.sequence_at(index)?;
                 let frame = sequence.frame_ms.as_ref().or(mode.frame_ms.as_ref())?;
-                Some((sequence.mean_psnr_db.value(), frame.median))
+                Some((self.metric().value_at(mode, index)?, frame.median))
             }
         }
     }
@@ -78,7 +92,7 @@ impl Basis {
                 let ranked = |id: &str| measured.iter().any(|(_, _, m)| m.mode == id);
                 place.on_front || place.dominated_by.iter().all(|d| !ranked(&d.mode))
             }),
-            Basis::Path(_) => !measured.iter().any(|&(p, t, _)| t < ms && p > psnr),
+            Basis::Path(_) => !measured.iter().any(|&(p, t, _)| t < ms && self.better(p, psnr)),
         }
     }
 }
@@ -100,8 +114,10 @@ pub fn fastest_by_level(scene: &SceneRecord, basis: Basis) -> Vec<(f64, &ModeRec
     levels.sort_by(f64::total_cmp);
     let mut rows: Vec<(f64, &ModeRecord)> = Vec::new();
     for level in levels {
-        let fastest =
-            measured.iter().filter(|(psnr, _, _)| *psnr >= level).min_by(|a, b| a.1.total_cmp(&b.1));
+        let fastest = measured
+            .iter()
+            .filter(|&&(psnr, _, _)| !basis.better(level, psnr))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
         if let Some(&(_, _, mode)) = fastest
             && rows.last().is_none_or(|(_, last)| last.mode != mode.mode)
         {

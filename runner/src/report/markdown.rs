@@ -13,7 +13,7 @@ use image::RgbaImage;
 use aabench_renderer::{Counts, Metrics, Mode, Reconstruction, Technique};
 
 use super::{
-    ErrorMetric, PAPER, competitors, decibels, error_points, mode_cells, mode_columns, open_rgba, plots,
+    ErrorPlot, PAPER, competitors, decibels, error_points, mode_cells, mode_columns, open_rgba, plots,
     reconstructions, sequence_cells, sequence_columns, sequence_summary, side_by_side, worst_window,
 };
 use crate::record::{ModeRecord, RunRecord, SceneRecord};
@@ -269,25 +269,22 @@ pub fn figures(run_dir: &Path, run: &RunRecord, dir: &Path) -> Result<(Vec<Strin
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let (mut written, mut left_out) = (Vec::new(), Vec::new());
     for scene in &run.scenes {
-        for metric in ErrorMetric::of_scene(scene) {
-            let suffix = match metric {
-                ErrorMetric::Mse => "front".into(),
-                ErrorMetric::Flip => "front-flip".into(),
-                ErrorMetric::Flicker(0) => "front-flicker".into(),
-                ErrorMetric::Flicker(index) => format!("front-flicker-{}", index + 1),
-            };
-            let points = error_points(scene, metric);
+        let error_plots = ErrorPlot::of_scene(scene);
+        for &error_plot in &error_plots {
+            let points = error_points(scene, error_plot);
             if points.is_empty() {
-                left_out.push(format!("{}: no mode has a {} to plot", scene.name, metric.axis()));
+                left_out.push(format!("{}: no mode has a {} to plot", scene.name, error_plot.axis()));
                 continue;
             }
-            let title = format!("{}: {}", scene.name, metric.title(scene));
-            let svg = plots::error_against_time(&title, [metric.time_axis(), metric.axis()], &points)?;
-            let path = dir.join(format!("{}-{suffix}.svg", scene.name));
+            let title = format!("{}: {}", scene.name, error_plot.title(scene));
+            let svg =
+                plots::error_against_time(&title, [error_plot.time_axis(), error_plot.axis()], &points)?;
+            let path = dir.join(format!("{}-{}.svg", scene.name, error_plot.file()));
             crate::fs::write(&path, standalone(&svg).as_bytes())?;
             written.push(path.display().to_string());
         }
-        if error_points(scene, ErrorMetric::Mse).is_empty() {
+        // The strip crops where the still's error is: none without it.
+        if error_plots.first().is_none_or(|&still| error_points(scene, still).is_empty()) {
             continue;
         }
         match strip(run_dir, scene) {

@@ -16,7 +16,7 @@ mod tables;
 pub use choice::{Basis, fastest_by_level, technique_cell};
 pub use history::load_history;
 pub use images::{open_rgba, side_by_side, worst_window};
-pub use points::{ErrorMetric, error_points};
+pub use points::{ErrorPlot, error_points};
 pub use tables::{decibels, mode_cells, mode_columns, sequence_cells, sequence_columns, sequence_summary};
 
 use std::fmt::Write;
@@ -179,16 +179,16 @@ fn scene_section(
     for index in 0..scene.sequences.len() {
         tables::sequence_table(page, scene, index);
     }
-    for metric in ErrorMetric::of_scene(scene) {
-        let points = error_points(scene, metric);
+    for (index, error_plot) in ErrorPlot::of_scene(scene).into_iter().enumerate() {
+        let points = error_points(scene, error_plot);
         if points.is_empty() {
-            if metric == ErrorMetric::Mse {
+            if index == 0 {
                 page.push_str("<p>No mode has an error against the truth to plot.</p>\n");
             }
             continue;
         }
-        let title = format!("{}: {}", scene.name, metric.title(scene));
-        let plot = plots::error_against_time(&title, [metric.time_axis(), metric.axis()], &points)?;
+        let title = format!("{}: {}", scene.name, error_plot.title(scene));
+        let plot = plots::error_against_time(&title, [error_plot.time_axis(), error_plot.axis()], &points)?;
         let _ = writeln!(page, "<figure class=\"plot\">{plot}</figure>");
     }
     tables::verdict_table(page, &checks);

@@ -1,22 +1,61 @@
 //! The report's plots, drawn as SVG with plotters: error against run time per scene, and key
 //! metrics over past runs.
 
-use aabench_renderer::{Marker, Shape};
+use aabench_renderer::{Counts, Reconstruction, Technique};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+
+/// The shape of a technique's points on the error-against-time plots.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shape {
+    Square,
+    Cross,
+    /// A square with a cross inside.
+    CrossedSquare,
+    Triangle,
+    Circle,
+}
+
+/// How a technique's points look on the plots: related techniques share a shape, filled for
+/// the one that the hollow ones are measured against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Marker {
+    pub shape: Shape,
+    pub filled: bool,
+}
+
+/// A technique's points on the plots: squares for the one-sample techniques (deferred shading
+/// filled, SMAA hollow, TAA crossed), a cross for FXAA, triangles for the M×M grid (the
+/// reference filled, MSAA hollow), discs for the paper's adaptive modes and circles for the
+/// variants beyond it. One arm per technique, no catch-all: a new technique is asked for its
+/// marker.
+pub fn marker(technique: Technique) -> Marker {
+    let (shape, filled) = match technique {
+        Technique::Deferred => (Shape::Square, true),
+        Technique::Fxaa => (Shape::Cross, false),
+        Technique::Smaa => (Shape::Square, false),
+        Technique::Taa => (Shape::CrossedSquare, false),
+        Technique::Reference => (Shape::Triangle, true),
+        Technique::Msaa => (Shape::Triangle, false),
+        Technique::Adaptive(_, reconstruction, counts) => {
+            (Shape::Circle, reconstruction == Reconstruction::Equal && counts == Counts::PerFrame)
+        }
+    };
+    Marker { shape, filled }
+}
 
 /// One mode on the error-against-time plot.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Point {
     pub label: String,
-    /// Its technique's ([`aabench_renderer::Technique::marker`]).
+    /// Its technique's ([`marker`]).
     pub marker: Marker,
     pub stalled: bool,
     /// Frame time median and its interval, ms.
     pub time: f64,
     pub time_low: f64,
     pub time_high: f64,
-    /// The error against the truth the plot draws (report::ErrorMetric).
+    /// The value the plot draws: its metric's (`report::ErrorPlot`), scaled to the axis.
     pub error: f64,
     /// On the scene's error-against-run-time front (run.json's `front`).
     pub on_front: bool,

@@ -6,6 +6,8 @@
 //! core, so overlapping CPU work would corrupt timings).
 
 mod console;
+mod context;
+mod measures;
 mod memory;
 mod results;
 mod rounds;
@@ -25,7 +27,7 @@ use crate::plan::{RunPlan, SceneEntry, Tier, fallback_name};
 use crate::progress::Progress;
 use crate::record::{Platform, RUN_SCHEMA, RunRecord, RunSettings, SceneRecord, Status};
 use crate::worker::Worker;
-use scene::SceneRun;
+use context::SceneRun;
 
 /// How a run ended.
 #[derive(Debug)]

@@ -7,8 +7,7 @@ use std::sync::Arc;
 
 use aabench_renderer::{DisplayImage, FrameImages, Mode, Technique};
 
-use super::rounds::ModeRun;
-use super::scene::SceneRun;
+use super::context::{ModeRun, SceneRun};
 use crate::images;
 use crate::metrics::{self, Quality};
 use crate::perceptual::FlipMap;

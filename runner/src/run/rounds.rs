@@ -4,23 +4,10 @@
 
 use aabench_renderer::{FrameImages, FrameTiming, RenderError};
 
-use super::scene::SceneRun;
+use super::context::{ModeRun, SceneRun};
 use crate::metrics::FrameChecks;
-use crate::record::{GraphRecord, ModeSequence, fingerprint};
+use crate::record::fingerprint;
 use crate::worker::WorkerError;
-
-/// What one mode measured during the scene's timed loop.
-#[derive(Debug, Default)]
-pub(super) struct ModeRun {
-    pub(super) graph: Option<GraphRecord>,
-    pub(super) timings: Vec<FrameTiming>,
-    pub(super) hashes: Vec<String>,
-    pub(super) images: Option<FrameImages>,
-    pub(super) checks: FrameChecks,
-    /// Its sequences, one per scene sequence, where the scene has a camera path.
-    pub(super) sequences: Vec<Option<ModeSequence>>,
-    pub(super) error: Option<String>,
-}
 
 /// What one rendered frame gave: its timing, its fingerprint (timed frames), the checks of its
 /// HDR values and sample counts, and its images (the first timed frame).

@@ -3,72 +3,22 @@
 //! (`sequence.rs`), free the device, then write images and metrics (`results.rs`). A phase that
 //! fails ends the scene with its error; the run goes on.
 
-use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use aabench_renderer::scene::Camera;
 use aabench_renderer::{DisplayImage, color};
 
+use super::context::{ModeRun, SceneRun};
 use super::results::finish_modes;
-use super::rounds::ModeRun;
 use super::{empty_scene, render_settings, sequence};
 use crate::images;
 use crate::inputs::SceneInputs;
-use crate::manifest::Manifest;
-use crate::plan::RunPlan;
-use crate::progress::Progress;
 use crate::record::{ExposureRecord, GraphRecord, SceneRecord, Status, fingerprint};
 use crate::scenes;
 use crate::truth::{self, TRUTH_ID, TRUTH_M, TruthRecord};
-use crate::worker::Worker;
-
-/// One scene's run: what its phases read and the GPU worker they render on.
-pub(super) struct SceneRun<'a> {
-    pub worker: &'a mut Worker,
-    pub plan: &'a RunPlan,
-    pub manifest: &'a Manifest,
-    pub progress: &'a Progress,
-    /// Set by the first signal: the current frame finishes and what was measured is kept.
-    pub cancel: &'a Arc<AtomicBool>,
-    /// The scene's resolution in the plan's tier.
-    pub resolution: [u32; 2],
-    /// The scene's folder in the run's: `<run>/<scene>/`.
-    pub dir: PathBuf,
-    /// Whether a material samples a texture: where none does, an adaptive mode's full windows
-    /// reuse S (see `sample_stats`). Known once the scene is loaded.
-    pub textured: bool,
-}
 
 impl<'a> SceneRun<'a> {
-    pub fn new(
-        worker: &'a mut Worker,
-        plan: &'a RunPlan,
-        manifest: &'a Manifest,
-        progress: &'a Progress,
-        cancel: &'a Arc<AtomicBool>,
-    ) -> SceneRun<'a> {
-        let resolution = plan.tier.resolution(manifest);
-        let dir = plan.run_dir.join(&manifest.name);
-        SceneRun { worker, plan, manifest, progress, cancel, resolution, dir, textured: false }
-    }
-
-    /// Whether a signal asked the run to stop.
-    pub fn cancelled(&self) -> bool {
-        self.cancel.load(Ordering::SeqCst)
-    }
-
-    /// Shows what the scene is doing on the progress line.
-    pub fn status(&self, what: &str) {
-        self.progress.status(&format!("[{}] {what}", self.manifest.name));
-    }
-
-    /// Prints a warning about the scene.
-    pub fn warn(&self, what: &str) {
-        self.progress.line(&format!("[{}] warning: {what}", self.manifest.name));
-    }
-
     /// The scene, phase after phase, into its record.
     pub async fn run(mut self) -> SceneRecord {
         let mut record = empty_scene(self.manifest);

@@ -24,7 +24,12 @@ struct Groups {
 }
 
 fn load_groups(pixel: vec2<i32>) -> Groups {
-    let g = textureLoad(groups, pixel, 0);
+    return groups_in(groups, pixel);
+}
+
+// A pixel's Groups in `texture`, laid out as `groups` (emit_row's texture is a parameter).
+fn groups_in(texture: texture_2d<u32>, pixel: vec2<i32>) -> Groups {
+    let g = textureLoad(texture, pixel, 0);
     return Groups(g.x & 0xffffu, g.yz, (g.x & TEXTURE_VARIES) != 0u);
 }
 
@@ -230,26 +235,7 @@ fn evaluate_coverage(@builtin(position) position: vec4<f32>) -> CoverageOut {
 // `emit` for `-coverage`: each pixel of n > 1 lists its shaded cells, in cell order.
 @compute @workgroup_size(64)
 fn emit_groups(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = textureDimensions(counts);
-    let y = id.x;
-    if y >= size.y {
-        return;
-    }
-    var offset = row_offsets[y];
-    for (var x = 0u; x < size.x; x += 1u) {
-        let pixel = vec2<i32>(i32(x), i32(y));
-        let n = textureLoad(counts, pixel, 0).r;
-        pixel_offsets[y * size.x + x] = offset;
-        if n == 1u {
-            continue;
-        }
-        var rest = load_groups(pixel).shaded;
-        while rest != 0u {
-            entries[offset] = list_entry(pixel * i32(M) + cell_offset(firstTrailingBit(rest)), n);
-            rest &= rest - 1u;
-            offset += 1u;
-        }
-    }
+    emit_row(id, groups, true);
 }
 
 struct ShadeOut {

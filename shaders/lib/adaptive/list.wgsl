@@ -36,9 +36,11 @@ fn scan_total() {
     totals[0] = total;
 }
 
-// Writes each pixel's first list index and the entries of its extra samples.
-@compute @workgroup_size(64)
-fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
+// Writes the first list index of each pixel of row `id.x` and the entries of its listed
+// samples: its extra ranks, from first_extra_rank(n) (`emit`), or, `by_groups` (`-coverage`'s
+// `emit_groups`), the shaded cells that `groups_texture` holds for each pixel of n > 1, in cell
+// order. The texture is a parameter so that `emit` passes `counts` and binds no `groups`.
+fn emit_row(id: vec3<u32>, groups_texture: texture_2d<u32>, by_groups: bool) {
     let size = textureDimensions(counts);
     let y = id.x;
     if y >= size.y {
@@ -46,14 +48,32 @@ fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     var offset = row_offsets[y];
     for (var x = 0u; x < size.x; x += 1u) {
-        let pixel = y * size.x + x;
-        let n = textureLoad(counts, vec2<u32>(x, y), 0).r;
-        pixel_offsets[pixel] = offset;
-        for (var rank = first_extra_rank(n); rank < n; rank += 1u) {
-            entries[offset] = list_entry(window_texel(vec2<i32>(i32(x), i32(y)), rank), n);
-            offset += 1u;
+        let pixel = vec2<i32>(i32(x), i32(y));
+        let n = textureLoad(counts, pixel, 0).r;
+        pixel_offsets[y * size.x + x] = offset;
+        if by_groups {
+            if n == 1u {
+                continue;
+            }
+            var rest = groups_in(groups_texture, pixel).shaded;
+            while rest != 0u {
+                entries[offset] = list_entry(pixel * i32(M) + cell_offset(firstTrailingBit(rest)), n);
+                rest &= rest - 1u;
+                offset += 1u;
+            }
+        } else {
+            for (var rank = first_extra_rank(n); rank < n; rank += 1u) {
+                entries[offset] = list_entry(window_texel(pixel, rank), n);
+                offset += 1u;
+            }
         }
     }
+}
+
+// Writes each pixel's first list index and the entries of its extra samples.
+@compute @workgroup_size(64)
+fn emit(@builtin(global_invocation_id) id: vec3<u32>) {
+    emit_row(id, counts, false);
 }
 
 // ---- shade_extra: the list, read only

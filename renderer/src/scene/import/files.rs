@@ -1,5 +1,5 @@
 //! The file and the files it names: regular files only, URIs inside the file's folder
-//! tree, extensions it uses or requires.
+//! tree, base64 `data:` URIs decoded, extensions it uses or requires.
 
 use std::path::{Path, PathBuf};
 
@@ -35,7 +35,7 @@ pub(super) fn check_external_files(document: &gltf::Document, base: &Path) -> Re
         if uri.starts_with("data:") {
             // The gltf crate decodes a buffer's data without saying which buffer it is.
             if what.starts_with("buffers") {
-                super::images::decode_data_uri(uri).map_err(|e| format!("{what} (data URI): {e}"))?;
+                decode_data_uri(uri).map_err(|e| format!("{what} (data URI): {e}"))?;
             }
             continue;
         }
@@ -96,6 +96,17 @@ pub fn shown(uri: &str) -> String {
 /// Whether a URI is a `data:` URI. URI schemes are case-insensitive (RFC 3986, 3.1).
 pub fn is_data_uri(uri: &str) -> bool {
     uri.get(..5).is_some_and(|scheme| scheme.eq_ignore_ascii_case("data:"))
+}
+
+/// The bytes of a base64 `data:` URI (`data:[<media type>];base64,<data>`).
+pub(super) fn decode_data_uri(uri: &str) -> Result<Vec<u8>, String> {
+    let rest = uri.strip_prefix("data:").unwrap_or(uri);
+    let (header, data) = rest.split_once(',').ok_or("no `,` between the media type and the data")?;
+    if !header.ends_with(";base64") {
+        let header = shown(header);
+        return Err(format!("`data:{header},…` is not base64; only base64 data URIs are read"));
+    }
+    base64::decode(data).map_err(|e| format!("bad base64: {e}"))
 }
 
 /// Writes every buffer's and image's `data:` scheme in lower case, the one spelling the gltf

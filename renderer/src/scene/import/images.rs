@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use super::files::{ImageSource, image_source, percent_decode};
+use super::files::{ImageSource, decode_data_uri, image_source, percent_decode};
 use super::primitives::view_bytes;
 use crate::scene::{Encoding, Texture};
 
@@ -88,15 +88,4 @@ fn decode_image(
     decoder.limits(limits);
     let decoded = decoder.decode().map_err(|e| format!("{what}: cannot decode: {e}"))?;
     Ok(Texture { width, height, rgba: decoded.into_rgba8().into_raw(), encoding })
-}
-
-/// The bytes of a base64 `data:` URI (`data:[<media type>];base64,<data>`).
-pub(super) fn decode_data_uri(uri: &str) -> Result<Vec<u8>, String> {
-    let rest = uri.strip_prefix("data:").unwrap_or(uri);
-    let (header, data) = rest.split_once(',').ok_or("no `,` between the media type and the data")?;
-    if !header.ends_with(";base64") {
-        let header = super::files::shown(header);
-        return Err(format!("`data:{header},…` is not base64; only base64 data URIs are read"));
-    }
-    base64::decode(data).map_err(|e| format!("bad base64: {e}"))
 }

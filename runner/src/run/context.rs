@@ -1,0 +1,75 @@
+//! What a scene's phases share: the scene's run (its plan, manifest, worker and folder) and,
+//! per mode, what its stills measured. The phases (`rounds.rs`, `sequence.rs`, `results.rs`)
+//! take these from here and give back only their results; `scene.rs` runs them in order.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use aabench_renderer::{FrameImages, FrameTiming};
+
+use crate::manifest::Manifest;
+use crate::metrics::FrameChecks;
+use crate::plan::RunPlan;
+use crate::progress::Progress;
+use crate::record::{GraphRecord, ModeSequence};
+use crate::worker::Worker;
+
+/// One scene's run: what its phases read and the GPU worker they render on.
+pub(super) struct SceneRun<'a> {
+    pub worker: &'a mut Worker,
+    pub plan: &'a RunPlan,
+    pub manifest: &'a Manifest,
+    pub progress: &'a Progress,
+    /// Set by the first signal: the current frame finishes and what was measured is kept.
+    pub cancel: &'a Arc<AtomicBool>,
+    /// The scene's resolution in the plan's tier.
+    pub resolution: [u32; 2],
+    /// The scene's folder in the run's: `<run>/<scene>/`.
+    pub dir: PathBuf,
+    /// Whether a material samples a texture: where none does, an adaptive mode's full windows
+    /// reuse S (see `sample_stats`). Known once the scene is loaded.
+    pub textured: bool,
+}
+
+impl<'a> SceneRun<'a> {
+    pub fn new(
+        worker: &'a mut Worker,
+        plan: &'a RunPlan,
+        manifest: &'a Manifest,
+        progress: &'a Progress,
+        cancel: &'a Arc<AtomicBool>,
+    ) -> SceneRun<'a> {
+        let resolution = plan.tier.resolution(manifest);
+        let dir = plan.run_dir.join(&manifest.name);
+        SceneRun { worker, plan, manifest, progress, cancel, resolution, dir, textured: false }
+    }
+
+    /// Whether a signal asked the run to stop.
+    pub fn cancelled(&self) -> bool {
+        self.cancel.load(Ordering::SeqCst)
+    }
+
+    /// Shows what the scene is doing on the progress line.
+    pub fn status(&self, what: &str) {
+        self.progress.status(&format!("[{}] {what}", self.manifest.name));
+    }
+
+    /// Prints a warning about the scene.
+    pub fn warn(&self, what: &str) {
+        self.progress.line(&format!("[{}] warning: {what}", self.manifest.name));
+    }
+}
+
+/// What one mode measured during the scene's timed loop.
+#[derive(Debug, Default)]
+pub(super) struct ModeRun {
+    pub(super) graph: Option<GraphRecord>,
+    pub(super) timings: Vec<FrameTiming>,
+    pub(super) hashes: Vec<String>,
+    pub(super) images: Option<FrameImages>,
+    pub(super) checks: FrameChecks,
+    /// Its sequences, one per scene sequence, where the scene has a camera path.
+    pub(super) sequences: Vec<Option<ModeSequence>>,
+    pub(super) error: Option<String>,
+}

@@ -1,0 +1,297 @@
+//! What a sequence measures of each mode, frame by frame, against the truth's frames: the
+//! error (MSE per frame; FLIP per frame once the path is rendered, from the spool), the error
+//! along the truth's motion (flicker) and what lag costs (`temporal.rs`), the uncompensated
+//! change of error and of the image, sample counts and frame times in motion; and the truth's
+//! own change. `sequence.rs` renders the frames and hands each here.
+//!
+//! **Flicker** is measured along the truth's own motion (`temporal.rs`): each pixel followed
+//! back to where its surface point lay in the frame before, by the scene's geometry probe
+//! rendered at every frame, and the mode's error compared there. An error that travels with the
+//! surface does not count; one that crawls, shimmers or stays put while the scene moves does.
+//! Beside it, what lag costs: the error on the pixels the frame before did not see
+//! (disoccluded), at silhouettes that moved, and elsewhere.
+//!
+//! **Temporal instability** is kept for the gate: the mean over pixels, channels and
+//! consecutive frame pairs of ((A_f − A_{f−1}) − (T_f − T_{f−1}))², with A and T the mode's and
+//! the truth's display images (code values scaled to [0, 1]), without motion compensation. It
+//! rewards lag and blur: an image that never changes scores the truth's own change.
+//! `change_ratio` sets the mode's own mean squared frame-to-frame change against the truth's.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use aabench_renderer::{DisplayImage, Mode};
+
+use crate::metrics::{self, Decibels, FrameChecks};
+use crate::record::{GhostFrame, Ghosting, ModeSequence, SequenceRecord, fingerprint};
+use crate::spool::Spool;
+use crate::temporal::{
+    self, Flow, Geometry, PairError, change_of_error, mean_of, per_value, squared_difference,
+};
+
+/// What a mode's sequence gave: its record (absent where it failed or was cut short), the checks
+/// of its frames, and its error.
+#[derive(Debug)]
+pub(super) struct ModeOutcome {
+    pub sequence: Option<ModeSequence>,
+    pub checks: FrameChecks,
+    pub error: Option<String>,
+}
+
+impl ModeOutcome {
+    /// The outcome of a mode that takes the frames of `twin`, whose outcome this is: its
+    /// sequence without a time of its own.
+    pub(super) fn of_twin(&self, twin: Mode) -> ModeOutcome {
+        let sequence = self.sequence.clone().map(|sequence| ModeSequence {
+            frame_ms: None,
+            frames_of: Some(twin.to_string()),
+            ..sequence
+        });
+        let error = self.error.as_ref().map(|error| format!("{twin}, whose frames it takes: {error}"));
+        ModeOutcome { sequence, checks: self.checks, error }
+    }
+}
+
+/// A mode's frame: its time, display image, sample counts and checks.
+pub(super) struct ModeFrame {
+    pub seconds: f64,
+    pub display: DisplayImage,
+    pub counts: Option<Vec<u8>>,
+    pub checks: FrameChecks,
+}
+
+/// The truth's frame and the frame before, and how the pixels of one follow back into the
+/// other.
+pub(super) struct TruthPair<'a> {
+    pub now: &'a DisplayImage,
+    pub then: Option<&'a DisplayImage>,
+    pub flow: Option<&'a Flow>,
+}
+
+/// What the sequence keeps of a mode between frames, and its sums so far.
+#[derive(Default)]
+pub(super) struct ModeState {
+    previous: Option<ModeFrame>,
+    mse: Vec<f64>,
+    /// Per frame, FLIP against the truth's: filled in once the path is rendered.
+    pub flip: Vec<f64>,
+    hashes: Vec<String>,
+    /// Σ (ΔA − ΔT)² and Σ ΔA², in squared code steps.
+    error_change: u64,
+    own_change: u64,
+    count_changes: Vec<f64>,
+    /// Per frame, the share of samples shaded (modes with a sample-count map), and the frame's
+    /// time (every frame but the first, which is rendered as a still).
+    shaded_percent: Vec<f64>,
+    frame_seconds: Vec<f64>,
+    /// The error along the truth's motion, summed over the frame pairs; per pair, the share of
+    /// pixels disoccluded and the error there.
+    followed: PairError,
+    ghosting: Vec<GhostFrame>,
+    checks: FrameChecks,
+    pub error: Option<String>,
+}
+
+/// The truth's side of a sequence: its frame and geometry before, and its own changes so far.
+#[derive(Default)]
+pub(super) struct TruthTrack {
+    pub previous: Option<(DisplayImage, Geometry)>,
+    /// Σ of the squared frame-to-frame change, in squared code steps, over the pairs so far.
+    change: u64,
+    pairs: usize,
+    /// Σ of the squared change along the motion, and its count of values.
+    along_motion: (f64, u64),
+}
+
+impl TruthTrack {
+    /// Takes the next frame's truth and geometry, followed back into the frame before by
+    /// `flow`, and records the truth's own changes so far.
+    pub fn advance(
+        &mut self,
+        truth: DisplayImage,
+        geometry: Geometry,
+        flow: Option<&Flow>,
+        record: &mut SequenceRecord,
+    ) {
+        if let Some((before, _)) = &self.previous {
+            self.change += squared_difference(&truth, before);
+            self.pairs += 1;
+            record.truth_change = Some(per_value(self.change, &truth, self.pairs));
+            if let Some(flow) = flow {
+                let (sum, count) = flow.own_change(&truth, before);
+                self.along_motion = (self.along_motion.0 + sum, self.along_motion.1 + count);
+                record.truth_flicker = temporal::mean(self.along_motion);
+            }
+        }
+        self.previous = Some((truth, geometry));
+    }
+}
+
+impl ModeState {
+    /// Adds a frame: its error against the truth's frame and, from the frame before, its error
+    /// along the truth's motion (each pixel's flicker also added to `flicker`), and the change
+    /// of its error, of its image and of its sample counts.
+    pub fn add(
+        &mut self,
+        mode: Mode,
+        frame: ModeFrame,
+        truth: &TruthPair,
+        flicker: &mut [f64],
+        textured: bool,
+    ) {
+        self.checks.add(frame.checks);
+        // Counts outside the window are reported by the frame's checks.
+        if let Some(stats) =
+            frame.counts.as_deref().and_then(|counts| metrics::sample_stats(counts, mode, textured).ok())
+        {
+            self.shaded_percent.push(stats.shaded_percent);
+        }
+        if self.previous.is_some() {
+            self.frame_seconds.push(frame.seconds);
+        }
+        self.hashes.push(fingerprint(&frame.display, frame.counts.as_deref()));
+        self.mse.push(metrics::quality(&frame.display, truth.now, "truth").mse);
+        if let (Some(before), Some(truth_before)) = (&self.previous, truth.then) {
+            self.error_change += change_of_error(
+                &frame.display.rgba,
+                &before.display.rgba,
+                &truth.now.rgba,
+                &truth_before.rgba,
+            );
+            self.own_change += squared_difference(&frame.display, &before.display);
+            if let (Some(now), Some(then)) = (&frame.counts, &before.counts) {
+                let changed = now.iter().zip(then).filter(|(a, b)| a != b).count();
+                self.count_changes.push(changed as f64 / now.len().max(1) as f64);
+            }
+            if let Some(flow) = truth.flow {
+                let pair = [&frame.display, truth.now];
+                let error = flow.error(pair, [&before.display, truth_before], flicker);
+                self.ghosting.push(GhostFrame {
+                    disoccluded: flow.disoccluded_share(),
+                    mse: temporal::mean(error.disoccluded),
+                });
+                self.followed.add(&error);
+            }
+        }
+        self.previous = Some(frame);
+    }
+
+    /// The mode's outcome over the `frames` frames every mode rendered: no record where it
+    /// failed, where fewer than two frames were rendered, or where it rendered a frame more
+    /// than the others (the sequence stopped in the middle of a frame).
+    pub fn conclude(self, frames: usize, truth_change: Option<f64>) -> ModeOutcome {
+        let ModeState {
+            previous,
+            mse,
+            flip,
+            hashes,
+            error_change,
+            own_change,
+            count_changes,
+            shaded_percent,
+            frame_seconds,
+            followed,
+            ghosting,
+            checks,
+            error,
+        } = self;
+        let Some(last) = previous.filter(|_| error.is_none() && mse.len() == frames && frames > 1) else {
+            return ModeOutcome { sequence: None, checks, error };
+        };
+        let pairs = frames - 1;
+        let mean_mse = mse.iter().sum::<f64>() / frames as f64;
+        let own = per_value(own_change, &last.display, pairs);
+        let sequence = ModeSequence {
+            psnr_db: mse.iter().map(|&e| Decibels::from_f64(-10.0 * e.log10())).collect(),
+            mean_psnr_db: Decibels::from_f64(-10.0 * mean_mse.log10()),
+            mse,
+            mean_flip: (flip.len() == frames).then(|| flip.iter().sum::<f64>() / frames as f64),
+            flip,
+            instability: per_value(error_change, &last.display, pairs),
+            change_ratio: truth_change.filter(|&t| t > 0.0).map(|t| own / t),
+            count_changes: mean_of(&count_changes),
+            shaded_percent: mean_of(&shaded_percent),
+            frame_ms: crate::stats::Summary::new(frame_seconds.iter().map(|s| s * 1e3).collect()),
+            frames_of: None,
+            flicker: temporal::mean(followed.flicker),
+            ghosting: mean_of(&ghosting.iter().map(|g| g.disoccluded).collect::<Vec<_>>()).map(
+                |disoccluded| Ghosting {
+                    disoccluded,
+                    mse: temporal::mean(followed.disoccluded),
+                    mse_edges: temporal::mean(followed.edges),
+                    mse_elsewhere: temporal::mean(followed.elsewhere),
+                    per_frame: ghosting,
+                },
+            ),
+            hashes,
+        };
+        ModeOutcome { sequence: Some(sequence), checks, error: None }
+    }
+}
+
+/// Per stream of the spool, each of its first `frames` frames' mean FLIP against the truth's
+/// frame (stream 0's); empty for the truth's and for a stream that holds fewer frames (its mode
+/// failed on the way). Frames identical to another (a stalled mode's and its twin's) are
+/// compared once; the comparisons of a frame run on every core.
+pub(super) fn flip_along(spool: &Spool, frames: usize, cancel: &AtomicBool) -> Result<Vec<Vec<f64>>, String> {
+    let [width, height] = spool.size();
+    let complete: Vec<usize> = (1..spool.streams()).filter(|&s| spool.frames(s) >= frames).collect();
+    let mut flips = vec![Vec::with_capacity(frames); spool.streams()];
+    let threads = std::thread::available_parallelism().map_or(1, usize::from);
+    for frame in 0..frames {
+        // A signal stops the comparisons between images, not after the path's last.
+        let stopped = || format!("interrupted: FLIP stopped at frame {frame} of {frames}");
+        if cancel.load(Ordering::SeqCst) {
+            return Err(stopped());
+        }
+        let truth = spool.frame(0, frame)?;
+        let images = complete.iter().map(|&s| spool.frame(s, frame)).collect::<Result<Vec<_>, _>>()?;
+        let mut seen = std::collections::HashSet::new();
+        let distinct: Vec<&[u8]> =
+            images.iter().map(Vec::as_slice).filter(|image| seen.insert(*image)).collect();
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let compare = || {
+            let mut done = Vec::new();
+            loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some(image) = distinct.get(i).filter(|_| !cancel.load(Ordering::SeqCst)) else {
+                    return done;
+                };
+                done.push((*image, crate::perceptual::flip_rgba8(image, &truth, width, height).mean()));
+            }
+        };
+        let values: std::collections::HashMap<&[u8], f64> = std::thread::scope(|scope| {
+            let workers: Vec<_> = (0..threads).map(|_| scope.spawn(compare)).collect();
+            workers.into_iter().flat_map(|w| w.join().expect("a FLIP thread panicked")).collect()
+        });
+        if values.len() < distinct.len() {
+            return Err(stopped());
+        }
+        for (&stream, image) in complete.iter().zip(&images) {
+            flips[stream].push(values[image.as_slice()]);
+        }
+    }
+    Ok(flips)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flip_along_the_path_stops_at_a_signal() {
+        let dir = std::env::temp_dir().join(format!("aabench-flip-stop-{}", std::process::id()));
+        let mut spool =
+            Spool::create(dir.join("spool"), [8, 8], vec!["truth".into(), "mode".into()]).unwrap();
+        for value in [10, 200] {
+            for stream in [0, 1] {
+                spool.append(stream, &DisplayImage::from_rgba8(&[value; 256])).unwrap();
+            }
+        }
+        let flips = flip_along(&spool, 2, &AtomicBool::new(false)).unwrap();
+        assert_eq!((flips[1].len(), flips[1][0]), (2, 0.0), "identical frames: FLIP 0 at each");
+        let error = flip_along(&spool, 2, &AtomicBool::new(true)).unwrap_err();
+        assert!(error.contains("interrupted"), "{error}");
+        drop(spool);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -167,6 +167,16 @@ pub fn bless(runs: &[RunRecord], root: &Path, consent: Consent, now: &str) -> Re
     Ok(blessed)
 }
 
+/// The baselines that blessing `runs` into `root` would replace: the readable ones of the
+/// runs' own platform, tier and scenes.
+pub fn replaced_by(runs: &[RunRecord], root: &Path) -> Vec<Baseline> {
+    let Some(run) = runs.first() else { return Vec::new() };
+    run.scenes
+        .iter()
+        .filter_map(|scene| load(&path(root, &run.platform.key, run.tier, &scene.name)).ok())
+        .collect()
+}
+
 /// Writes `baselines` into `dir` as one transaction: the folder's other files and the new
 /// ones are assembled in a staging folder beside it (`<tier>.tmp-<pid>`, a temporary that a
 /// later bless removes once its process is gone), which then trades places with `dir` in one

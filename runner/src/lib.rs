@@ -16,6 +16,7 @@ pub mod markup;
 pub mod merge;
 pub mod metrics;
 pub mod motion;
+pub mod moved;
 pub mod perceptual;
 pub mod plan;
 pub mod progress;

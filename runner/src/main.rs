@@ -378,10 +378,14 @@ fn bless(runs: &[PathBuf], root: &Path, consent: baseline::Consent) -> u8 {
         );
     }
     let now = humantime::format_rfc3339_seconds(std::time::SystemTime::now()).to_string();
+    let replaced = baseline::replaced_by(&records, root);
     match baseline::bless(&records, root, consent, &now) {
         Ok(blessed) => {
             for path in &blessed.written {
                 say!("blessed {}", path.display());
+            }
+            if let Err(message) = say_what_moved(&records, root, &replaced, &blessed) {
+                tell!("aabench: warning: {message}");
             }
             for (scene, reason) in &blessed.skipped {
                 tell!("aabench: {scene}: not blessed: {reason}");
@@ -394,6 +398,33 @@ fn bless(runs: &[PathBuf], root: &Path, consent: baseline::Consent) -> u8 {
         }
         Err(message) => fail(message),
     }
+}
+
+/// Prints what the bless moved against the baselines it replaced, and writes it beside them
+/// (`<key>/<tier>.bless.md`) for the commit that carries them.
+fn say_what_moved(
+    records: &[RunRecord],
+    root: &Path,
+    replaced: &[baseline::Baseline],
+    blessed: &baseline::Blessed,
+) -> Result<(), String> {
+    let Some(run) = records.first().filter(|_| !blessed.written.is_empty()) else { return Ok(()) };
+    let written = blessed.written.iter().map(|path| baseline::load(path)).collect::<Result<Vec<_>, _>>()?;
+    let changes = aabench::moved::between(replaced, &written);
+    let runs: Vec<&str> = records.iter().map(|r| r.run_id.as_str()).collect();
+    let heading = format!(
+        "{} scene(s) of `{}/{}` blessed from run(s) `{}`, against the baselines they replace.",
+        written.len(),
+        run.platform.key,
+        run.tier.name(),
+        runs.join("`, `")
+    );
+    let text = aabench::moved::markdown(&changes, &heading);
+    say!("{text}");
+    let path = root.join(&run.platform.key).join(format!("{}.bless.md", run.tier.name()));
+    aabench::fs::write(&path, text.as_bytes())?;
+    say!("(written to {})", path.display());
+    Ok(())
 }
 
 /// A run read back, after removing what killed processes left in its folder (a sequence's

@@ -604,6 +604,46 @@ fn baselines_of_another_key_judge_a_run_only_where_every_image_is_theirs() {
 }
 
 #[test]
+fn bless_says_what_it_moved_and_calls_out_the_papers_bits() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("moved");
+    ws.manifest("edge", "edge", |_| {});
+    let measured = blessed_run(&ws);
+    let record = read_json(&measured.join("run.json"));
+    let written =
+        ws.dir.join("baselines").join(record["platform"]["key"].as_str().unwrap()).join("quick.bless.md");
+    assert!(std::fs::read_to_string(&written).unwrap().contains("- edge: a new scene (4 modes)"));
+    // The same run blessed again moves nothing.
+    let again = ws.run(&["bless", arg(&measured)]);
+    assert_eq!(again.status.code(), Some(0), "{}", stderr(&again));
+    let said = String::from_utf8_lossy(&again.stdout).into_owned();
+    assert!(said.contains("Nothing moved: every one of the 4 output hashes"), "{said}");
+    assert!(std::fs::read_to_string(&written).unwrap().contains("Nothing moved"));
+    // The paper's bits and one PSNR moved: the bless needs a reason and lists exactly those.
+    let moved = doctored(&ws, "moved", &record, |r| {
+        let mode = mode_mut(r, "adaptive-2x2");
+        mode["output_hash"] = json!("0123456789abcdef");
+        let psnr = &mut mode["vs_ground_truth"]["psnr_db"];
+        *psnr = json!(psnr.as_f64().unwrap() - 0.5);
+    });
+    let output = ws.run(&["bless", arg(&moved), "--why", "the test moves them"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let said = String::from_utf8_lossy(&output.stdout).into_owned();
+    assert!(
+        said.contains("Output hashes moved in 1 of 4 modes; the paper's mode: **edge adaptive-2x2**"),
+        "{said}"
+    );
+    let rows: Vec<&str> = said.lines().filter(|line| line.starts_with("| edge |")).collect();
+    assert_eq!(rows.len(), 2, "the hash and the PSNR, nothing else: {said}");
+    assert!(
+        rows[0].contains("**adaptive-2x2** (the paper's) | ") && rows[0].ends_with("→ 0123456789abcdef |")
+    );
+    assert!(rows[1].starts_with("| edge | adaptive-2x2 | psnr_vs_truth | "), "{}", rows[1]);
+    let file = std::fs::read_to_string(&written).unwrap();
+    assert!(file.starts_with("# What the bless moved") && said.contains(&file), "{file}");
+}
+
+#[test]
 fn the_truth_note_speaks_only_when_the_truth_image_changed() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let ws = Workspace::new("truth-note");

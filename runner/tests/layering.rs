@@ -5,8 +5,12 @@
 //! outside `#[cfg(test)]` modules, doc comments and comments. Inside each folder module, its
 //! children use each other in no cycle either, read from `crate::`, `super::` and `self::` paths.
 
+mod source;
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
+
+use source::production_code;
 
 fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
@@ -27,48 +31,6 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 fn ident(text: &str) -> &str {
     let end = text.find(|c: char| !(c.is_alphanumeric() || c == '_')).unwrap_or(text.len());
     &text[..end]
-}
-
-/// The source without comments (from `//` to the end of a line, doc comments included) and
-/// without `#[cfg(test)]` items (the braced block that follows the attribute): test code may
-/// reach anywhere.
-fn production_code(source: &str) -> String {
-    let lines: Vec<&str> = source.lines().map(|line| line.split("//").next().unwrap_or_default()).collect();
-    let code = lines.join("\n");
-    let mut out = String::new();
-    let mut rest = code.as_str();
-    while let Some(at) = rest.find("#[cfg(test)]") {
-        out.push_str(&rest[..at]);
-        let after = &rest[at..];
-        // An item without a block (`#[cfg(test)] mod tests;`) ends at its semicolon.
-        let semicolon = after.find(';').unwrap_or(after.len());
-        let Some(open) = after.find('{') else {
-            rest = &after[(semicolon + 1).min(after.len())..];
-            continue;
-        };
-        if semicolon < open {
-            rest = &after[semicolon + 1..];
-            continue;
-        }
-        let mut depth = 0usize;
-        let mut end = after.len();
-        for (i, c) in after[open..].char_indices() {
-            match c {
-                '{' => depth += 1,
-                '}' => {
-                    depth -= 1;
-                    if depth == 0 {
-                        end = open + i + 1;
-                        break;
-                    }
-                }
-                _ => {}
-            }
-        }
-        rest = &after[end..];
-    }
-    out.push_str(rest);
-    out
 }
 
 /// The first names of the items of a `{…}` group (nested groups and line breaks included),

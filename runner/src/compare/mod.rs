@@ -110,7 +110,8 @@ pub fn compare(request: &Request) -> Verdict {
     let run = &runs[0];
     let mut notes = Vec::new();
     let mut checks = Vec::new();
-    for problem in run_problems(run, baselines) {
+    let hashes = Hashes::of(run, baselines);
+    for problem in run_problems(run, baselines, &hashes) {
         if lenient {
             notes.push(format!("{problem} (--lenient: reported, not failed)"));
         } else {
@@ -125,7 +126,7 @@ pub fn compare(request: &Request) -> Verdict {
             run.platform.key
         ));
     }
-    notes.extend(Hashes::of(run, baselines).note());
+    notes.extend(hashes.note());
     let machine = same_machine(run, baselines);
     let baseline_time_gated = baseline_time_gated(request, &machine, &mut notes);
     checks.extend(disagreements(runs));
@@ -236,9 +237,10 @@ pub fn check_comparable(groups: &[&[RunRecord]; 4]) -> Result<(), String> {
     Ok(())
 }
 
-/// What makes a run unfit to gate on: no baselines, another platform's, a run without scenes,
-/// one shard of a suite, a run that did not finish. A strict compare fails on each.
-fn run_problems(run: &RunRecord, baselines: &BaselineSet) -> Vec<String> {
+/// What makes a run unfit to gate on: no baselines, only another platform's whose images differ
+/// from the run's (`hashes`), a run without scenes, one shard of a suite, a run that did not
+/// finish. A strict compare fails on each.
+fn run_problems(run: &RunRecord, baselines: &BaselineSet, hashes: &Hashes) -> Vec<String> {
     let mut problems = Vec::new();
     match (&baselines.absent, &baselines.platform_key) {
         (Some(why), _) => problems.push(format!(
@@ -246,7 +248,7 @@ fn run_problems(run: &RunRecord, baselines: &BaselineSet) -> Vec<String> {
         )),
         // Baselines of another key still judge a run whose every image is theirs to the bit.
         (None, Some(key)) if !baselines.same_platform => {
-            if let Err(first) = Hashes::of(run, baselines).all_equal() {
+            if let Err(first) = hashes.all_equal() {
                 problems.push(format!(
                     "no baselines of this run's platform `{}` for the {} tier, only of `{key}`, whose images \
                      differ from this run's ({first}): bless runs made here",

@@ -88,6 +88,13 @@ enum Command {
         #[arg(long, value_name = "TEXT")]
         why: Option<String>,
     },
+    /// Rewrite baselines of an older schema in today's, value for value (a tier's folder at
+    /// once); baselines of today's schema are left as they are.
+    Upgrade {
+        /// The baselines' root folder.
+        #[arg(long, default_value = "baselines")]
+        baseline: PathBuf,
+    },
     /// Decide per scene × mode × metric whether a run regressed against its baselines; write
     /// summary.md, junit.xml and verdict.json. Exit 0: nothing regressed, 1: something did, or
     /// the run compared less than its baselines hold, 2: an error.
@@ -212,6 +219,18 @@ fn main() -> ExitCode {
         Command::Bless { runs, baseline, force, why } => {
             bless(&runs, &baseline, baseline::Consent { force, why: why.as_deref() })
         }
+        Command::Upgrade { baseline } => match baseline::upgrade(&baseline) {
+            Ok(written) => {
+                for path in &written {
+                    say!("upgraded {}", path.display());
+                }
+                if written.is_empty() {
+                    say!("every baseline under {} is of today's schema", baseline.display());
+                }
+                exit::OK
+            }
+            Err(message) => fail(message),
+        },
         Command::Compare(args) => compare(&args),
         Command::Report { runs, markdown: true, figures, .. } => markdown_report(&runs, figures.as_deref()),
         Command::Report { runs, history, verdict, .. } => {

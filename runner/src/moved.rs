@@ -5,10 +5,9 @@
 
 use std::fmt::Write;
 
-use crate::baseline::Baseline;
-use crate::metrics::SampleStats;
-use crate::record::ModeRecord;
-use crate::vocabulary::{METRICS, Source};
+use crate::baseline::{Baseline, BlessedMode, BlessedSamples};
+use crate::record::is_paper;
+use crate::vocabulary::METRICS;
 
 /// One value of a mode that the bless changed.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,61 +53,59 @@ impl Changes {
 /// The `new` baselines against the `old` ones they replace (a scene without an old one is new).
 pub fn between(old: &[Baseline], new: &[Baseline]) -> Changes {
     let mut changes = Changes::default();
-    for baseline in new {
-        let now = baseline.scene();
-        let Some(then) = old.iter().map(Baseline::scene).find(|s| s.name == now.name) else {
-            changes.presence.push(format!("{}: a new scene ({} modes)", now.name, now.modes.len()));
+    for now in new {
+        let Some(then) = old.iter().find(|b| b.scene == now.scene) else {
+            changes.presence.push(format!("{}: a new scene ({} modes)", now.scene, now.modes.len()));
             continue;
         };
         let sequences = now.sequences.len().max(then.sequences.len());
-        for mode in &now.modes {
-            match then.mode(&mode.mode) {
-                Some(old_mode) => compare_mode(&now.name, mode, old_mode, sequences, &mut changes),
-                None => changes.presence.push(format!("{} {}: new", now.name, mode.mode)),
+        for (id, mode) in &now.modes {
+            match then.mode(id) {
+                Some(old_mode) => compare_mode(&now.scene, id, mode, old_mode, sequences, &mut changes),
+                None => changes.presence.push(format!("{} {id}: new", now.scene)),
             }
         }
-        for old_mode in then.modes.iter().filter(|m| now.mode(&m.mode).is_none()) {
-            changes.presence.push(format!("{} {}: no longer blessed", now.name, old_mode.mode));
+        for id in then.modes.keys().filter(|id| now.mode(id).is_none()) {
+            changes.presence.push(format!("{} {id}: no longer blessed", now.scene));
         }
     }
     changes
 }
 
 /// One mode's output hash, metrics and sample statistics, old against new.
-fn compare_mode(scene: &str, now: &ModeRecord, then: &ModeRecord, sequences: usize, changes: &mut Changes) {
+fn compare_mode(
+    scene: &str,
+    id: &str,
+    now: &BlessedMode,
+    then: &BlessedMode,
+    sequences: usize,
+    changes: &mut Changes,
+) {
     if let (Some(new), Some(old)) = (&now.output_hash, &then.output_hash) {
         changes.compared += 1;
         if new != old {
-            changes.hashes.push(HashMoved {
-                scene: scene.into(),
-                mode: now.mode.clone(),
-                paper: now.is_paper(),
-                old: old.clone(),
-                new: new.clone(),
-            });
+            let (old, new, paper) = (old.clone(), new.clone(), is_paper(id));
+            changes.hashes.push(HashMoved { scene: scene.into(), mode: id.into(), paper, old, new });
         }
     }
     let mut push = |value: String, old: String, new: String| {
         if old != new {
-            changes.moved.push(Moved { scene: scene.into(), mode: now.mode.clone(), value, old, new });
+            changes.moved.push(Moved { scene: scene.into(), mode: id.into(), value, old, new });
         }
     };
     for metric in &METRICS {
-        let along = if metric.source == Source::Sequence { sequences } else { 1 };
-        for index in 0..along {
-            let value =
-                if index == 0 { metric.id.to_string() } else { format!("{}@{}", metric.id, index + 1) };
-            push(value, shown(metric.value_at(then, index)), shown(metric.value_at(now, index)));
+        for index in 0..metric.values_in(sequences) {
+            push(metric.key(index), shown(then.value_at(metric, index)), shown(now.value_at(metric, index)));
         }
     }
     for (name, read) in SAMPLE_VALUES {
-        let read = |mode: &ModeRecord| mode.samples.as_ref().map_or_else(|| "–".to_string(), read);
+        let read = |mode: &BlessedMode| mode.samples.as_ref().map_or_else(|| "–".to_string(), read);
         push(format!("samples.{name}"), read(then), read(now));
     }
 }
 
 /// A sample statistic as a bless shows it.
-type SampleValue = fn(&SampleStats) -> String;
+type SampleValue = fn(&BlessedSamples) -> String;
 
 /// The sample statistics a bless reports beside the vocabulary's `shaded_percent`: the work
 /// done and the distribution.

@@ -197,12 +197,18 @@ impl SceneRecord {
     pub fn mode_of(&self, mode: aabench_renderer::Mode) -> Option<&ModeRecord> {
         self.mode(&mode.to_string())
     }
+}
+
+/// Frame times of one process's modes, round by round: what the in-run time ratios are taken
+/// from, in a run's record and in a baseline's.
+pub trait Rounds {
+    /// Mode `id`'s frame times in milliseconds, one a round.
+    fn frames(&self, id: &str) -> Option<&[f64]>;
 
     /// Round-by-round ratios of `mode`'s frame time to `anchor`'s. Every round renders each
     /// mode once, so round i of both ran moments apart and share the machine's state.
-    pub fn paired_ratios(&self, mode: &str, anchor: &str) -> Option<Vec<f64>> {
-        let own = &self.mode(mode)?.frame_ms.as_ref()?.samples;
-        let base = &self.mode(anchor)?.frame_ms.as_ref()?.samples;
+    fn paired_ratios(&self, mode: &str, anchor: &str) -> Option<Vec<f64>> {
+        let (own, base) = (self.frames(mode)?, self.frames(anchor)?);
         let ratios: Vec<f64> = own.iter().zip(base).map(|(a, b)| a / b).collect();
         (!ratios.is_empty()).then_some(ratios)
     }
@@ -211,17 +217,26 @@ impl SceneRecord {
     /// itself (a mode is not measured against itself): an anchor that averages the machine's
     /// momentary speed over several modes of the round. Rounds where any of them has no sample
     /// are left out; `None` if no anchor mode or no round remains.
-    pub fn round_anchor(&self, anchors: &[&str], mode: &str) -> Option<Vec<f64>> {
-        let samples: Vec<&Vec<f64>> = anchors
-            .iter()
-            .filter(|id| **id != mode)
-            .map(|id| self.mode(id)?.frame_ms.as_ref().map(|f| &f.samples))
-            .collect::<Option<_>>()?;
+    fn round_anchor(&self, anchors: &[&str], mode: &str) -> Option<Vec<f64>> {
+        let samples: Vec<&[f64]> =
+            anchors.iter().filter(|id| **id != mode).map(|id| self.frames(id)).collect::<Option<_>>()?;
         let rounds = samples.iter().map(|s| s.len()).min()?;
         let means: Vec<f64> = (0..rounds)
             .map(|i| samples.iter().map(|s| s[i].ln()).sum::<f64>() / samples.len() as f64)
             .collect();
         (!means.is_empty()).then_some(means)
+    }
+}
+
+impl Rounds for SceneRecord {
+    fn frames(&self, id: &str) -> Option<&[f64]> {
+        Some(&self.mode(id)?.frame_ms.as_ref()?.samples)
+    }
+}
+
+impl<T: Rounds + ?Sized> Rounds for &T {
+    fn frames(&self, id: &str) -> Option<&[f64]> {
+        (**self).frames(id)
     }
 }
 
@@ -278,9 +293,7 @@ impl ModeRecord {
     /// Whether it is the paper's adaptive mode (`adaptive-MxM`, plain or stalled), whose bits
     /// the gate holds to its baseline.
     pub fn is_paper(&self) -> bool {
-        self.mode
-            .parse::<aabench_renderer::Mode>()
-            .is_ok_and(|mode| mode.technique == aabench_renderer::Technique::PAPER)
+        is_paper(&self.mode)
     }
 
     /// Its sequence along the scene's first (the gate's) sequence, where it has one.
@@ -298,6 +311,12 @@ impl ModeRecord {
     pub fn parsed(&self) -> Option<aabench_renderer::Mode> {
         self.mode.parse().ok()
     }
+}
+
+/// Whether mode `id` is the paper's adaptive mode (`adaptive-MxM`, plain or stalled).
+pub fn is_paper(id: &str) -> bool {
+    id.parse::<aabench_renderer::Mode>()
+        .is_ok_and(|mode| mode.technique == aabench_renderer::Technique::PAPER)
 }
 
 /// A mode's pass graph as compiled for this scene: what ran and what it allocated, against

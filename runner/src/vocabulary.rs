@@ -373,6 +373,18 @@ impl Metric {
         Some(self.gate?.rule.better(a, b))
     }
 
+    /// Its name in a baseline and in what a bless moved: the id, along each sequence after
+    /// the first with the sequence's number (`flicker@2`).
+    pub fn key(&self, index: usize) -> String {
+        if index == 0 { self.id.to_string() } else { format!("{}@{}", self.id, index + 1) }
+    }
+
+    /// How many values it has in a mode of a scene with `sequences` sequences: one per sequence
+    /// for a sequence's metric, else one.
+    pub fn values_in(&self, sequences: usize) -> usize {
+        if self.source == Source::Sequence { sequences } else { 1 }
+    }
+
     /// Its value in `mode`'s record, a sequence's metric along the scene's sequence `index`.
     pub fn value_at(&self, mode: &ModeRecord, index: usize) -> Option<f64> {
         match self.read {

@@ -130,12 +130,8 @@ fn the_papers_mode_changes_its_bits_only_with_a_reason() {
     assert_eq!(ws.run(&["bless", &path_arg(&run_dir)]).status.code(), Some(0));
     let file = baseline_file(&ws, "edge");
     let mut moved = read_json(&file);
-    for scene in moved["scenes"].as_array_mut().unwrap() {
-        for mode in scene["modes"].as_array_mut().unwrap() {
-            if mode["mode"] == "adaptive-2x2" || mode["mode"] == "reference-2x2" {
-                mode["output_hash"] = json!("0123456789abcdef");
-            }
-        }
+    for mode in ["adaptive-2x2", "reference-2x2"] {
+        moved["modes"][mode]["output_hash"] = json!("0123456789abcdef");
     }
     write_json(&file, &moved);
     let out = ws.dir.join("gate");
@@ -153,11 +149,11 @@ fn the_papers_mode_changes_its_bits_only_with_a_reason() {
     let why = "the evaluate pass reads the depth at the sample";
     let blessed = ws.run(&["bless", &path_arg(&run_dir), "--why", why]);
     assert_eq!(blessed.status.code(), Some(0), "{}", stderr(&blessed));
-    assert_eq!(read_json(&file)["why"], why);
+    assert_eq!(read_json(&file)["blessed"]["why"], why);
     assert_eq!(compare(&ws, &run_dir, &out).status.code(), Some(0));
     // A later bless of the same bits needs no reason and keeps the one given.
     assert_eq!(ws.run(&["bless", &path_arg(&run_dir)]).status.code(), Some(0));
-    assert_eq!(read_json(&file)["why"], why);
+    assert_eq!(read_json(&file)["blessed"]["why"], why);
 }
 
 /// A run against a baseline blessed from itself exits 0, and the next run takes its truth from
@@ -176,11 +172,11 @@ fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
     assert_eq!(blessed.status.code(), Some(0), "{}", stderr(&blessed));
     let file = baseline_file(&ws, "edge");
     let baseline = read_json(&file);
-    assert_eq!(baseline["schema"], "aabench.baseline/1");
+    assert_eq!(baseline["schema"], "aabench.baseline/2");
     assert_eq!(baseline["tier"], "quick");
-    assert_eq!(baseline["scenes"][0]["inputs"]["manifest_sha256"].as_str().map(str::len), Some(64));
-    let samples = &mode(&baseline["scenes"][0], "adaptive-2x2")["frame_ms"]["samples"];
-    assert_eq!(samples.as_array().map(Vec::len), Some(6), "every timing sample is kept");
+    assert_eq!(baseline["inputs"]["manifest_sha256"].as_str().map(str::len), Some(64));
+    let samples = &baseline["times"]["adaptive-2x2"]["frame_ms"];
+    assert_eq!(samples[0].as_array().map(Vec::len), Some(6), "every timing sample is kept");
 
     let out = ws.dir.join("gate");
     let same = compare(&ws, &first, &out);
@@ -206,8 +202,8 @@ fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
     let pooled = ws.run(&["bless", &path_arg(&first), &path_arg(&second)]);
     assert_eq!(pooled.status.code(), Some(0), "{}", stderr(&pooled));
     let baseline = read_json(&file);
-    assert_eq!(baseline["scenes"].as_array().map(Vec::len), Some(2));
-    assert_eq!(baseline["run_ids"][1], record["run_id"]);
+    assert_eq!(baseline["times"]["adaptive-2x2"]["frame_ms"].as_array().map(Vec::len), Some(2));
+    assert_eq!(baseline["blessed"]["run_ids"][1], record["run_id"]);
     let pooled_compare = compare(&ws, &second, &out);
     assert_eq!(pooled_compare.status.code(), Some(0), "{}", String::from_utf8_lossy(&pooled_compare.stdout));
     // Runs that disagree on an image are not blessed together.
@@ -244,12 +240,7 @@ fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
 
     // A baseline doctored 0.5 dB better in one mode: that mode regressed.
     let mut doctored = baseline.clone();
-    let psnr = &mut doctored["scenes"][0]["modes"]
-        .as_array_mut()
-        .unwrap()
-        .iter_mut()
-        .find(|m| m["mode"] == "adaptive-2x2")
-        .unwrap()["vs_ground_truth"]["psnr_db"];
+    let psnr = &mut doctored["modes"]["adaptive-2x2"]["metrics"]["psnr_vs_truth"];
     *psnr = json!(psnr.as_f64().unwrap() + 0.5);
     write_json(&file, &doctored);
     let worse = compare(&ws, &second, &out);
@@ -267,12 +258,12 @@ fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
     // A baseline from before the perceptual metrics reads and checks neither; one whose
     // FLIP and SSIM were 10 % less of an error fails them.
     let mut older = baseline.clone();
-    for scene in older["scenes"].as_array_mut().unwrap() {
-        for m in scene["modes"].as_array_mut().unwrap() {
-            if let Some(quality) = m["vs_ground_truth"].as_object_mut() {
-                assert!(quality.remove("flip").is_some() && quality.remove("ssim").is_some(), "{m}");
-            }
-        }
+    for m in older["modes"].as_object_mut().unwrap().values_mut() {
+        let metrics = m["metrics"].as_object_mut().unwrap();
+        assert!(
+            metrics.remove("flip_vs_truth").is_some() && metrics.remove("ssim_vs_truth").is_some(),
+            "{m}"
+        );
     }
     write_json(&file, &older);
     let without = compare(&ws, &second, &out);
@@ -280,15 +271,10 @@ fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
     let verdict = read_json(&out.join("verdict.json"));
     assert!(checks_of(&verdict, "adaptive-2x2", "flip_vs_truth").is_empty());
     let mut sharper = baseline.clone();
-    for m in sharper["scenes"][0]["modes"].as_array_mut().unwrap() {
-        if m["mode"] == "adaptive-2x2" {
-            let flip = &mut m["vs_ground_truth"]["flip"];
-            *flip = json!(flip.as_f64().unwrap() * 0.9);
-        } else if m["mode"] == "reference-2x2" {
-            let ssim = &mut m["vs_ground_truth"]["ssim"];
-            *ssim = json!(1.0 - (1.0 - ssim.as_f64().unwrap()) * 0.9);
-        }
-    }
+    let flip = &mut sharper["modes"]["adaptive-2x2"]["metrics"]["flip_vs_truth"];
+    *flip = json!(flip.as_f64().unwrap() * 0.9);
+    let ssim = &mut sharper["modes"]["reference-2x2"]["metrics"]["ssim_vs_truth"];
+    *ssim = json!(1.0 - (1.0 - ssim.as_f64().unwrap()) * 0.9);
     write_json(&file, &sharper);
     let blurrier = compare(&ws, &second, &out);
     assert_eq!(blurrier.status.code(), Some(1), "{}", stderr(&blurrier));
@@ -298,7 +284,7 @@ fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
     assert_eq!(checks_of(&verdict, "reference-2x2", "ssim_vs_truth")[0]["outcome"], "regressed");
 
     // A baseline of another platform is not overwritten without --force, and says why.
-    doctored["platform"]["key"] = json!("another-platform");
+    doctored["blessed"]["platform"]["key"] = json!("another-platform");
     write_json(&file, &doctored);
     let before = std::fs::read(&file).unwrap();
     let refused = ws.run(&["bless", &path_arg(&second)]);
@@ -311,7 +297,7 @@ fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
     assert_eq!(std::fs::read(&file).unwrap(), before, "a refused bless writes nothing");
     let forced = ws.run(&["bless", &path_arg(&second), "--force"]);
     assert_eq!(forced.status.code(), Some(0), "{}", stderr(&forced));
-    assert_eq!(read_json(&file)["run_ids"], json!([record["run_id"]]));
+    assert_eq!(read_json(&file)["blessed"]["run_ids"], json!([record["run_id"]]));
 
     // The user's own files in the tier's folder are kept; a folder there, which a bless could
     // not carry over, is refused by name before anything is written.
@@ -419,10 +405,10 @@ fn corrupt_truncated_and_wrong_schema_baselines_exit_two_and_stay_untouched() {
     wrong_schema["schema"] = json!("aabench.baseline/0");
     // A negative tolerance would turn identical values into "improved".
     let mut negative = read_json(&file);
-    negative["scenes"][0]["gate"]["psnr_db"] = json!(-0.5);
+    negative["gate"]["psnr_db"] = json!(-0.5);
     let cases: [(&str, Vec<u8>, &str); 4] = [
-        ("corrupt", b"{ this is not json".to_vec(), "not an aabench.baseline/1 file"),
-        ("truncated", good[..good.len() / 2].to_vec(), "not an aabench.baseline/1 file"),
+        ("corrupt", b"{ this is not json".to_vec(), "not an aabench.baseline/2 file"),
+        ("truncated", good[..good.len() / 2].to_vec(), "not an aabench.baseline/2 file"),
         ("wrong schema", serde_json::to_vec(&wrong_schema).unwrap(), "schema is `aabench.baseline/0`"),
         (
             "negative tolerance",

@@ -662,7 +662,7 @@ fn the_truth_note_speaks_only_when_the_truth_image_changed() {
     assert!(verdict["notes"].to_string().contains("ground truth's image changed"), "{}", verdict["notes"]);
 }
 
-/// `blessed_at` and `run_ids` of every baseline file in the tier folder, and whether any
+/// The `run_ids` of every baseline file in the tier folder, and whether any
 /// temporary is inside it.
 fn baseline_state(ws: &Workspace) -> (Vec<String>, bool) {
     let keys: Vec<PathBuf> = std::fs::read_dir(ws.dir.join("baselines"))
@@ -679,7 +679,7 @@ fn baseline_state(ws: &Workspace) -> (Vec<String>, bool) {
             temporary = true;
             continue;
         }
-        states.push(read_json(&path)["run_ids"].to_string());
+        states.push(read_json(&path)["blessed"]["run_ids"].to_string());
     }
     (states, temporary)
 }

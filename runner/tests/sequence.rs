@@ -384,18 +384,13 @@ fn the_gate_compares_sequences_and_a_run_without_them_compared_less() {
     let file = std::fs::read_dir(ws.dir.join("baselines")).unwrap().next().unwrap().unwrap().path();
     let file = file.join("quick/wire.json");
     let mut doctored = read_json(&file);
-    for m in doctored["scenes"][0]["modes"].as_array_mut().unwrap() {
-        if m["mode"] == "adaptive-2x2" {
-            let instability = &mut m["sequences"][0]["instability"];
-            *instability = json!(instability.as_f64().unwrap() * 0.8);
-            let shaded = &mut m["sequences"][0]["shaded_percent"];
-            *shaded = json!(shaded.as_f64().unwrap() - 1.0);
-        }
-        if m["mode"] == "deferred-1x1" {
-            let flip = &mut m["sequences"][0]["mean_flip"];
-            *flip = json!(flip.as_f64().unwrap() * 0.9);
-        }
-    }
+    let mut edit = |mode: &str, metric: &str, change: fn(f64) -> f64| {
+        let value = &mut doctored["modes"][mode]["metrics"][metric];
+        *value = json!(change(value.as_f64().unwrap()));
+    };
+    edit("adaptive-2x2", "instability", |v| v * 0.8);
+    edit("adaptive-2x2", "sequence_shaded_percent", |v| v - 1.0);
+    edit("deferred-1x1", "sequence_flip_vs_truth", |v| v * 0.9);
     let original = std::fs::read(&file).unwrap();
     write_json(&file, &doctored);
     let (code, verdict) = compare(&first, &[]);
@@ -414,10 +409,8 @@ fn the_gate_compares_sequences_and_a_run_without_them_compared_less() {
 
     // A baseline whose sequence has another length is no comparison of this run's means.
     let mut longer = read_json(&file);
-    for scene in longer["scenes"].as_array_mut().unwrap() {
-        scene["sequences"][0]["frames"] = json!(8);
-        scene["sequences"][0]["frames_done"] = json!(8);
-    }
+    longer["sequences"][0]["frames"] = json!(8);
+    longer["sequences"][0]["frames_done"] = json!(8);
     write_json(&file, &longer);
     let (code, verdict) = compare(&first, &[]);
     assert_eq!(code, Some(1), "{verdict}");

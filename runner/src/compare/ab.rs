@@ -9,7 +9,7 @@
 //! numbers with its Moses interval.
 
 use crate::baseline::BaselineSet;
-use crate::record::{RunRecord, SceneRecord, Status};
+use crate::record::{Rounds, RunRecord, SceneRecord, Status};
 use crate::stats::{Shift, Summary};
 use crate::vocabulary::TimeMetric;
 
@@ -50,7 +50,7 @@ pub(super) fn checks(
                 .push(format!("{}: not rendered ok by {side}: its time is not compared with it", scene.name));
             continue;
         }
-        let tolerance = baselines.scene(&scene.name).map_or(scene.gate, |b| b.scene().gate).time_ratio;
+        let tolerance = baselines.scene(&scene.name).map_or(scene.gate, |b| b.gate).time_ratio;
         let side = Side { head: &head, base: &then };
         let anchors = side.anchor_modes();
         let bound = (1.0 + tolerance).ln();

@@ -68,21 +68,21 @@ fn scene_checks(runs: &[RunRecord], baselines: &BaselineSet, notes: &mut Vec<Str
         if scene.status != Status::Ok {
             let status = scene.status.to_string();
             let detail = scene.error.clone().unwrap_or_else(|| format!("the scene's status is {status}"));
-            checks.push(status_check(scene, "*", Outcome::Failed, &detail));
+            checks.push(status_check(&scene.name, "*", Outcome::Failed, &detail));
         }
         let processes: Vec<&SceneRecord> =
             runs.iter().filter_map(|r| r.scenes.iter().find(|s| s.name == scene.name)).collect();
         match baselines.scene(&scene.name) {
             Some(_) if scene.modes.is_empty() => {}
             Some(baseline) => {
-                notes.extend(input_notes(scene, baseline.scene()));
-                notes.extend(front_notes(scene, baseline.scene()));
+                notes.extend(input_notes(scene, baseline));
+                notes.extend(front_notes(scene, baseline));
                 checks.extend(compare_scene(&processes, baseline, baselines.same_platform, notes));
             }
             None => checks.extend(scene.modes.iter().map(|mode| {
                 let outcome = if mode.status == Status::Ok { Outcome::New } else { Outcome::Failed };
                 status_check(
-                    scene,
+                    &scene.name,
                     &mode.mode,
                     outcome,
                     mode.error.as_deref().unwrap_or("no baseline for this scene"),
@@ -94,10 +94,9 @@ fn scene_checks(runs: &[RunRecord], baselines: &BaselineSet, notes: &mut Vec<Str
     // fails a baseline that no shard compared).
     if run.shard.is_none() {
         for baseline in &baselines.baselines {
-            let scene = baseline.scene();
-            if run.scenes.iter().all(|s| s.name != scene.name) {
-                let detail = format!("the scene is not in the run (its {} modes)", scene.modes.len());
-                checks.push(status_check(scene, "*", Outcome::Missing, &detail));
+            if run.scenes.iter().all(|s| s.name != baseline.scene) {
+                let detail = format!("the scene is not in the run (its {} modes)", baseline.modes.len());
+                checks.push(status_check(&baseline.scene, "*", Outcome::Missing, &detail));
             }
         }
     }
@@ -190,7 +189,7 @@ fn shard_scope(run: &RunRecord, baselines: &BaselineSet) -> Option<ShardScope> {
         index: shard.index,
         count: shard.count,
         scenes: run.scenes.iter().map(|s| s.name.clone()).collect(),
-        baseline_scenes: baselines.baselines.iter().map(|b| b.scene().name.clone()).collect(),
+        baseline_scenes: baselines.baselines.iter().map(|b| b.scene.clone()).collect(),
     })
 }
 
@@ -293,7 +292,7 @@ impl Hashes {
         for scene in &run.scenes {
             let Some(baseline) = baselines.scene(&scene.name) else { continue };
             for mode in &scene.modes {
-                let old = baseline.scene().mode(&mode.mode).and_then(|old| old.output_hash.as_ref());
+                let old = baseline.mode(&mode.mode).and_then(|old| old.output_hash.as_ref());
                 let (Some(now), Some(then)) = (&mode.output_hash, old) else { continue };
                 hashes.compared += 1;
                 if now == then {
@@ -338,7 +337,7 @@ fn same_machine(run: &RunRecord, baselines: &BaselineSet) -> Result<(), String> 
         return Err("another platform key".into());
     }
     let blessed = baselines.baselines.first().ok_or("no baselines")?;
-    match (&run.platform.machine, &blessed.platform.machine) {
+    match (&run.platform.machine, &blessed.blessed.platform.machine) {
         (Some(now), Some(then)) => now.same_as(then),
         (None, _) if run.scenes.iter().any(|scene| scene.machine.is_some()) => {
             Err("its shards ran on different machines (each scene records its own)".into())
@@ -367,7 +366,7 @@ fn disagreements(runs: &[RunRecord]) -> Vec<Check> {
                     );
                     checks.push(Check {
                         metric: "output_hash".into(),
-                        ..status_check(scene, &mode.mode, Outcome::Failed, &detail)
+                        ..status_check(&scene.name, &mode.mode, Outcome::Failed, &detail)
                     });
                 }
             }
@@ -377,7 +376,7 @@ fn disagreements(runs: &[RunRecord]) -> Vec<Check> {
 }
 
 /// Notes on input files that changed since the baseline: the metrics may move for that reason.
-fn input_notes(scene: &SceneRecord, baseline: &SceneRecord) -> Vec<String> {
+fn input_notes(scene: &SceneRecord, baseline: &Baseline) -> Vec<String> {
     let mut notes = Vec::new();
     if let (Some(now), Some(then)) = (&scene.inputs, &baseline.inputs) {
         if now.manifest_sha256 != then.manifest_sha256 {
@@ -406,14 +405,14 @@ fn input_notes(scene: &SceneRecord, baseline: &SceneRecord) -> Vec<String> {
 
 /// Notes on modes that left or joined the scene's error-against-run-time front since the
 /// baseline: informational, since the front moves with any mode's time or error.
-fn front_notes(scene: &SceneRecord, baseline: &SceneRecord) -> Vec<String> {
+fn front_notes(scene: &SceneRecord, baseline: &Baseline) -> Vec<String> {
     scene
         .modes
         .iter()
         .filter_map(|mode| {
             let now = mode.front.as_ref()?;
-            let then = baseline.mode(&mode.mode)?.front.as_ref()?;
-            match (then.on_front, now.on_front) {
+            let then = baseline.times.get(&mode.mode)?.on_front?;
+            match (then, now.on_front) {
                 (true, false) => {
                     Some(format!("{}: {} left the front: {}", scene.name, mode.mode, now.describe()))
                 }
@@ -424,8 +423,8 @@ fn front_notes(scene: &SceneRecord, baseline: &SceneRecord) -> Vec<String> {
         .collect()
 }
 
-fn status_check(scene: &SceneRecord, mode: &str, outcome: Outcome, detail: &str) -> Check {
-    Check::new(&scene.name, mode, "status", outcome, detail.into())
+fn status_check(scene: &str, mode: &str, outcome: Outcome, detail: &str) -> Check {
+    Check::new(scene, mode, "status", outcome, detail.into())
 }
 
 /// The checks of one scene: `processes` are its records in each process of the run (the
@@ -436,8 +435,7 @@ fn compare_scene(
     same_platform: bool,
     notes: &mut Vec<String>,
 ) -> Vec<Check> {
-    let scene = processes[0];
-    let then = baseline.scene();
+    let (scene, then) = (processes[0], baseline);
     if scene.resolution != then.resolution {
         let show = |r: Option<[u32; 2]>| r.map_or("?".into(), |[w, h]| format!("{w}×{h}"));
         let detail = format!(
@@ -445,7 +443,11 @@ fn compare_scene(
             show(scene.resolution),
             show(then.resolution)
         );
-        return scene.modes.iter().map(|m| status_check(scene, &m.mode, Outcome::Failed, &detail)).collect();
+        return scene
+            .modes
+            .iter()
+            .map(|m| status_check(&scene.name, &m.mode, Outcome::Failed, &detail))
+            .collect();
     }
     // The blessed tolerances decide: a change cannot loosen its own gate without a re-bless.
     let tolerances = then.gate;
@@ -457,29 +459,27 @@ fn compare_scene(
     }
     // The anchor of `relative_time`: the geometric mean of the unstalled modes that ran in
     // both (all common modes when fewer than two are unstalled), each mode left out of its own.
-    let common: Vec<&ModeRecord> = scene
-        .modes
-        .iter()
-        .filter(|m| m.status == Status::Ok && then.mode(&m.mode).is_some_and(|old| old.status == Status::Ok))
-        .collect();
+    let common: Vec<&ModeRecord> =
+        scene.modes.iter().filter(|m| m.status == Status::Ok && then.mode(&m.mode).is_some()).collect();
     let plain: Vec<&str> = common.iter().filter(|m| !m.stalled).map(|m| m.mode.as_str()).collect();
     let anchor_modes =
         if plain.len() >= 2 { plain } else { common.iter().map(|m| m.mode.as_str()).collect() };
+    let blessed = baseline.processes();
     let mut checks = Vec::new();
     for mode in &scene.modes {
         let Some(old) = then.mode(&mode.mode) else {
-            checks.push(status_check(scene, &mode.mode, Outcome::New, "not in the baseline"));
+            checks.push(status_check(&scene.name, &mode.mode, Outcome::New, "not in the baseline"));
             continue;
         };
         if mode.status != Status::Ok {
             let error = mode.error.as_deref().unwrap_or("the mode failed");
-            checks.push(status_check(scene, &mode.mode, Outcome::Failed, error));
+            checks.push(status_check(&scene.name, &mode.mode, Outcome::Failed, error));
             continue;
         }
         let context = ModeContext {
             scene,
             processes,
-            baselines: &baseline.scenes,
+            blessed: &blessed,
             mode,
             old,
             tolerances,
@@ -490,14 +490,14 @@ fn compare_scene(
         checks.extend(context.time_checks());
     }
     // Green means compared in full: a run without the sequence its baseline holds compared less.
-    if then.sequence().is_some() && scene.sequence().is_none() {
+    if !then.sequences.is_empty() && scene.sequence().is_none() {
         let detail = "the baseline holds the scene's sequence, the run rendered none (--sequences off?)";
-        checks.push(status_check(scene, "*", Outcome::Missing, detail));
+        checks.push(status_check(&scene.name, "*", Outcome::Missing, detail));
     }
     checks.extend(sequence_lengths(scene, then));
-    for old in &then.modes {
-        if scene.mode(&old.mode).is_none() {
-            checks.push(status_check(scene, &old.mode, Outcome::Missing, "not in the run"));
+    for old in then.modes.keys() {
+        if scene.mode(old).is_none() {
+            checks.push(status_check(&scene.name, old, Outcome::Missing, "not in the run"));
         }
     }
     checks
@@ -505,7 +505,7 @@ fn compare_scene(
 
 /// Means over other frames are other numbers: a sequence cut short (or of another length) is no
 /// comparison of the baseline's, and fails.
-fn sequence_lengths(scene: &SceneRecord, then: &SceneRecord) -> Vec<Check> {
+fn sequence_lengths(scene: &SceneRecord, then: &Baseline) -> Vec<Check> {
     let mut checks = Vec::new();
     for (index, (now, before)) in scene.sequences.iter().zip(&then.sequences).enumerate() {
         let (frames, frames_then) = ((now.frames, now.frames_done), (before.frames, before.frames_done));
@@ -519,7 +519,7 @@ fn sequence_lengths(scene: &SceneRecord, then: &SceneRecord) -> Vec<Check> {
                 frames_then.1,
                 frames_then.0
             );
-            checks.push(status_check(scene, "*", Outcome::Failed, &detail));
+            checks.push(status_check(&scene.name, "*", Outcome::Failed, &detail));
         }
     }
     checks

@@ -2,6 +2,7 @@
 //! (`quality.rs`) and time checks (`time.rs`) read.
 
 use super::verdict::{Check, Outcome};
+use crate::baseline::{BlessedMode, BlessedProcess};
 use crate::gate::Tolerances;
 use crate::record::{ModeRecord, SceneRecord};
 
@@ -10,11 +11,11 @@ pub(super) struct ModeContext<'a> {
     pub scene: &'a SceneRecord,
     /// The scene in every process of the run: time checks pool their rounds.
     pub processes: &'a [&'a SceneRecord],
-    /// The baseline's records of the scene, one per blessed run: time checks pool their rounds.
-    pub baselines: &'a [SceneRecord],
+    /// The baseline's frame times, one per blessed process: time checks pool their rounds.
+    pub blessed: &'a [BlessedProcess<'a>],
     pub mode: &'a ModeRecord,
-    /// The mode in the first baseline record: its quality numbers.
-    pub old: &'a ModeRecord,
+    /// The mode as blessed: its quality numbers.
+    pub old: &'a BlessedMode,
     pub tolerances: Tolerances,
     pub same_platform: bool,
     /// The modes whose geometric mean anchors `relative_time`.

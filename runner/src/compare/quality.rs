@@ -19,7 +19,7 @@ impl ModeContext<'_> {
         for metric in &METRICS {
             let Some(gate) = metric.gate else { continue };
             let source = metric.source;
-            if (source == Source::Sequence && self.scene.sequence().is_none()) || !source.present(self.old) {
+            if (source == Source::Sequence && self.scene.sequence().is_none()) || !self.old.has(source) {
                 continue;
             }
             if !source.present(self.mode) {
@@ -40,7 +40,7 @@ impl ModeContext<'_> {
     /// One metric where the baseline has it: moved beyond its tolerance or not. A run that
     /// lacks it fails it.
     fn metric_check(&self, metric: &Metric, gate: Gate, tolerance: &QualityTolerances) -> Option<Check> {
-        let (now, then) = match (metric.value(self.mode), metric.value(self.old)) {
+        let (now, then) = match (metric.value(self.mode), self.old.value(metric)) {
             (Some(now), Some(then)) => (now, then),
             (None, Some(_)) => {
                 let detail = format!("the baseline has {}, the run has none", metric.label);

@@ -4,7 +4,7 @@
 
 use super::mode::{ModeContext, show_percent};
 use super::verdict::{CONFIDENCE, Check, MIN_FRAMES, Outcome};
-use crate::record::SceneRecord;
+use crate::record::Rounds;
 use crate::stats::Shift;
 use crate::vocabulary::TimeMetric;
 
@@ -13,17 +13,13 @@ impl ModeContext<'_> {
         let mut checks = Vec::new();
         let threshold = self.tolerances.time_ratio;
         let id = self.mode.mode.as_str();
-        // The mode's frame samples in each baseline record and each process of the run.
-        let frames = |record: &SceneRecord| record.mode(id)?.frame_ms.as_ref().map(|f| f.samples.clone());
-        let Some(now) = self.processes.iter().map(|record| frames(record)).collect::<Option<Vec<_>>>() else {
+        // The mode's frame samples in each process of the run and each blessed process.
+        let (Some(now), Some(then)) = (frames(self.processes, id), frames(self.blessed, id)) else {
             return checks;
         };
-        let Some(then) = self.baselines.iter().map(frames).collect::<Option<Vec<_>>>() else { return checks };
-        let anchors = |record: &SceneRecord| record.round_anchor(self.anchor_modes, id);
-        if let (Some(now_anchors), Some(then_anchors)) = (
-            self.processes.iter().map(|record| anchors(record)).collect::<Option<Vec<_>>>(),
-            self.baselines.iter().map(anchors).collect::<Option<Vec<_>>>(),
-        ) {
+        if let (Some(now_anchors), Some(then_anchors)) =
+            (anchors(self.processes, self.anchor_modes, id), anchors(self.blessed, self.anchor_modes, id))
+        {
             let relative = |samples: &[f64], anchor: &[f64]| -> Vec<f64> {
                 samples.iter().zip(anchor).map(|(s, a)| s.ln() - a).collect()
             };
@@ -60,10 +56,17 @@ impl ModeContext<'_> {
     /// The ratio of this mode's frame time to `anchor`'s, round by round, against the
     /// baseline's.
     fn ratio_check(&self, metric: &str, anchor: &str, threshold: f64) -> Option<Check> {
-        let log = |ratios: Vec<f64>| ratios.iter().map(|r| r.ln()).collect::<Vec<_>>();
-        let ratios = |record: &SceneRecord| record.paired_ratios(&self.mode.mode, anchor).map(log);
-        let now: Vec<Vec<f64>> = self.processes.iter().map(|record| ratios(record)).collect::<Option<_>>()?;
-        let then: Vec<Vec<f64>> = self.baselines.iter().map(ratios).collect::<Option<_>>()?;
+        let (id, log) = (self.mode.mode.as_str(), |ratios: Vec<f64>| ratios.iter().map(|r| r.ln()).collect());
+        let now: Vec<Vec<f64>> = self
+            .processes
+            .iter()
+            .map(|record| record.paired_ratios(id, anchor).map(log))
+            .collect::<Option<_>>()?;
+        let then: Vec<Vec<f64>> = self
+            .blessed
+            .iter()
+            .map(|record| record.paired_ratios(id, anchor).map(log))
+            .collect::<Option<_>>()?;
         self.time_check(
             metric,
             &now.concat(),
@@ -212,4 +215,14 @@ pub(super) fn process_spread(per_process: &[Vec<f64>]) -> f64 {
 /// exp of the median of log values: the median ratio.
 fn median_exp(logs: &[f64]) -> f64 {
     crate::stats::Summary::new(logs.to_vec()).map_or(f64::NAN, |s| s.median.exp())
+}
+
+/// Mode `id`'s frame times in each of `processes`, where every one has them.
+fn frames<R: Rounds>(processes: &[R], id: &str) -> Option<Vec<Vec<f64>>> {
+    processes.iter().map(|process| process.frames(id).map(<[f64]>::to_vec)).collect()
+}
+
+/// Each of `processes`' round anchors for mode `id` (see [`Rounds::round_anchor`]).
+fn anchors<R: Rounds>(processes: &[R], modes: &[&str], id: &str) -> Option<Vec<Vec<f64>>> {
+    processes.iter().map(|process| process.round_anchor(modes, id)).collect()
 }

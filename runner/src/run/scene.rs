@@ -356,17 +356,24 @@ fn fail(mut record: SceneRecord, error: String) -> SceneRecord {
 mod tests {
     use super::*;
 
-    /// A committed baseline's record of `scene` (any platform's quick tier).
-    fn blessed(scene: &str) -> SceneRecord {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../baselines");
-        let platform = std::fs::read_dir(&root).unwrap().next().unwrap().unwrap().path();
-        let baseline = crate::baseline::load(&platform.join(format!("quick/{scene}.json"))).unwrap();
-        baseline.scene().clone()
+    /// A scene that finished its one sequence of 8 frames.
+    fn with_a_sequence() -> SceneRecord {
+        let sequence: crate::record::SequenceRecord = serde_json::from_value(serde_json::json!({
+            "path": "orbit", "frames": 8, "frames_done": 8, "time_step_s": 0.1, "truth_rendered": 8,
+            "truth_render_s": 1.0, "truth_change": null, "seconds": 2.0, "error": null
+        }))
+        .unwrap();
+        let manifest = std::path::Path::new("scenes/wire.json");
+        SceneRecord {
+            name: "wire".into(),
+            sequences: vec![sequence],
+            ..super::super::empty_scene_at(manifest)
+        }
     }
 
     #[test]
     fn a_sequence_that_stopped_leaves_its_scene_not_ok() {
-        let whole = blessed("wire");
+        let whole = with_a_sequence();
         assert_eq!(conclude(whole.clone(), false, false).status, Status::Ok);
         let mut cut = whole;
         cut.sequences[0].frames_done = 3;

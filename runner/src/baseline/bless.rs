@@ -1,65 +1,12 @@
-//! Baselines: `baselines/<platform-key>/<tier>/<scene>.json`, schema `aabench.baseline/1`. A
-//! baseline is one scene as measured by one or more blessed runs, whole: every timing sample,
-//! the in-run ratios, quality numbers, sample statistics, output hashes, the input files'
-//! hashes and the gate tolerances, with the platform and aabench version that produced them.
-//!
-//! Blessing several runs (separate processes) is worth it: each process drifts a little on its
-//! own, and a baseline of one process carries its drift into every later comparison. Compare
-//! pools the rounds of all of them.
+//! `aabench bless`: baselines written from finished runs, all of a tier's folder at once, and
+//! `aabench upgrade`: baselines of the schema before rewritten in today's.
 
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
-
+use super::{Baseline, Blessing, load, parse, path, write};
+use crate::fs;
 use crate::plan::Tier;
-use crate::record::{Platform, RunRecord, RunSettings, SceneRecord, Status};
-use crate::{fs, json};
-
-pub const BASELINE_SCHEMA: &str = "aabench.baseline/1";
-
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Baseline {
-    pub schema: String,
-    /// The aabench version of the blessed run.
-    pub aabench_version: String,
-    pub blessed_at: String,
-    pub run_ids: Vec<String>,
-    pub tier: Tier,
-    pub platform: Platform,
-    pub settings: RunSettings,
-    /// The scene as each blessed run measured it, in the order of `run_ids`. Their images,
-    /// sample counts and input files are the same (bless checks); their times differ.
-    pub scenes: Vec<SceneRecord>,
-    /// Why the bless that wrote it moved images (`bless --why`): the paper's mode may change
-    /// its bits only with a reason.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub why: Option<String>,
-}
-
-impl Baseline {
-    /// The first run's record: its quality numbers stand for all of them.
-    pub fn scene(&self) -> &SceneRecord {
-        &self.scenes[0]
-    }
-}
-
-/// `<root>/<platform key>/<tier>/<scene>.json`
-pub fn path(root: &Path, platform_key: &str, tier: Tier, scene: &str) -> PathBuf {
-    root.join(platform_key).join(tier.name()).join(format!("{scene}.json"))
-}
-
-/// Reads a baseline file; errors name the file and what is wrong with it, a tolerance out of
-/// range among it (a negative one would call identical values improved).
-pub fn load(path: &Path) -> Result<Baseline, String> {
-    let baseline: Baseline = json::read_versioned(path, BASELINE_SCHEMA)?;
-    for (index, scene) in baseline.scenes.iter().enumerate() {
-        scene
-            .gate
-            .validate()
-            .map_err(|(field, why)| format!("{}: scenes[{index}].{field}: {why}", path.display()))?;
-    }
-    Ok(baseline)
-}
+use crate::record::{RunRecord, RunSettings, SceneRecord, Status};
 
 /// What `bless` did.
 #[derive(Debug, Default)]
@@ -145,18 +92,18 @@ pub fn bless(runs: &[RunRecord], root: &Path, consent: Consent, now: &str) -> Re
     let baselines: Vec<(PathBuf, Baseline)> = planned
         .into_iter()
         .map(|(target, measured)| {
-            let baseline = Baseline {
-                schema: BASELINE_SCHEMA.into(),
+            // A bless that says nothing keeps the reason of the one that moved the bits.
+            let why =
+                consent.why.map(String::from).or_else(|| load(&target).ok().and_then(|old| old.blessed.why));
+            let blessing = Blessing {
                 aabench_version: run.aabench_version.clone(),
-                blessed_at: now.into(),
+                at: now.into(),
                 run_ids: runs.iter().map(|r| r.run_id.clone()).collect(),
-                tier: run.tier,
+                why,
                 platform: run.platform.clone(),
                 settings: run.settings.clone(),
-                scenes: measured.into_iter().cloned().collect(),
-                // A bless that says nothing keeps the reason of the one that moved the bits.
-                why: consent.why.map(String::from).or_else(|| load(&target).ok().and_then(|old| old.why)),
             };
+            let baseline = Baseline::of(run.tier, blessing, &measured);
             (target, baseline)
         })
         .collect();
@@ -197,7 +144,7 @@ fn write_together(dir: &Path, baselines: &[(PathBuf, Baseline)]) -> Result<(), S
             std::fs::copy(&file, &copy).map_err(|e| error(&file, e))?;
         }
         for (target, baseline) in baselines {
-            fs::write_json(&staging.join(target.file_name().unwrap_or_default()), baseline)?;
+            write(&staging.join(target.file_name().unwrap_or_default()), baseline)?;
         }
         swap_into_place(&staging, dir)
             .map_err(|e| format!("{}: cannot move the new baselines in: {e}", dir.display()))
@@ -367,8 +314,7 @@ fn refusal(target: &Path, run: &RunRecord) -> Result<Option<String>, String> {
 /// The paper's modes of `scene` whose output hash differs from the existing baseline at
 /// `target` of the same platform (`adaptive-2x2 (old → new)`, comma-separated), if any.
 fn paper_moved(target: &Path, scene: &SceneRecord) -> Option<String> {
-    let existing = load(target).ok()?;
-    let old = existing.scene();
+    let old = load(target).ok()?;
     let moved: Vec<String> = scene
         .modes
         .iter()
@@ -383,21 +329,15 @@ fn paper_moved(target: &Path, scene: &SceneRecord) -> Option<String> {
 
 /// Why the existing file `text` must not be replaced by a baseline of `run` without `--force`.
 fn replaced(text: &[u8], run: &RunRecord) -> Option<String> {
-    let schema = match json::schema_of(text) {
-        Ok(schema) => schema,
-        Err(error) => return Some(format!("the existing file is not a baseline ({error})")),
-    };
-    if schema != BASELINE_SCHEMA {
-        return Some(format!("the existing baseline has schema `{schema}`, not `{BASELINE_SCHEMA}`"));
-    }
-    let existing: Baseline = match json::parse(text) {
+    let existing = match parse(text) {
         Ok(existing) => existing,
-        Err(error) => return Some(format!("the existing baseline does not parse ({error})")),
+        Err(error) => return Some(format!("the existing file is no baseline this aabench reads ({error})")),
     };
-    if existing.platform.key != run.platform.key {
+    let key = &existing.blessed.platform.key;
+    if *key != run.platform.key {
         return Some(format!(
-            "the existing baseline is of platform `{}`, the run of `{}`",
-            existing.platform.key, run.platform.key
+            "the existing baseline is of platform `{key}`, the run of `{}`",
+            run.platform.key
         ));
     }
     if existing.tier != run.tier {
@@ -410,75 +350,36 @@ fn replaced(text: &[u8], run: &RunRecord) -> Option<String> {
     None
 }
 
-/// The baselines a run is compared with: one platform's folder for the run's tier.
-#[derive(Debug)]
-pub struct BaselineSet {
-    /// `<root>/<key>/<tier>`, or `None` when no platform has baselines for the tier.
-    pub dir: Option<PathBuf>,
-    pub platform_key: Option<String>,
-    /// True when the baselines are of the run's own platform key.
-    pub same_platform: bool,
-    pub baselines: Vec<Baseline>,
-    /// Why there are no baselines, when there are none: the root is missing or no folder, or
-    /// holds nothing for the tier.
-    pub absent: Option<String>,
-}
-
-impl BaselineSet {
-    /// Loads the baselines for `run`: its own platform's when they exist, else those of the
-    /// platform whose key agrees with the run's over the longest prefix (keys begin with the
-    /// driver and its version). Every file of the chosen folder must read, or this fails
-    /// naming the file.
-    pub fn load(root: &Path, run: &RunRecord) -> Result<BaselineSet, String> {
-        let tier = run.tier.name();
-        let none = |why: String| BaselineSet {
-            dir: None,
-            platform_key: None,
-            same_platform: false,
-            baselines: Vec::new(),
-            absent: Some(why),
-        };
-        match std::fs::metadata(root) {
-            Err(error) => {
-                return Ok(none(format!("the baseline folder {} cannot be read ({error})", root.display())));
+/// Rewrites every baseline under `root` (`<root>/<key>/<tier>/*.json`) whose schema is the
+/// one before in today's, value for value, a tier's folder at once; returns the files
+/// rewritten. A file that does not read stops it before anything is written, naming the file.
+pub fn upgrade(root: &Path) -> Result<Vec<PathBuf>, String> {
+    let keys = std::fs::read_dir(root).map_err(|e| format!("{}: {e}", root.display()))?;
+    let mut tiers: Vec<PathBuf> = keys
+        .filter_map(|entry| entry.ok())
+        .flat_map(|key| [Tier::Quick, Tier::Nightly].map(|tier| key.path().join(tier.name())))
+        .filter(|tier| tier.is_dir())
+        .collect();
+    tiers.sort();
+    let mut folders = Vec::new();
+    for tier in tiers {
+        let mut older = Vec::new();
+        for file in fs::files_in(&tier)? {
+            let text =
+                fs::read_regular(&file).map_err(|e| format!("{}: cannot read: {e}", file.display()))?;
+            let baseline = parse(&text).map_err(|e| format!("{}: {e}", file.display()))?;
+            if crate::json::schema_of(&text).ok().as_deref() != Some(super::BASELINE_SCHEMA) {
+                older.push((file, baseline));
             }
-            Ok(meta) if !meta.is_dir() => return Ok(none(format!("{} is not a folder", root.display()))),
-            Ok(_) => {}
         }
-        let own = root.join(&run.platform.key).join(tier);
-        let chosen = if own.is_dir() {
-            Some((run.platform.key.clone(), own))
-        } else {
-            let mut others: Vec<String> = std::fs::read_dir(root)
-                .into_iter()
-                .flatten()
-                .filter_map(|entry| entry.ok())
-                .filter(|entry| entry.path().join(tier).is_dir())
-                .map(|entry| entry.file_name().to_string_lossy().into_owned())
-                .collect();
-            others.sort();
-            let shared =
-                |key: &String| key.chars().zip(run.platform.key.chars()).take_while(|(a, b)| a == b).count();
-            others.iter().max_by_key(|key| (shared(key), std::cmp::Reverse((*key).clone()))).map(|key| {
-                let dir = root.join(key).join(tier);
-                (key.clone(), dir)
-            })
-        };
-        let Some((key, dir)) = chosen else {
-            return Ok(none(format!("{} holds no baselines for the {tier} tier", root.display())));
-        };
-        let baselines = fs::files_in(&dir)?.iter().map(|file| load(file)).collect::<Result<Vec<_>, _>>()?;
-        let absent = baselines.is_empty().then(|| format!("{} holds no baseline files", dir.display()));
-        Ok(BaselineSet {
-            same_platform: key == run.platform.key,
-            platform_key: Some(key),
-            dir: Some(dir),
-            baselines,
-            absent,
-        })
+        if !older.is_empty() {
+            folders.push((tier, older));
+        }
     }
-
-    pub fn scene(&self, name: &str) -> Option<&Baseline> {
-        self.baselines.iter().find(|b| b.scene().name == name)
+    let mut written = Vec::new();
+    for (tier, baselines) in folders {
+        write_together(&tier, &baselines)?;
+        written.extend(baselines.into_iter().map(|(file, _)| file));
     }
+    Ok(written)
 }

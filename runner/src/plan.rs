@@ -17,6 +17,81 @@ pub struct Shard {
     pub count: u32,
 }
 
+/// How many timed rounds each mode of a scene takes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Repetitions {
+    /// Exactly this many (`--repetitions N`): the gate's processes, a bless of a set size.
+    Count(u32),
+    /// By confidence, the suite's default: each mode's rounds until the rule is met.
+    Confidence(Confidence),
+}
+
+/// When a mode that takes its rounds by confidence has enough: a fifteenth round of a mode whose
+/// median is known to 1 % buys less than a fifth of one that varies by 30 %.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Confidence {
+    /// No mode stops before this many rounds.
+    pub floor: u32,
+    /// Nor takes more than this many.
+    pub most: u32,
+    /// A mode stops once its median's interval (≥ 95 %) is at most this share of its median
+    /// wide…
+    pub width: f64,
+    /// …or once its scene's timed frames, every mode's, took this many seconds.
+    pub budget_s: f64,
+}
+
+/// Why a mode took no more rounds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Stop {
+    /// It took the rounds asked for (`--repetitions N`).
+    Count,
+    /// Its median's interval was within the rule's width.
+    Interval,
+    /// Its scene's timed frames had taken the rule's budget.
+    Budget,
+    /// It took the most rounds the rule allows.
+    Most,
+}
+
+impl Repetitions {
+    /// The most rounds a mode may take.
+    pub fn most(self) -> u32 {
+        match self {
+            Repetitions::Count(count) => count,
+            Repetitions::Confidence(rule) => rule.most,
+        }
+    }
+
+    /// Whether a mode whose timed frames so far took `frames_ms` stops here, and why, when its
+    /// scene's timed frames took `spent_s` seconds in all.
+    pub fn stop(self, frames_ms: &[f64], spent_s: f64) -> Option<Stop> {
+        let taken = frames_ms.len() as u32;
+        let rule = match self {
+            Repetitions::Count(count) => return (taken >= count).then_some(Stop::Count),
+            Repetitions::Confidence(rule) if taken >= rule.floor => rule,
+            Repetitions::Confidence(_) => return None,
+        };
+        let summary = crate::stats::Summary::new(frames_ms.to_vec())?;
+        if summary.ci_high - summary.ci_low <= rule.width * summary.median {
+            Some(Stop::Interval)
+        } else if spent_s >= rule.budget_s {
+            Some(Stop::Budget)
+        } else {
+            (taken >= rule.most).then_some(Stop::Most)
+        }
+    }
+
+    /// The rule, as a run's settings record it (`None` for a count).
+    pub fn confidence(self) -> Option<Confidence> {
+        match self {
+            Repetitions::Count(_) => None,
+            Repetitions::Confidence(rule) => Some(rule),
+        }
+    }
+}
+
 /// Longest a single frame may take unless `--frame-timeout` says.
 pub fn default_frame_timeout() -> Duration {
     Duration::from_secs(120)
@@ -26,8 +101,8 @@ pub fn default_frame_timeout() -> Duration {
 pub struct RunArgs {
     /// Manifests or folders of manifests [default: scenes/].
     pub paths: Vec<PathBuf>,
-    /// quick: 256×192 unless a manifest says (the stiff scenes: 160×120), 15 repetitions (the
-    /// suite and the CI gate); nightly: 1024×768, 7 repetitions.
+    /// quick: 256×192 unless a manifest says (the stiff scenes: 160×120), up to 15 rounds (the
+    /// suite and the CI gate); nightly: 1024×768, up to 7 rounds.
     #[arg(long, value_enum, default_value = "quick")]
     pub tier: Tier,
     /// Comma-separated mode ids or groups: baseline, adaptive, ablation, variant, stable [default: the tier's].
@@ -36,7 +111,9 @@ pub struct RunArgs {
     /// Folder that receives the run's folder.
     #[arg(long, default_value = "reports")]
     pub out: PathBuf,
-    /// Timed repetitions per mode, 1 to 10 000 [default: the tier's].
+    /// Timed rounds per mode, 1 to 10 000 [default: by confidence: each mode's rounds until its
+    /// median frame time is known to ±5 %, or its scene's frames took 20 s, at least 5 and
+    /// at most the tier's 15 (nightly 7)].
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub repetitions: Option<u32>,
     /// Untimed rounds before timing (lavapipe compiles shaders at the first draw); at most 100.
@@ -117,7 +194,9 @@ impl RunArgs {
                     args.frame_timeout
                 )
             })?;
-        let repetitions = args.repetitions.unwrap_or_else(|| args.tier.repetitions());
+        let repetitions = args
+            .repetitions
+            .map_or_else(|| Repetitions::Confidence(args.tier.confidence()), Repetitions::Count);
         let memory_limit = args
             .memory_limit
             .map(|gib| {
@@ -202,16 +281,33 @@ impl Tier {
         }
     }
 
-    /// Timed repetitions of every mode, after warm-up. The quick tier is the default suite's
-    /// and the one the gate compares with the baselines; its time against the base build the
-    /// gate decides from processes of its own, 3 rounds each (`docs/gate.md`). Where time is
-    /// gated by one run against the baselines of the machine that blessed them (no git
-    /// history), `ci/gate.sh` times 25 rounds: one frame's time varies by about 10 % from the next
-    /// on these machines.
-    pub fn repetitions(self) -> u32 {
+    /// The most timed rounds of a mode when the run takes them by confidence. The quick tier
+    /// is the default suite's and the one the gate compares with the baselines; its time
+    /// against the base build the gate decides from processes of its own, 3 rounds each
+    /// (`docs/gate.md`). Where time is gated by one run against the baselines of the machine
+    /// that blessed them (no git history), `ci/gate.sh` times 25 rounds: one frame's time
+    /// varies by about 10 % from the next on these machines.
+    pub fn most_rounds(self) -> u32 {
         match self {
             Tier::Quick => 15,
             Tier::Nightly => 7,
+        }
+    }
+
+    /// How the suite takes its rounds when `--repetitions` does not say: until each mode's
+    /// median is known to ±5 % (its interval no wider than the gate's 10 % time tolerance, so
+    /// that a change of that size shows), or its scene's timed frames
+    /// took 20 s (four of criterion's 5 s measurement times: most quick scenes time their 15
+    /// rounds within it, the heaviest stop early), at least the 5 a time check needs
+    /// ([`crate::gate::MIN_FRAMES`]) and at most [`Tier::most_rounds`]. On the suite's own
+    /// recorded rounds this keeps all but about 3 % of the front's memberships that 15 rounds
+    /// decide (`docs/measuring.md`).
+    pub fn confidence(self) -> Confidence {
+        Confidence {
+            floor: crate::gate::MIN_FRAMES as u32,
+            most: self.most_rounds(),
+            width: 0.10,
+            budget_s: 20.0,
         }
     }
 
@@ -298,7 +394,7 @@ pub struct RunPlan {
     pub tier: Tier,
     pub scenes: Vec<SceneEntry>,
     pub modes: Vec<Mode>,
-    pub repetitions: u32,
+    pub repetitions: Repetitions,
     pub warmup: u32,
     pub frame_timeout: Duration,
     pub extra_samples: ExtraSamples,
@@ -478,6 +574,27 @@ pub fn fallback_name(path: &Path) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_mode_stops_at_its_count_or_once_its_median_is_known_or_its_scene_spent_its_budget() {
+        let rule = Repetitions::Confidence(Confidence { floor: 5, most: 15, width: 0.05, budget_s: 5.0 });
+        let steady = [10.0, 10.1, 9.9, 10.0, 10.05];
+        assert_eq!(rule.stop(&steady[..4], 100.0), None, "below the floor nothing stops it");
+        assert_eq!(rule.stop(&steady, 0.0), Some(Stop::Interval), "9.9–10.1 ms is within 5 % of 10");
+        let noisy = [10.0, 14.0, 9.0, 12.0, 8.0];
+        assert_eq!(rule.stop(&noisy, 4.9), None);
+        assert_eq!(rule.stop(&noisy, 5.0), Some(Stop::Budget));
+        let alternating: Vec<f64> = (0..15).map(|i| if i % 2 == 0 { 8.0 } else { 12.0 }).collect();
+        assert_eq!(rule.stop(&alternating[..14], 1.0), None);
+        assert_eq!(rule.stop(&alternating, 1.0), Some(Stop::Most));
+        assert_eq!(rule.most(), 15);
+        let count = Repetitions::Count(3);
+        assert_eq!(
+            (count.stop(&[1.0, 2.0], 100.0), count.stop(&[1.0, 2.0, 9.0], 0.0)),
+            (None, Some(Stop::Count))
+        );
+        assert_eq!((count.most(), count.confidence()), (3, None));
+    }
 
     #[test]
     fn run_folders_are_created_once_each() {

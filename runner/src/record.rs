@@ -11,7 +11,7 @@ use crate::inputs::SceneInputs;
 use crate::machine::Machine;
 use crate::metrics::{Decibels, FrameChecks, Quality, SampleStats};
 pub use crate::plan::Shard;
-use crate::plan::Tier;
+use crate::plan::{Confidence, Stop, Tier};
 use crate::stats::Summary;
 use crate::truth::TruthRecord;
 
@@ -93,7 +93,12 @@ impl From<&PlatformInfo> for Platform {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RunSettings {
     pub modes: Vec<String>,
+    /// Timed rounds of every mode, or with `confidence` the most a mode takes.
     pub repetitions: u32,
+    /// The rule by which each mode took its rounds, where not by count (runs from before took
+    /// `repetitions` each).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub confidence: Option<Confidence>,
     pub warmup: u32,
     pub frame_timeout_s: f64,
     /// How the frames were ordered: every repetition renders each mode once, in this order.
@@ -108,6 +113,22 @@ pub struct RunSettings {
     /// time alone; runs from before read as true).
     #[serde(default = "measured_quality", skip_serializing_if = "is_measured")]
     pub quality: bool,
+}
+
+impl RunSettings {
+    /// How the modes took their rounds, for people: `15 repetitions`, or the rule.
+    pub fn rounds(&self) -> String {
+        match &self.confidence {
+            None => format!("{} repetitions", self.repetitions),
+            Some(rule) => format!(
+                "{}–{} rounds by confidence (until a mode's median is known to {} %, or its scene's frames took {} s)",
+                rule.floor,
+                rule.most,
+                rule.width * 100.0,
+                rule.budget_s
+            ),
+        }
+    }
 }
 
 fn measured_quality() -> bool {
@@ -249,6 +270,9 @@ pub struct ModeRecord {
     pub error: Option<String>,
     /// Wall-clock frame time in milliseconds: the sum of its passes.
     pub frame_ms: Option<Summary>,
+    /// Why it took no more rounds (absent in runs from before, which took `repetitions` each).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped: Option<Stop>,
     /// Per pass, in submission order.
     pub passes: Vec<PassRecord>,
     /// Frame median over plain deferred-1x1's in the same run: travels between machines.

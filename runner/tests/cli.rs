@@ -42,6 +42,7 @@ fn a_run_writes_its_record_and_images_and_exits_zero() {
         let m = mode(scene, id);
         assert_eq!(m["status"], "ok", "{id}: {}", m["error"]);
         assert_eq!(m["frame_ms"]["samples"].as_array().unwrap().len(), 2, "{id}");
+        assert_eq!(m["stopped"], "count", "{id}");
         assert!(m["frame_ms"]["median"].as_f64().unwrap() > 0.0);
         assert_eq!(m["deterministic"], true, "{id}");
         // One warm-up and two timed frames, each checked for NaN, Inf and sample counts.
@@ -422,7 +423,7 @@ fn a_killed_run_leaves_the_scenes_that_finished() {
 }
 
 #[test]
-fn run_help_states_each_tiers_repetitions() {
+fn run_help_states_each_tiers_most_rounds() {
     let ws = Workspace::new("help");
     let output = ws.run(&["run", "--help"]);
     assert!(output.status.success(), "{}", stderr(&output));
@@ -430,10 +431,49 @@ fn run_help_states_each_tiers_repetitions() {
     for tier in [aabench::plan::Tier::Quick, aabench::plan::Tier::Nightly] {
         let said = format!("{}: ", tier.name());
         let line = help.split(&said).nth(1).unwrap_or_else(|| panic!("no `{said}` in: {help}"));
-        let repetitions = format!("{} repetitions", tier.repetitions());
-        assert!(
-            line.split(';').next().unwrap().contains(&repetitions),
-            "{said}… lacks `{repetitions}`: {help}"
+        let rounds = format!("up to {} rounds", tier.most_rounds());
+        assert!(line.split(';').next().unwrap().contains(&rounds), "{said}… lacks `{rounds}`: {help}");
+    }
+}
+
+/// Without `--repetitions` each mode takes its rounds by confidence, at least 5 and at most 15,
+/// and says why it stopped, which its own frames bear out.
+#[test]
+fn a_run_takes_its_rounds_by_confidence_unless_given_a_count() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("confidence");
+    ws.manifest("edge", "edge", |_| {});
+    let modes = "deferred-1x1,reference-2x2,reference-4x4-stalled,adaptive-2x2";
+    let output = ws.run(&["run", "--modes", modes]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let record = ws.record();
+    let rule = &record["settings"]["confidence"];
+    assert_eq!(rule, &json!({"floor": 5, "most": 15, "width": 0.1, "budget_s": 20.0}));
+    assert_eq!(record["settings"]["repetitions"], 15);
+    let scene = &record["scenes"][0];
+    let spent_ms: f64 = scene["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|m| m["frame_ms"]["samples"].as_array().unwrap())
+        .map(|s| s.as_f64().unwrap())
+        .sum();
+    for id in modes.split(',') {
+        let m = mode(scene, id);
+        assert_eq!(m["status"], "ok", "{id}: {}", m["error"]);
+        let frames = &m["frame_ms"];
+        let taken = frames["samples"].as_array().unwrap().len();
+        assert!((5..=15).contains(&taken), "{id}: {taken} rounds");
+        let (low, high, median) = (
+            frames["ci_low"].as_f64().unwrap(),
+            frames["ci_high"].as_f64().unwrap(),
+            frames["median"].as_f64().unwrap(),
         );
+        match m["stopped"].as_str() {
+            Some("interval") => assert!(high - low <= 0.1 * median, "{id}: {frames}"),
+            Some("budget") => assert!(spent_ms >= 20_000.0, "{id}: the scene's frames took {spent_ms} ms"),
+            Some("most") => assert_eq!(taken, 15, "{id}"),
+            other => panic!("{id} stopped for {other:?}"),
+        }
     }
 }

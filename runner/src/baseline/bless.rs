@@ -241,7 +241,7 @@ fn short_records(measured: &[&SceneRecord]) -> Option<String> {
     ))
 }
 
-/// Runs blessed together must be of one platform, tier, build and settings (repetitions aside).
+/// Runs blessed together must be of one platform, tier, build and settings (rounds aside).
 fn check_alike(runs: &[RunRecord]) -> Result<(), String> {
     if let Some(run) = runs.iter().find(|run| !run.settings.quality) {
         return Err(format!(
@@ -269,6 +269,7 @@ fn check_alike(runs: &[RunRecord]) -> Result<(), String> {
         // one process of several); how frames were made may not.
         let settings = RunSettings {
             repetitions: first.settings.repetitions,
+            confidence: first.settings.confidence,
             sequences: first.settings.sequences,
             ..run.settings.clone()
         };

@@ -103,7 +103,7 @@ fn summary(page: &mut String, run: &RunRecord, verdict: Option<&Verdict>) {
     let _ = writeln!(
         page,
         "<p class=\"meta\">{} tier · status <b>{}</b> · started {} · finished {}<br>{} · {} · {} ({} cores) · \
-         LP_NUM_THREADS={} · {} build<br>platform key <code>{}</code><br>{} repetitions after {} warm-up round(s), \
+         LP_NUM_THREADS={} · {} build<br>platform key <code>{}</code><br>{} after {} warm-up round(s), \
          {}; extra samples: {}{}</p>",
         run.tier.name(),
         run.status,
@@ -116,7 +116,7 @@ fn summary(page: &mut String, run: &RunRecord, verdict: Option<&Verdict>) {
         escape(p.lp_num_threads.as_deref().unwrap_or("auto")),
         escape(&p.build_profile),
         escape(&run.platform.key),
-        run.settings.repetitions,
+        run.settings.rounds(),
         run.settings.warmup,
         escape(&run.settings.interleaving),
         escape(&run.settings.extra_samples),

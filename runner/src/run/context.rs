@@ -10,7 +10,7 @@ use aabench_renderer::{FrameImages, FrameTiming};
 
 use crate::manifest::Manifest;
 use crate::metrics::FrameChecks;
-use crate::plan::RunPlan;
+use crate::plan::{RunPlan, Stop};
 use crate::progress::Progress;
 use crate::record::{GraphRecord, ModeSequence};
 use crate::worker::Worker;
@@ -66,6 +66,9 @@ impl<'a> SceneRun<'a> {
 pub(super) struct ModeRun {
     pub(super) graph: Option<GraphRecord>,
     pub(super) timings: Vec<FrameTiming>,
+    /// Why it took no more timed rounds; `None` while it takes them, or when they were cut
+    /// short (an error, a signal).
+    pub(super) stopped: Option<Stop>,
     pub(super) hashes: Vec<String>,
     pub(super) images: Option<FrameImages>,
     pub(super) checks: FrameChecks,

@@ -61,7 +61,8 @@ pub async fn execute(plan: &RunPlan, progress: Progress, cancel: Arc<AtomicBool>
         platform: Platform { machine: Some(Machine::measure()), ..Platform::from(&worker.platform) },
         settings: RunSettings {
             modes: plan.modes.iter().map(ToString::to_string).collect(),
-            repetitions: plan.repetitions,
+            repetitions: plan.repetitions.most(),
+            confidence: plan.repetitions.confidence(),
             warmup: plan.warmup,
             frame_timeout_s: plan.frame_timeout.as_secs_f64(),
             interleaving: "round-robin: each repetition renders every mode once, in plan order".into(),

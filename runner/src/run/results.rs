@@ -222,7 +222,7 @@ fn timing_record(
             .collect()
     });
     let deterministic = (!run.hashes.is_empty()).then(|| run.hashes.windows(2).all(|w| w[0] == w[1]));
-    let complete = run.timings.len() == plan.repetitions as usize;
+    let complete = run.stopped.is_some();
     // A run that times alone reads no still of a jittered mode: its frames alone decide.
     let read_back = run.images.is_some() || (!plan.quality && mode.is_jittered());
     let unstable = run.checks.problem(mode.m);
@@ -248,6 +248,7 @@ fn timing_record(
         status,
         error,
         frame_ms,
+        stopped: run.stopped,
         passes,
         ratio_to_deferred: None,
         deterministic,

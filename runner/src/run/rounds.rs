@@ -20,25 +20,26 @@ struct Frame {
 
 impl SceneRun<'_> {
     /// Warm-up rounds (lavapipe compiles at the first draw), then timed rounds. Each round renders
-    /// every mode once: A B C … A B C …, so drift over time hits every mode alike. Images are read
-    /// back after the first timed frame (every later frame is checked to give the same display
-    /// image), so an interrupted run still has them. A worker that stops (a timeout, a panic)
-    /// ends the rounds of every mode.
+    /// every mode still taking rounds once: A B C … A B C …, so drift over time hits every mode
+    /// alike; after each, a mode whose rounds are enough by the plan's rule stops
+    /// ([`crate::plan::Repetitions::stop`]). Images are read back after the first timed frame
+    /// (every later frame is checked to give the same display image), so an interrupted run
+    /// still has them. A worker that stops (a timeout, a panic) ends the rounds of every mode.
     pub(super) async fn timed_rounds(&mut self, runs: &mut [ModeRun]) {
         let plan = self.plan;
-        let rounds = plan.warmup + plan.repetitions;
-        for round in 0..rounds {
+        let most = plan.repetitions.most();
+        for round in 0..plan.warmup + most {
             let timed = round >= plan.warmup;
             let first_timed = round == plan.warmup;
             for (index, mode) in plan.modes.iter().enumerate() {
                 if self.cancelled() {
                     return;
                 }
-                if runs[index].error.is_some() {
+                if runs[index].error.is_some() || runs[index].stopped.is_some() {
                     continue;
                 }
                 let label = if timed {
-                    format!("rep {}/{}", round - plan.warmup + 1, plan.repetitions)
+                    format!("rep {}/{most}", round - plan.warmup + 1)
                 } else {
                     format!("warm-up {}/{}", round + 1, plan.warmup)
                 };
@@ -70,6 +71,20 @@ impl SceneRun<'_> {
                     }
                 }
             }
+            if timed {
+                self.stop_modes(runs);
+            }
+        }
+    }
+
+    /// After a timed round, stops every mode whose rounds are enough by the plan's rule, which
+    /// weighs its frames and the scene's timed seconds so far.
+    fn stop_modes(&self, runs: &mut [ModeRun]) {
+        let frames_ms =
+            |run: &ModeRun| -> Vec<f64> { run.timings.iter().map(|t| t.seconds() * 1e3).collect() };
+        let spent_s: f64 = runs.iter().flat_map(|run| &run.timings).map(FrameTiming::seconds).sum();
+        for run in runs.iter_mut().filter(|run| run.error.is_none() && run.stopped.is_none()) {
+            run.stopped = self.plan.repetitions.stop(&frames_ms(run), spent_s);
         }
     }
 

@@ -140,6 +140,35 @@ fn mann_whitney_cdf(n: usize, m: usize) -> Vec<f64> {
         .collect()
 }
 
+/// Frame times of one process's modes, round by round: what the in-run time ratios are taken
+/// from, in a run's record and in a baseline's.
+pub trait Rounds {
+    /// Mode `id`'s frame times in milliseconds, one a round.
+    fn frames(&self, id: &str) -> Option<&[f64]>;
+
+    /// Round-by-round ratios of `mode`'s frame time to `anchor`'s. Every round renders each
+    /// mode once, so round i of both ran moments apart and share the machine's state.
+    fn paired_ratios(&self, mode: &str, anchor: &str) -> Option<Vec<f64>> {
+        let (own, base) = (self.frames(mode)?, self.frames(anchor)?);
+        let ratios: Vec<f64> = own.iter().zip(base).map(|(a, b)| a / b).collect();
+        (!ratios.is_empty()).then_some(ratios)
+    }
+
+    /// Per round, the log of the geometric mean frame time of `anchors` other than `mode`
+    /// itself (a mode is not measured against itself): an anchor that averages the machine's
+    /// momentary speed over several modes of the round. Rounds where any of them has no sample
+    /// are left out; `None` if no anchor mode or no round remains.
+    fn round_anchor(&self, anchors: &[&str], mode: &str) -> Option<Vec<f64>> {
+        let samples: Vec<&[f64]> =
+            anchors.iter().filter(|id| **id != mode).map(|id| self.frames(id)).collect::<Option<_>>()?;
+        let rounds = samples.iter().map(|s| s.len()).min()?;
+        let means: Vec<f64> = (0..rounds)
+            .map(|i| samples.iter().map(|s| s[i].ln()).sum::<f64>() / samples.len() as f64)
+            .collect();
+        (!means.is_empty()).then_some(means)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -29,7 +29,8 @@ use crate::gate::Tolerances;
 use crate::inputs::SceneInputs;
 use crate::metrics::SampleStats;
 use crate::plan::Tier;
-use crate::record::{ModeRecord, Platform, Rounds, RunRecord, RunSettings, SceneRecord};
+use crate::record::{ModeRecord, Platform, RunRecord, RunSettings, SceneRecord};
+use crate::stats::Rounds;
 use crate::vocabulary::{METRICS, Metric, Source};
 use crate::{fs, json};
 

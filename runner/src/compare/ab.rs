@@ -9,8 +9,8 @@
 //! numbers with its Moses interval.
 
 use crate::baseline::BaselineSet;
-use crate::record::{Rounds, RunRecord, SceneRecord, Status};
-use crate::stats::{Shift, Summary};
+use crate::record::{RunRecord, SceneRecord, Status};
+use crate::stats::{Rounds, Shift, Summary};
 use crate::vocabulary::TimeMetric;
 
 use super::request::Confirmation;

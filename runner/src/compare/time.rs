@@ -4,8 +4,7 @@
 
 use super::mode::{ModeContext, show_percent};
 use super::verdict::{CONFIDENCE, Check, MIN_FRAMES, Outcome};
-use crate::record::Rounds;
-use crate::stats::Shift;
+use crate::stats::{Rounds, Shift};
 use crate::vocabulary::TimeMetric;
 
 impl ModeContext<'_> {

@@ -51,6 +51,15 @@ while [ $# -gt 0 ]; do
         *) run_args+=("$1"); shift ;;
     esac
 done
+# A malformed shard fails here, once, before any set-up, build or process (aabench's own check,
+# `plan::parse_shard`, would refuse it in every process after both builds).
+if [ ${#shard_args[@]} -gt 0 ]; then
+    shard=${shard_args[1]}
+    if ! [[ $shard =~ ^([1-9][0-9]{0,8})/([1-9][0-9]{0,8})$ ]] || ((BASH_REMATCH[1] > BASH_REMATCH[2])); then
+        echo "ci/gate.sh: --shard $shard: expected I/N with 1 ≤ I ≤ N, e.g. 2/4" >&2
+        exit 2
+    fi
+fi
 if [ -n "$verdict_out" ]; then
     # Relative to where the gate was started; an earlier gate's verdict must not outlive this one.
     case "$verdict_out" in /*) ;; *) verdict_out="$invoked_from/$verdict_out" ;; esac

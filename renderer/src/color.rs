@@ -453,16 +453,8 @@ pub fn metered_exposure(
     white: f64,
     range: [f32; 2],
 ) -> Result<f32, String> {
-    let shows = |i: usize| scene.is_none_or(|covered| covered.get(i).copied().unwrap_or(false));
-    let any_scene = (0..hdr.len()).any(shows);
-    let metered: Vec<[f64; 3]> = hdr
-        .iter()
-        .enumerate()
-        .filter(|&(i, _)| !any_scene || shows(i))
-        .map(|(_, p)| [p[0], p[1], p[2]].map(|c| sanitize(f64::from(c))))
-        .collect();
-    let saturated = metered.iter().filter(|p| p.iter().any(|&c| c >= HALF_MAX)).count();
-    let share = saturated as f64 / metered.len().max(1) as f64;
+    let metered = scene_pixels(hdr, scene);
+    let share = saturated_share(&metered);
     if share > METERED_SATURATED_SHARE {
         return Err(format!(
             "{:.1} % of the scene's pixels reach the HDR target's limit of 65 504 at exposure 1: light \
@@ -489,6 +481,46 @@ pub fn metered_exposure(
         None => key / average,
     };
     Ok((exposure as f32).clamp(range[0], range[1]))
+}
+
+/// The sanitized RGB of the pixels of `hdr` that show the scene (all of them where none does).
+fn scene_pixels(hdr: &[[f32; 4]], scene: Option<&[bool]>) -> Vec<[f64; 3]> {
+    let shows = |i: usize| scene.is_none_or(|covered| covered.get(i).copied().unwrap_or(false));
+    let any_scene = (0..hdr.len()).any(shows);
+    hdr.iter()
+        .enumerate()
+        .filter(|&(i, _)| !any_scene || shows(i))
+        .map(|(_, p)| [p[0], p[1], p[2]].map(|c| sanitize(f64::from(c))))
+        .collect()
+}
+
+/// The share of `pixels` with a channel at the HDR target's limit.
+fn saturated_share(pixels: &[[f64; 3]]) -> f64 {
+    let saturated = pixels.iter().filter(|p| p.iter().any(|&c| c >= HALF_MAX)).count();
+    saturated as f64 / pixels.len().max(1) as f64
+}
+
+/// Whether a scene's own `exposure` shows its light (an HDR image, RGBA, of which `scene` says
+/// which pixels show the scene): an error where more than [`METERED_SATURATED_SHARE`] of them
+/// reach the HDR target's limit and the exposure maps that limit below `white` (the HDR value
+/// that displays white), so that the light lost above the limit would show as a flat grey. An
+/// exposure that displays the limit white hides the loss, and passes.
+pub fn headroom(hdr: &[[f32; 4]], scene: Option<&[bool]>, exposure: f64, white: f64) -> Result<(), String> {
+    if HALF_MAX * exposure >= white {
+        return Ok(());
+    }
+    let share = saturated_share(&scene_pixels(hdr, scene));
+    if share > METERED_SATURATED_SHARE {
+        return Err(format!(
+            "{:.1} % of the scene's pixels reach the HDR target's limit of 65 504, which exposure {:e} \
+             displays below white: light above it is lost, and would show as a flat grey; scale the lights' \
+             intensities down and the exposure up",
+            100.0 * share,
+            // The manifest's exposure is an f32: shown as written.
+            exposure as f32
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

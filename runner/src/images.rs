@@ -79,11 +79,12 @@ pub fn write_apng(
     crate::fs::write(path, &bytes).map_err(anyhow::Error::msg)
 }
 
-/// The frames of an animated PNG as RGBA8 images (a still PNG: its one image).
+/// The frames of an animated PNG as RGBA8 images (a still PNG: its one image). A path that is
+/// no regular file (a FIFO would block for ever) is an error naming it.
 pub fn read_apng(path: &Path) -> anyhow::Result<Vec<image::RgbaImage>> {
     use image::AnimationDecoder;
-    let file =
-        std::io::BufReader::new(std::fs::File::open(path).with_context(|| format!("{}", path.display()))?);
+    let bytes = crate::fs::read_regular(path).with_context(|| format!("{}", path.display()))?;
+    let file = std::io::Cursor::new(bytes);
     let decoder = image::codecs::png::PngDecoder::new(file).with_context(|| format!("{}", path.display()))?;
     let frames = if decoder.is_apng().with_context(|| format!("{}", path.display()))? {
         let frames = decoder.apng().with_context(|| format!("{}", path.display()))?.into_frames();
@@ -234,6 +235,17 @@ mod tests {
         let read: Vec<Vec<u8>> = read_apng(&apng).unwrap().into_iter().map(|f| f.into_raw()).collect();
         assert_eq!(read, frames);
         assert_eq!(display_rgba8(&ten), vec![0, 0, 128, 255, 255, 174, 1, 255]);
+
+        // A FIFO where an animation should be (a report reads a sequence's) is an error naming
+        // it, at once: opening it for reading would wait for a writer for ever.
+        let fifo = dir.join("pipe.png");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+        let (sender, receiver) = std::sync::mpsc::channel();
+        let path = fifo.clone();
+        std::thread::spawn(move || sender.send(read_apng(&path).map_err(|e| format!("{e:#}"))));
+        let read = receiver.recv_timeout(std::time::Duration::from_secs(10)).expect("read_apng returns");
+        let error = read.unwrap_err();
+        assert!(error.contains("pipe.png") && error.contains("not a regular file"), "{error}");
 
         let exr_path = dir.join("a.exr");
         write_exr(&exr_path, 2, 1, &[1.5, 2.0, 3.0, 0.0, 0.25, 0.5, 100.0, 0.0]).unwrap();

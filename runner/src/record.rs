@@ -115,22 +115,6 @@ pub struct RunSettings {
     pub quality: bool,
 }
 
-impl RunSettings {
-    /// How the modes took their rounds, for people: `15 repetitions`, or the rule.
-    pub fn rounds(&self) -> String {
-        match &self.confidence {
-            None => format!("{} repetitions", self.repetitions),
-            Some(rule) => format!(
-                "{}–{} rounds by confidence (until a mode's median is known to {} %, or its scene's frames took {} s)",
-                rule.floor,
-                rule.most,
-                rule.width * 100.0,
-                rule.budget_s
-            ),
-        }
-    }
-}
-
 fn measured_quality() -> bool {
     true
 }
@@ -418,9 +402,25 @@ pub struct SampleCost {
 
 /// Reads a run: its folder or its run.json. Returns the record and the run folder (image
 /// paths in the record are relative to it). Errors name the file.
-/// This binary's build (see [`RunRecord::build`]).
+/// This build (see [`RunRecord::build`]): this binary's source and the shaders it reads, the
+/// embedded ones or those of `AABENCH_SHADER_DIR`, so that runs of two shader trees are no one
+/// build's.
 pub fn this_build() -> String {
-    env!("AABENCH_BUILD_SHA256")[..16].to_string()
+    use aabench_renderer::shaders;
+    use sha2::{Digest, Sha256};
+    let dir = std::env::var_os(shaders::SHADER_DIR_VARIABLE).map(std::path::PathBuf::from);
+    let mut hasher = Sha256::new();
+    hasher.update(env!("AABENCH_BUILD_SHA256").as_bytes());
+    for (name, embedded) in shaders::SOURCES {
+        let text = match &dir {
+            Some(dir) => crate::fs::read_regular(&dir.join(name)).unwrap_or_default(),
+            None => embedded.as_bytes().to_vec(),
+        };
+        hasher.update(name.as_bytes());
+        hasher.update((text.len() as u64).to_le_bytes());
+        hasher.update(&text);
+    }
+    hasher.finalize().iter().take(8).map(|b| format!("{b:02x}")).collect()
 }
 
 /// Why runs of different builds cannot be taken together, where they are of different builds:

@@ -305,6 +305,21 @@ fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
     std::fs::write(tier.join("NOTES.md"), "why these were blessed").unwrap();
     assert_eq!(ws.run(&["bless", &path_arg(&second)]).status.code(), Some(0));
     assert_eq!(std::fs::read_to_string(tier.join("NOTES.md")).unwrap(), "why these were blessed");
+    // A `*.json` of the user's there is kept too, with a warning: compare would take it for a
+    // baseline and refuse the folder, naming it.
+    std::fs::write(tier.join("notes.json"), r#"{"why": "these were blessed"}"#).unwrap();
+    let warned = ws.run(&["bless", &path_arg(&second)]);
+    assert_eq!(warned.status.code(), Some(0), "{}", stderr(&warned));
+    assert!(
+        stderr(&warned).contains("notes.json: is no baseline (not an aabench.baseline/2 file"),
+        "{}",
+        stderr(&warned)
+    );
+    assert!(tier.join("notes.json").is_file());
+    let refused = compare(&ws, &second, &out);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(stderr(&refused).contains("notes.json"), "{}", stderr(&refused));
+    std::fs::remove_file(tier.join("notes.json")).unwrap();
     std::fs::create_dir(tier.join("archive")).unwrap();
     let before = std::fs::read(&file).unwrap();
     let refused = ws.run(&["bless", &path_arg(&second)]);
@@ -318,6 +333,40 @@ fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
     assert_eq!(nowhere.status.code(), Some(2));
     assert!(stderr(&nowhere).contains("cannot be read or written"), "{}", stderr(&nowhere));
     assert!(!stderr(&nowhere).contains("--force"), "{}", stderr(&nowhere));
+}
+
+/// Runs that read their shaders from another tree (`AABENCH_SHADER_DIR`) are of another build,
+/// and bless refuses them beside the embedded shaders' runs; an unchanged copy of the shaders is
+/// the embedded build.
+#[test]
+fn runs_of_two_shader_trees_are_two_builds() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("shader-trees");
+    ws.manifest("edge", "edge", |_| {});
+    let shaders = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+    let (same, edited) = (ws.dir.join("tree-same"), ws.dir.join("tree-edited"));
+    copy_dir(&shaders, &same);
+    copy_dir(&shaders, &edited);
+    let shade = edited.join("shade.wgsl");
+    let text = std::fs::read_to_string(&shade).unwrap();
+    std::fs::write(&shade, format!("{text}\n// An edit that changes no pixel.\n")).unwrap();
+    let run_with = |folder: &str, tree: Option<&Path>| {
+        let mut command =
+            ws.command(&["run", "--out", folder, "--modes", "deferred-1x1", "--repetitions", "5"]);
+        if let Some(tree) = tree {
+            command.env("AABENCH_SHADER_DIR", tree);
+        }
+        let output = command.output().unwrap();
+        assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+        run_in(&ws, folder)
+    };
+    let runs = [run_with("embedded", None), run_with("same", Some(&same)), run_with("edited", Some(&edited))];
+    let builds = runs.each_ref().map(|run| read_json(&run.join("run.json"))["build"].clone());
+    assert_eq!(builds[0], builds[1], "the same shaders, the same build");
+    assert_ne!(builds[0], builds[2], "another shader tree, another build");
+    let refused = ws.run(&["bless", &path_arg(&runs[0]), &path_arg(&runs[2])]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(stderr(&refused).contains("different builds"), "{}", stderr(&refused));
 }
 
 /// A stall made 256× as expensive in a copied manifest regresses both stalled modes (exit 1);

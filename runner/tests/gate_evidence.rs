@@ -245,19 +245,6 @@ fn a_compare_that_compared_less_than_its_baselines_fails_and_lenient_reports_it(
     }
 }
 
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for entry in std::fs::read_dir(from).unwrap() {
-        let path = entry.unwrap().path();
-        let target = to.join(path.file_name().unwrap());
-        if path.is_dir() {
-            copy_dir(&path, &target)
-        } else {
-            std::fs::copy(&path, &target).map(drop).unwrap()
-        }
-    }
-}
-
 /// With one repetition a side, every time check is `insufficient`, and bless warns that the
 /// modes have fewer than 5 timed frames.
 #[test]

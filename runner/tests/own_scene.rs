@@ -172,12 +172,23 @@ fn automatic_exposure_renders_a_sun_of_6830_lux_as_one_of_6_8() {
 fn automatic_exposure_meters_the_scene_not_its_sky_and_refuses_light_beyond_the_hdr_range() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let ws = Workspace::new("exposure-sky");
-    for (name, lux) in [("sunlit", 2000.0), ("blaze", 1e9)] {
+    // The blaze metered, and under exposures of its own: one that shows the lost light as grey
+    // (refused like the metered one), one that displays the limit white (it hides nothing).
+    let scenes = [
+        ("sunlit", 2000.0, None),
+        ("blaze", 1e9, None),
+        ("dimmed", 1e9, Some(1e-9)),
+        ("white", 1e9, Some(1.0)),
+    ];
+    for (name, lux, exposure) in scenes {
         let mut writer = box_scene();
         writer.add_directional_light(glam::DVec3::new(-0.4, -1.0, -0.6), [1.0, 0.97, 0.9], lux);
         writer.write(&ws.dir.join(format!("scenes/{name}.glb"))).unwrap();
-        let manifest = json!({ "schema_version": 1, "name": name, "gltf": format!("{name}.glb"),
+        let mut manifest = json!({ "schema_version": 1, "name": name, "gltf": format!("{name}.glb"),
             "ambient": [0, 0, 0], "background": [0.0005, 0.0006, 0.001] });
+        if let Some(exposure) = exposure {
+            manifest["tonemap"] = json!({ "exposure": exposure });
+        }
         std::fs::write(ws.dir.join(format!("scenes/{name}.json")), manifest.to_string()).unwrap();
     }
     let output = ws.run(&["run", "--modes", "deferred-1x1", "--repetitions", "1"]);
@@ -185,6 +196,18 @@ fn automatic_exposure_meters_the_scene_not_its_sky_and_refuses_light_beyond_the_
     let text = stderr(&output);
     assert!(text.contains("blaze.glb") && text.contains("65 504"), "{text}");
     let record = ws.record();
+    let dimmed = scene(&record, "dimmed");
+    assert_eq!(dimmed["status"], "failed", "{dimmed}");
+    let error = dimmed["error"].as_str().unwrap();
+    assert!(
+        error.contains("dimmed.glb") && error.contains("which exposure 1e-9 displays below white"),
+        "{error}"
+    );
+    assert_eq!(
+        scene(&record, "white")["status"],
+        "ok",
+        "exposure 1 shows the limit white: nothing is hidden"
+    );
     let sunlit = scene(&record, "sunlit");
     assert_eq!(sunlit["exposure"]["metered"], true, "{sunlit}");
     let image = ws.display(mode(sunlit, "deferred-1x1")).to_rgb8();

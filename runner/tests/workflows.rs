@@ -61,6 +61,27 @@ fn the_workflows_lint_clean_and_a_broken_one_does_not() {
     assert!(findings.contains("\"shards\"") && findings.contains("\"part\""), "{findings}");
 }
 
+/// A malformed `--shard` fails the gate at once, with one line, before it sets up or builds
+/// anything.
+#[test]
+fn the_gate_refuses_a_malformed_shard_before_it_builds() {
+    for shard in ["0/4", "a/b", "1/0", "5/4", "2/4/1", "99999999999/99999999999"] {
+        let started = std::time::Instant::now();
+        let output = Command::new("bash")
+            .arg(repository().join("ci/gate.sh"))
+            .args(["--shard", shard])
+            .output()
+            .unwrap();
+        let said = stderr(&output);
+        assert_eq!(output.status.code(), Some(2), "{shard}: {said}");
+        assert_eq!(
+            said.trim(),
+            format!("ci/gate.sh: --shard {shard}: expected I/N with 1 ≤ I ≤ N, e.g. 2/4")
+        );
+        assert!(started.elapsed().as_secs() < 10, "{shard}: refused only after {:?}", started.elapsed());
+    }
+}
+
 fn arg(path: &Path) -> &str {
     path.to_str().unwrap()
 }

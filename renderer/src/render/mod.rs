@@ -366,23 +366,47 @@ impl SceneRenderer {
     /// is an error ([`RenderError::Limit`]); on an error the exposure stays 1.
     pub fn meter_exposure(&mut self, key: f64, range: [f32; 2]) -> Result<f32, RenderError> {
         lock(&self.view).lighting.exposure = 1.0;
-        let (width, height) = (self.settings.width, self.settings.height);
-        let white = self.settings.color.tonemap.map_or(1.0, |tonemap| tonemap.hdr_max);
-        let metered = self
-            .render_alone(Mode::new(Technique::Deferred, 1, false), Tile::whole(width, height), "metering")
-            .and_then(|outputs| {
-                let hdr = half_texels(&self.gpu.read_texture(&outputs[&Output::Hdr])?);
-                let depth = self.gpu.read_texture(&outputs[&Output::GBufferDepth])?;
-                // Reversed depth: the background keeps the cleared far plane, 0.
-                let scene: Vec<bool> = depth.chunks_exact(4).map(|d| d != [0; 4]).collect();
-                crate::color::metered_exposure(&hdr, Some(&scene), key, white, range)
-                    .map_err(RenderError::Limit)
-            });
+        let white = self.white();
+        let metered = self.scene_radiance("metering").and_then(|(hdr, scene)| {
+            crate::color::metered_exposure(&hdr, Some(&scene), key, white, range).map_err(RenderError::Limit)
+        });
         if let Ok(exposure) = metered {
             lock(&self.view).lighting.exposure = exposure;
         }
-        self.write_frame_uniforms(Tile::whole(width, height));
+        self.write_frame_uniforms(Tile::whole(self.settings.width, self.settings.height));
         metered
+    }
+
+    /// Checks a scene's own exposure against its light: renders deferred-1x1 once and fails
+    /// ([`RenderError::Limit`]) where the scene's radiance reaches the HDR target's limit on
+    /// more than a hundredth of its pixels and the exposure shows that limit below white, so
+    /// that the light lost above it would show ([`crate::color::headroom`]).
+    pub fn check_headroom(&mut self) -> Result<(), RenderError> {
+        let (exposure, white) = (f64::from(self.exposure()), self.white());
+        let checked = self.scene_radiance("headroom").and_then(|(hdr, scene)| {
+            crate::color::headroom(&hdr, Some(&scene), exposure, white).map_err(RenderError::Limit)
+        });
+        self.write_frame_uniforms(Tile::whole(self.settings.width, self.settings.height));
+        checked
+    }
+
+    /// The HDR value that displays white: the tonemap's `hdr_max`, or 1 where the image is
+    /// exposed and clamped.
+    fn white(&self) -> f64 {
+        self.settings.color.tonemap.map_or(1.0, |tonemap| tonemap.hdr_max)
+    }
+
+    /// Deferred-1x1's HDR radiance, rendered alone, and which of its pixels show the scene (not
+    /// the background). The frame uniforms are left pointing at the whole frame's tile.
+    fn scene_radiance(&mut self, label: &str) -> Result<(Vec<[f32; 4]>, Vec<bool>), RenderError> {
+        let (width, height) = (self.settings.width, self.settings.height);
+        let outputs =
+            self.render_alone(Mode::new(Technique::Deferred, 1, false), Tile::whole(width, height), label)?;
+        let hdr = half_texels(&self.gpu.read_texture(&outputs[&Output::Hdr])?);
+        let depth = self.gpu.read_texture(&outputs[&Output::GBufferDepth])?;
+        // Reversed depth: the background keeps the cleared far plane, 0.
+        let scene: Vec<bool> = depth.chunks_exact(4).map(|d| d != [0; 4]).collect();
+        Ok((hdr, scene))
     }
 
     /// The exposure frames render at: the scene's, or the metered one.

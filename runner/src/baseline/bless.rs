@@ -95,23 +95,30 @@ pub fn bless(runs: &[RunRecord], root: &Path, consent: Consent, now: &str) -> Re
             // A bless that says nothing keeps the reason of the one that moved the bits.
             let why =
                 consent.why.map(String::from).or_else(|| load(&target).ok().and_then(|old| old.blessed.why));
-            let blessing = Blessing {
-                aabench_version: run.aabench_version.clone(),
-                at: now.into(),
-                run_ids: runs.iter().map(|r| r.run_id.clone()).collect(),
-                why,
-                platform: run.platform.clone(),
-                settings: run.settings.clone(),
-            };
-            let baseline = Baseline::of(run.tier, blessing, &measured);
+            let baseline = Baseline::of(run.tier, blessing(runs, now, why), &measured);
             (target, baseline)
         })
         .collect();
+    let dir = root.join(&run.platform.key).join(run.tier.name());
     if !baselines.is_empty() {
-        write_together(&root.join(&run.platform.key).join(run.tier.name()), &baselines)?;
+        write_together(&dir, &baselines)?;
     }
     blessed.written = baselines.into_iter().map(|(target, _)| target).collect();
+    blessed.warnings.extend(strangers(&dir, &blessed.written));
     Ok(blessed)
+}
+
+/// Who blesses `runs` (their first's version, platform and settings) `at`, and why.
+fn blessing(runs: &[RunRecord], at: &str, why: Option<String>) -> Blessing {
+    let run = &runs[0];
+    Blessing {
+        aabench_version: run.aabench_version.clone(),
+        at: at.into(),
+        run_ids: runs.iter().map(|r| r.run_id.clone()).collect(),
+        why,
+        platform: run.platform.clone(),
+        settings: run.settings.clone(),
+    }
 }
 
 /// The baselines that blessing `runs` into `root` would replace: the readable ones of the
@@ -176,6 +183,26 @@ fn kept_files(dir: &Path) -> Result<Vec<PathBuf>, String> {
     }
     files.sort();
     Ok(files)
+}
+
+/// A warning for each `*.json` of the tier's folder `dir` that is no baseline (a user's
+/// `notes.json`): bless keeps it, but compare reads every `*.json` there as a baseline and
+/// refuses the folder, naming it.
+fn strangers(dir: &Path, written: &[PathBuf]) -> Vec<String> {
+    let files = fs::files_in(dir).unwrap_or_default();
+    files
+        .into_iter()
+        .filter(|file| !written.contains(file))
+        .filter_map(|file| {
+            let error = parse(&fs::read_regular(&file).ok()?).err()?;
+            Some(format!(
+                "{}: is no baseline ({error}): compare reads every *.json of {} as one and will refuse \
+                 the folder; rename it (notes.md) or move it out",
+                file.display(),
+                dir.display()
+            ))
+        })
+        .collect()
 }
 
 /// Moves the folder `from` to `to` atomically: a plain rename when `to` does not exist, else an

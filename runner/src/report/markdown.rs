@@ -83,7 +83,7 @@ fn provenance(out: &mut String, run: &RunRecord) {
         run.tier.name(),
         run.run_id,
         run.tier.name(),
-        run.settings.rounds(),
+        super::rounds(&run.settings),
         run.settings.warmup,
         if run.settings.warmup == 1 { "round" } else { "rounds" },
         run.settings.interleaving,

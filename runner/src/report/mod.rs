@@ -97,6 +97,21 @@ fn head(page: &mut String, run: &RunRecord) {
     );
 }
 
+/// How the run's modes took their rounds, for people: `15 repetitions`, or the rule.
+fn rounds(settings: &crate::record::RunSettings) -> String {
+    match &settings.confidence {
+        None => format!("{} repetitions", settings.repetitions),
+        Some(rule) => format!(
+            "{}–{} rounds by confidence (until a mode's median interval is at most {} % of it wide, or its \
+             scene's frames took {} s)",
+            rule.floor,
+            rule.most,
+            rule.width * 100.0,
+            rule.budget_s
+        ),
+    }
+}
+
 fn summary(page: &mut String, run: &RunRecord, verdict: Option<&Verdict>) {
     let p = &run.platform.info;
     let _ = writeln!(page, "<h1>aabench run <code>{}</code></h1>", escape(&run.run_id));
@@ -116,7 +131,7 @@ fn summary(page: &mut String, run: &RunRecord, verdict: Option<&Verdict>) {
         escape(p.lp_num_threads.as_deref().unwrap_or("auto")),
         escape(&p.build_profile),
         escape(&run.platform.key),
-        run.settings.rounds(),
+        rounds(&run.settings),
         run.settings.warmup,
         escape(&run.settings.interleaving),
         escape(&run.settings.extra_samples),

@@ -184,6 +184,8 @@ impl<'a> SceneRun<'a> {
                 renderer.set_memory_budget(budget);
                 if metered {
                     renderer.meter_exposure(color::EXPOSURE_KEY, color::METERED_EXPOSURE_RANGE)?;
+                } else {
+                    renderer.check_headroom()?;
                 }
                 let exposure = ExposureRecord { value: renderer.exposure(), metered };
                 state.renderer = Some(renderer);

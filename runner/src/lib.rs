@@ -21,6 +21,7 @@ pub mod perceptual;
 pub mod plan;
 pub mod progress;
 pub mod record;
+pub mod repetitions;
 pub mod report;
 pub mod run;
 pub mod scenes;

@@ -11,7 +11,8 @@ use crate::inputs::SceneInputs;
 use crate::machine::Machine;
 use crate::metrics::{Decibels, FrameChecks, Quality, SampleStats};
 pub use crate::plan::Shard;
-use crate::plan::{Confidence, Stop, Tier};
+use crate::plan::Tier;
+use crate::repetitions::{Confidence, Stop};
 use crate::stats::{Rounds, Summary};
 use crate::truth::TruthRecord;
 

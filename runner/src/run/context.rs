@@ -10,9 +10,10 @@ use aabench_renderer::{FrameImages, FrameTiming};
 
 use crate::manifest::Manifest;
 use crate::metrics::FrameChecks;
-use crate::plan::{RunPlan, Stop};
+use crate::plan::RunPlan;
 use crate::progress::Progress;
 use crate::record::{GraphRecord, ModeSequence};
+use crate::repetitions::Stop;
 use crate::worker::Worker;
 
 /// One scene's run: what its phases read and the GPU worker they render on.

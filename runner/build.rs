@@ -1,7 +1,8 @@
 //! Fingerprints the source code that decides a rendered image, for the ground truth's cache key:
 //! the renderer crate and the runner's scene set-up (manifest defaults, camera and lights).
 //! Shaders are hashed at run time as composed, so `AABENCH_SHADER_DIR` is covered too. And the
-//! build's identity, which runs record: all of the source, the shaders and the lock file.
+//! build's identity, which runs record: all of the source (ColorVideoVDP's with its tables
+//! included), the shaders and the lock file.
 
 use std::path::{Path, PathBuf};
 
@@ -42,15 +43,19 @@ fn main() {
     files_under(Path::new("../renderer/src"), rust, &mut render);
     files_under(Path::new("src/manifest"), rust, &mut render);
     render.push(PathBuf::from("src/scenes.rs"));
-    // The build's identity, recorded in every run: everything that renders and measures (both
-    // crates' source, the shaders, the lock file). Runs of one build pool; runs of two do not.
+    // The build's identity, recorded in every run: everything that renders and measures (the
+    // crates' source, ColorVideoVDP's tables, the shaders, the lock file). Runs of one build
+    // pool; runs of two do not.
     let mut build = Vec::new();
     files_under(Path::new("../renderer/src"), rust, &mut build);
     files_under(Path::new("src"), rust, &mut build);
+    files_under(Path::new("../cvvdp/src"), rust, &mut build);
+    files_under(Path::new("../cvvdp/data"), |_| true, &mut build);
     files_under(Path::new("../shaders"), |_| true, &mut build);
     build.push(PathBuf::from("../Cargo.lock"));
     // A folder is scanned whole, so added files count too.
-    for watched in ["../renderer/src", "src", "../shaders", "../Cargo.lock"] {
+    for watched in ["../renderer/src", "src", "../cvvdp/src", "../cvvdp/data", "../shaders", "../Cargo.lock"]
+    {
         println!("cargo::rerun-if-changed={watched}");
     }
     println!("cargo::rustc-env=AABENCH_RENDER_SOURCE_SHA256={}", digest(render));

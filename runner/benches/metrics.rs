@@ -32,10 +32,11 @@ fn quality(c: &mut Criterion) {
     c.bench_function("quality 1024x768 (MSE, PSNR, max diff)", |bench| {
         bench.iter(|| metrics::quality(black_box(&a), black_box(&b), "reference"))
     });
-    // What each mode of a run adds against the truth: MSE, FLIP with its error map, and SSIM,
-    // the truth's share of SSIM prepared once per scene as a run prepares it.
-    let truth = metrics::Truth::new(b.clone(), WIDTH as u32, HEIGHT as u32);
-    c.bench_function("quality_vs_truth 1024x768 (MSE, PSNR, FLIP, SSIM)", |bench| {
+    // What each mode of a run adds against the truth: MSE, FLIP with its error map, SSIM and
+    // ColorVideoVDP's JOD, the truth's share of SSIM prepared once per scene as a run prepares it.
+    let jod = aabench::perceptual::Jod::new(aabench_cvvdp::display::STANDARD_FHD).unwrap();
+    let truth = metrics::Truth::new(b.clone(), WIDTH as u32, HEIGHT as u32, jod);
+    c.bench_function("quality_vs_truth 1024x768 (MSE, PSNR, FLIP, SSIM, JOD)", |bench| {
         bench.iter(|| metrics::quality_vs_truth(black_box(&a), &truth, "truth"))
     });
     let counts: Vec<u8> = (0..WIDTH * HEIGHT).map(|p| 1 + (p % 16) as u8).collect();

@@ -31,6 +31,8 @@ pub enum Tolerance {
     FlipRelative,
     /// 1 − SSIM against the truth (the dissimilarity), as a fraction of the baseline's.
     SsimRelative,
+    /// ColorVideoVDP's JOD against the truth (the still's and along a path), in JOD.
+    Jod,
 }
 
 /// A quality tolerance's fields in a manifest's `gate` section and its defaults.
@@ -42,13 +44,14 @@ struct Row {
 }
 
 impl Tolerance {
-    pub const ALL: [Tolerance; 6] = [
+    pub const ALL: [Tolerance; 7] = [
         Tolerance::PsnrDb,
         Tolerance::MseRelative,
         Tolerance::ShadedPercent,
         Tolerance::Histogram,
         Tolerance::FlipRelative,
         Tolerance::SsimRelative,
+        Tolerance::Jod,
     ];
 
     /// Its fields and defaults: tight on the baselines' platform, where quality is nearly
@@ -61,6 +64,10 @@ impl Tolerance {
             Tolerance::Histogram => ("histogram", "histogram_cross_platform", 0.002, 0.01),
             Tolerance::FlipRelative => ("flip_relative", "flip_relative_cross_platform", 0.005, 0.06),
             Tolerance::SsimRelative => ("ssim_relative", "ssim_relative_cross_platform", 0.005, 0.06),
+            // The port is deterministic: on the baselines' platform the same bits score the
+            // same to 10⁻⁶. Across platforms 0.1 JOD is a tenth of the difference that 75 % of
+            // observers would notice.
+            Tolerance::Jod => ("jod", "jod_cross_platform", 0.01, 0.1),
         };
         Row { field, cross_field, default, cross_default }
     }
@@ -77,9 +84,9 @@ impl Tolerance {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Tolerances {
     /// Each [`Tolerance`] in the order of [`Tolerance::ALL`], on the baselines' own platform.
-    pub same_platform: [f64; 6],
+    pub same_platform: [f64; 7],
     /// Each [`Tolerance`] in the order of [`Tolerance::ALL`], against another platform.
-    pub cross_platform: [f64; 6],
+    pub cross_platform: [f64; 7],
     /// In-run time ratios (a mode against deferred-1x1, adaptive-MxM against reference-MxM),
     /// as a fraction: 0.1 flags a ratio 10% above the baseline's.
     pub time_ratio: f64,
@@ -149,7 +156,7 @@ impl Tolerances {
 
 /// The quality tolerances in force for one comparison.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct QualityTolerances([f64; 6]);
+pub struct QualityTolerances([f64; 7]);
 
 impl QualityTolerances {
     pub fn get(&self, tolerance: Tolerance) -> f64 {

@@ -74,6 +74,11 @@ pub struct Quality {
     /// truth only; absent from records from before it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ssim: Option<f64>,
+    /// ColorVideoVDP's score of the image against the truth, in JOD (10: no visible
+    /// difference), on the scene's `jod_display` (`perceptual::Jod`). Against the truth only;
+    /// absent from records from before it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jod: Option<f64>,
 }
 
 /// Compares two display images of the same size and bit depth (alpha ignored).
@@ -103,6 +108,7 @@ pub fn quality(image: &DisplayImage, reference: &DisplayImage, against: &str) ->
         max_abs_diff,
         flip: None,
         ssim: None,
+        jod: None,
     }
 }
 
@@ -113,12 +119,13 @@ pub struct Truth {
     width: u32,
     height: u32,
     ssim: perceptual::SsimTruth,
+    jod: perceptual::Jod,
 }
 
 impl Truth {
-    pub fn new(image: DisplayImage, width: u32, height: u32) -> Self {
+    pub fn new(image: DisplayImage, width: u32, height: u32, jod: perceptual::Jod) -> Self {
         let ssim = perceptual::SsimTruth::new(&image, width, height);
-        Self { image, width, height, ssim }
+        Self { image, width, height, ssim, jod }
     }
 }
 
@@ -128,6 +135,7 @@ pub fn quality_vs_truth(image: &DisplayImage, truth: &Truth, against: &str) -> (
     let quality = Quality {
         flip: Some(map.mean()),
         ssim: Some(truth.ssim.ssim(image)),
+        jod: Some(truth.jod.image(image, &truth.image, truth.width, truth.height)),
         ..quality(image, &truth.image, against)
     };
     (quality, map)

@@ -291,8 +291,11 @@ impl MotionSpec {
                 vec![Pace { rate: self.rate(), pixels_per_frame: pixels }]
             }
             (_, None) => {
-                let turn = (self.rate() * step).to_radians();
-                vec![Pace { rate: self.rate(), pixels_per_frame: Some(focal * turn.tan().abs()) }]
+                // Beyond half the vertical field a frame, tan ω says nothing of the image (at
+                // 90° it is 10¹⁷ px, at 180° 0): no nominal speed; the measured one stands.
+                let turn = (self.rate() * step).to_radians().abs();
+                let pixels = (turn < fov_y / 2.0).then(|| focal * turn.tan());
+                vec![Pace { rate: self.rate(), pixels_per_frame: pixels }]
             }
         }
     }
@@ -340,6 +343,26 @@ impl MotionSpec {
                 })
             })
             .collect()
+    }
+
+    /// The path's cameras for the `count` frames before its first, oldest first: the path
+    /// extended backwards in time, where a temporal mode's history warms up. A camera that the
+    /// extension makes invalid (a keyframe path holds its first key; a dolly backs away) is the
+    /// path's first.
+    pub fn cameras_before(&self, base: &Camera, pivot: f64, count: u32, rate: f64) -> Vec<Camera> {
+        (1..=count)
+            .rev()
+            .map(|back| {
+                let camera = self.camera_at(base, pivot, -f64::from(back) * self.time_step_s, rate);
+                if camera.validate().is_ok() { camera } else { self.camera_at(base, pivot, 0.0, rate) }
+            })
+            .collect()
+    }
+
+    /// The animation's time `back` frames before the path's first (clamped to its first key
+    /// when it plays).
+    pub fn animation_time_before(&self, back: usize) -> Option<f64> {
+        Some(self.animation.as_ref()?.start_s - back as f64 * self.time_step_s)
     }
 
     /// The manifest field that decides where the path's cameras go: `motion.keyframes`,

@@ -1,10 +1,13 @@
 //! Perceptual error of a display image against the truth: mean FLIP (Andersson et al. 2020,
-//! LDR-FLIP, through `nv-flip`, which binds NVIDIA's reference implementation) and SSIM (Wang
-//! et al. 2004, computed here and checked against scikit-image in `tests/perceptual.rs`).
+//! LDR-FLIP, through `nv-flip`, which binds NVIDIA's reference implementation), SSIM (Wang
+//! et al. 2004, computed here and checked against scikit-image in `tests/perceptual.rs`) and
+//! ColorVideoVDP (Mantiuk et al. 2024, the workspace's `aabench-cvvdp`, checked against its
+//! reference implementation), of stills and of a path's frames as a video.
 //!
-//! Both read the display's code values, as MSE and PSNR do. FLIP takes them as 8-bit sRGB (a
+//! All read the display's code values, as MSE and PSNR do. FLIP takes them as 8-bit sRGB (a
 //! 10-bit image is rounded to 8 bits first; on a PQ-encoded image FLIP's sRGB model is a
-//! proxy); SSIM scales them to [0, 1].
+//! proxy); SSIM scales them to [0, 1]; ColorVideoVDP decodes them through the scene's display
+//! model (`display.jod_display`) into light, as a viewer would see them.
 
 use aabench_renderer::DisplayImage;
 
@@ -28,15 +31,21 @@ impl FlipMap {
 
     /// The error map in FLIP's own colour scale (magma, black for no error), as RGBA bytes.
     pub fn magma_rgba(&self) -> Vec<u8> {
-        let lut = nv_flip::magma_lut().to_vec();
-        self.errors
-            .iter()
-            .flat_map(|&e| {
-                let i = 3 * (e.clamp(0.0, 1.0) * 255.0).round() as usize;
-                [lut[i], lut[i + 1], lut[i + 2], 255]
-            })
-            .collect()
+        magma_rgba(&self.errors)
     }
+}
+
+/// Values in [0, 1] (clamped) in FLIP's colour scale (magma: black at 0, yellow at 1), as RGBA
+/// bytes.
+pub fn magma_rgba(values: &[f32]) -> Vec<u8> {
+    let lut = nv_flip::magma_lut().to_vec();
+    values
+        .iter()
+        .flat_map(|&e| {
+            let i = 3 * (e.clamp(0.0, 1.0) * 255.0).round() as usize;
+            [lut[i], lut[i + 1], lut[i + 2], 255]
+        })
+        .collect()
 }
 
 /// FLIP of `image` against `truth`, both `width` × `height`.
@@ -52,6 +61,69 @@ pub fn flip_rgba8(image: &[u8], truth: &[u8], width: u32, height: u32) -> FlipMa
     let test = nv_flip::FlipImageRgb8::with_data(width, height, &rgb(image));
     let errors = nv_flip::flip(reference, test, FLIP_PIXELS_PER_DEGREE).to_vec();
     FlipMap { width, height, errors }
+}
+
+/// ColorVideoVDP on one display model: a still's JOD against the truth, and a video's.
+#[derive(Debug, Clone)]
+pub struct Jod {
+    metric: aabench_cvvdp::Cvvdp,
+}
+
+impl Jod {
+    /// The metric on ColorVideoVDP's display model `name` (checked when the manifest loaded).
+    pub fn new(name: &str) -> Result<Self, String> {
+        let display = aabench_cvvdp::Display::named(name).map_err(|error| error.to_string())?;
+        Ok(Jod { metric: aabench_cvvdp::Cvvdp::new(display) })
+    }
+
+    /// The JOD of `image` against `truth`, both `width` × `height`.
+    pub fn image(&self, image: &DisplayImage, truth: &DisplayImage, width: u32, height: u32) -> f64 {
+        let (test, reference) = (code_values(image), code_values(truth));
+        let frame = |rgb| aabench_cvvdp::Frame { width: width as usize, height: height as usize, rgb };
+        self.metric.image(frame(&test), frame(&reference)).map_or(f64::NAN, |score| score.jod)
+    }
+
+    /// The JOD of RGBA8 frames against the truth's, shown at `fps` frames a second, and the
+    /// distortion map of the frame that differs most; `None` for fewer than two frames or a
+    /// frame of the wrong size.
+    pub fn video<'a>(
+        &self,
+        frames: impl Iterator<Item = (&'a [u8], &'a [u8])>,
+        [width, height]: [u32; 2],
+        fps: f64,
+    ) -> Option<VideoJod> {
+        let mut video = self.metric.video(width as usize, height as usize, fps).ok()?.with_worst_map();
+        for (image, truth) in frames {
+            let (test, reference) = (rgba8_code_values(image), rgba8_code_values(truth));
+            let frame = |rgb| aabench_cvvdp::Frame { width: width as usize, height: height as usize, rgb };
+            video.push(frame(&test), frame(&reference)).ok()?;
+        }
+        let score = video.finish().ok()?;
+        let worst = score.worst.expect("a map was asked for");
+        Some(VideoJod { jod: score.jod, worst_frame: worst.frame as u32, map: worst.map.data, width, height })
+    }
+}
+
+/// A video's JOD, and where it differs most: the frame whose difference is largest and its
+/// distortion map, per pixel 1 − JOD/10 (0 where no difference shows; above 1 where it is
+/// beyond 10 JOD).
+#[derive(Debug, Clone, PartialEq)]
+pub struct VideoJod {
+    pub jod: f64,
+    pub worst_frame: u32,
+    pub map: Vec<f32>,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// A display image's RGB code values in [0, 1].
+fn code_values(image: &DisplayImage) -> Vec<f32> {
+    let max = f32::from(image.max_code());
+    image.rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(|v| f32::from(v) / max)).collect()
+}
+
+fn rgba8_code_values(rgba: &[u8]) -> Vec<f32> {
+    rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(|v| f32::from(v) / 255.0)).collect()
 }
 
 /// SSIM's window: a Gaussian of σ 1.5 truncated at 3.5σ, 11 taps.

@@ -70,6 +70,16 @@ pub struct RunArgs {
     /// images, quality or sequences (the gate's timing processes after its first).
     #[arg(long, value_enum, default_value = "on")]
     pub quality: Switch,
+    /// The display ColorVideoVDP judges every scene's JOD on, one of its named models
+    /// (standard_fhd, standard_4k, standard_hdr_pq, …) [default: each manifest's
+    /// `display.jod_display`: standard_fhd, or standard_hdr_pq for a pq display]
+    #[arg(long, value_name = "MODEL")]
+    pub jod_display: Option<String>,
+    /// Write each sequence's measured frames, display-encoded, as
+    /// <scene>/frames/<sequence>/<mode>/<NNN>.png (the truth's as `truth`), for a video metric
+    /// or an encoder of your own
+    #[arg(long)]
+    pub keep_frames: bool,
     /// Longest a single frame may take, in seconds.
     #[arg(
         long,
@@ -132,6 +142,11 @@ impl RunArgs {
             })
             .transpose()?;
         let shard = args.shard.as_deref().map(parse_shard).transpose()?;
+        if let Some(name) = &args.jod_display {
+            aabench_cvvdp::Display::named(name).map_err(|error| {
+                format!("--jod-display: {error}; one of: {}", aabench_cvvdp::Display::names().join(", "))
+            })?;
+        }
         let manifests = find_manifests(&args.paths)?;
         // Temporaries of killed runs (run folder, scene folders, sequence spools) go before this
         // run adds its own.
@@ -148,6 +163,8 @@ impl RunArgs {
                 extra_samples: args.extra_samples.into(),
                 sequences: args.sequences == Switch::On && args.quality == Switch::On,
                 quality: args.quality == Switch::On,
+                jod_display: args.jod_display.clone(),
+                keep_frames: args.keep_frames,
                 truth_cache: args.truth_cache.clone(),
                 shard,
                 memory_limit,
@@ -330,6 +347,10 @@ pub struct RunPlan {
     /// holds frame and pass times, adaptive costs and the output hashes of the modes without
     /// history alone.
     pub quality: bool,
+    /// ColorVideoVDP's display for every scene (`--jod-display`); `None`: each manifest's.
+    pub jod_display: Option<String>,
+    /// Whether each sequence's frames are written as PNGs (`--keep-frames`).
+    pub keep_frames: bool,
     /// Where ground truths are cached; `None`: `cache/truth/` beside each manifest.
     pub truth_cache: Option<PathBuf>,
     /// The slice of the scenes this run renders, if not all.
@@ -343,6 +364,17 @@ pub struct RunPlan {
 }
 
 impl RunPlan {
+    /// The ColorVideoVDP display `manifest`'s JOD is judged on, or why the one `--jod-display`
+    /// names cannot decode its display images.
+    pub fn jod_display(&self, manifest: &Manifest) -> Result<String, String> {
+        match &self.jod_display {
+            Some(name) => crate::manifest::check_jod_display(name, manifest.display.transfer)
+                .map(|()| name.clone())
+                .map_err(|why| format!("--jod-display: {why}")),
+            None => Ok(manifest.display.jod_display().to_string()),
+        }
+    }
+
     /// The folder that caches `manifest`'s ground truths.
     pub fn truth_cache_dir(&self, manifest: &Manifest) -> PathBuf {
         self.truth_cache

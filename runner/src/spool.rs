@@ -117,6 +117,23 @@ impl Spool {
         Ok(out)
     }
 
+    /// Writes each stream's first `frames` frames as PNGs, `<dir>/<stream name>/<NNN>.png`
+    /// (000 the first), each atomically; a stream that holds fewer frames (a mode that failed,
+    /// or one that took its twin's frames) is left out.
+    pub fn write_pngs(&self, dir: &Path, frames: usize) -> Result<(), String> {
+        let [width, height] = self.size;
+        for stream in (0..self.streams()).filter(|&s| self.frames(s) >= frames) {
+            let folder = dir.join(self.name(stream));
+            std::fs::create_dir_all(&folder).map_err(|e| format!("{}: {e}", folder.display()))?;
+            for frame in 0..frames {
+                let path = folder.join(format!("{frame:03}.png"));
+                images::write_png(&path, width, height, &self.frame(stream, frame)?)
+                    .map_err(|e| format!("{}: {e}", path.display()))?;
+            }
+        }
+        Ok(())
+    }
+
     /// The `square` of frame `frame` of stream `stream`.
     pub fn crop(&self, stream: usize, frame: usize, square: Square) -> Result<Vec<u8>, String> {
         let [width, height] = self.size.map(u64::from);

@@ -55,6 +55,68 @@ pub struct Geometry {
     pub depth: Vec<f64>,
 }
 
+/// How fast the truth's content moves: over every frame pair, the covered pixels' (those with
+/// geometry) motion from the frame before, in pixels. A path's nominal speed is its
+/// background's or the frame centre's; an orbit's content at the pivot moves slower, an object
+/// crossing a still view faster.
+#[derive(Debug, Clone, Default)]
+pub struct Speeds {
+    /// Pixels per bin of [`SPEED_BIN`] px, the last holding everything beyond.
+    counts: Vec<u64>,
+    max: f64,
+}
+
+/// The speed histogram's resolution, px, and its last bin's start.
+const SPEED_BIN: f64 = 1.0 / 64.0;
+const SPEED_BINS: usize = 64 * 512;
+
+/// A sequence's measured speed over its covered pixels and frame pairs, px a frame.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MeasuredSpeed {
+    pub median: f64,
+    pub p90: f64,
+    pub max: f64,
+}
+
+impl Speeds {
+    /// Adds a frame's geometry (its motion from the frame before).
+    pub fn add(&mut self, geometry: &Geometry) {
+        if self.counts.is_empty() {
+            self.counts = vec![0; SPEED_BINS];
+        }
+        for (_, [dx, dy]) in geometry.motion.iter().enumerate().filter(|&(i, _)| geometry.covered(i)) {
+            let speed = f64::from(dx.hypot(*dy));
+            self.max = self.max.max(speed);
+            self.counts[((speed / SPEED_BIN) as usize).min(SPEED_BINS - 1)] += 1;
+        }
+    }
+
+    /// The median, 90th percentile (each to a 64th of a pixel, the bin's middle) and maximum;
+    /// `None` where no pixel was covered.
+    pub fn measured(&self) -> Option<MeasuredSpeed> {
+        let total: u64 = self.counts.iter().sum();
+        let quantile = |q: f64| -> f64 {
+            let rank = (q * total as f64).ceil().max(1.0) as u64;
+            let mut seen = 0;
+            let bin = self.counts.iter().position(|&c| {
+                seen += c;
+                seen >= rank
+            });
+            ((bin.unwrap_or(0) as f64 + 0.5) * SPEED_BIN).min(self.max)
+        };
+        (total > 0).then(|| MeasuredSpeed { median: quantile(0.5), p90: quantile(0.9), max: self.max })
+    }
+}
+
+/// Why the frame before did not see a pixel's point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Unseen {
+    /// It lay outside that frame, or behind its camera.
+    Entered,
+    /// Another surface hid it.
+    Hidden,
+}
+
 /// Where a pixel's point lay in the frame before: the pixel centres around it, left and above,
 /// and its offsets from them, in pixels.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -72,9 +134,14 @@ pub struct Flow {
     height: usize,
     /// Per pixel, where its point lay, or `None` where the frame before did not see it.
     from: Vec<Option<Source>>,
+    /// Per pixel, whether its point lay off the frame before (outside it, or behind its
+    /// camera): content that enters, which no history can hold.
+    entered: Vec<bool>,
     /// Per pixel, whether it lies at or beside a silhouette that moved.
     edge: Vec<bool>,
-    /// The share of pixels whose point the frame before did not see.
+    /// The shares of pixels whose point entered from off screen, and that the frame before
+    /// had hidden behind another surface (disoccluded).
+    entered_share: f64,
     disoccluded: f64,
 }
 
@@ -83,8 +150,10 @@ pub struct Flow {
 pub struct PairError {
     /// Σ (E_f(x) − E_{f−1}(x − v))² over the followed pixels' colour channels, and their number.
     pub flicker: (f64, u64),
-    /// Σ (A − T)² of frame f over the colour channels of the disoccluded pixels, of the pixels
-    /// at moving edges (followed ones), and of the other followed pixels; each with its count.
+    /// Σ (A − T)² of frame f over the colour channels of the pixels that entered from off
+    /// screen, of the disoccluded ones, of the pixels at moving edges (followed ones), and of
+    /// the other followed pixels; each with its count.
+    pub entered: (f64, u64),
     pub disoccluded: (f64, u64),
     pub edges: (f64, u64),
     pub elsewhere: (f64, u64),
@@ -95,6 +164,7 @@ impl PairError {
     pub fn add(&mut self, other: &PairError) {
         for (sum, more) in [
             (&mut self.flicker, other.flicker),
+            (&mut self.entered, other.entered),
             (&mut self.disoccluded, other.disoccluded),
             (&mut self.edges, other.edges),
             (&mut self.elsewhere, other.elsewhere),
@@ -187,14 +257,15 @@ impl Geometry {
     }
 
     /// Where pixel `i`'s point lay in the frame `then`, where `then` saw it: inside the frame
-    /// and no deeper than the surfaces around that place by more than [`HIDDEN_DEPTH`].
-    fn source(&self, i: usize, then: &Geometry) -> Option<Source> {
+    /// and no deeper than the surfaces around that place by more than [`HIDDEN_DEPTH`]; else
+    /// why it did not see it.
+    fn source(&self, i: usize, then: &Geometry) -> Result<Source, Unseen> {
         let (width, height) = (self.width as f64, self.height() as f64);
         let [dx, dy] = self.motion[i];
         let x = (i % self.width) as f64 + 0.5 - f64::from(dx);
         let y = (i / self.width) as f64 + 0.5 - f64::from(dy);
         if !(0.0..width).contains(&x) || !(0.0..height).contains(&y) {
-            return None;
+            return Err(Unseen::Entered);
         }
         // The pixel centres around the point, clamped to the frame.
         let (cx, cy) = ((x - 0.5).clamp(0.0, width - 1.0), (y - 0.5).clamp(0.0, height - 1.0));
@@ -205,51 +276,49 @@ impl Geometry {
         let depth_then = self.depth_then[i];
         if depth_then <= 0.0 {
             // The point lay behind the camera of the frame before.
-            return None;
+            return Err(Unseen::Entered);
         }
         let corners = source.corners(self.width, self.height());
         let mut around = corners.iter().filter(|&&(_, weight)| weight > 0.0);
         let hidden =
             around.all(|&(j, _)| then.covered(j) && depth_then > then.depth[j] * (1.0 + HIDDEN_DEPTH));
-        (!hidden).then_some(source)
+        if hidden { Err(Unseen::Hidden) } else { Ok(source) }
     }
 
-    /// Per pixel, whether a silhouette lies between it and its right or lower neighbour: one of
-    /// the two has no geometry and the other has, or their depths differ by more than
-    /// [`SILHOUETTE_DEPTH`] relatively.
-    fn silhouettes(&self) -> Vec<bool> {
-        let (width, height) = (self.width, self.height());
-        let apart = |i: usize, j: usize| match (self.covered(i), self.covered(j)) {
+    /// Whether a silhouette lies between pixels `i` and `j`: one has no geometry and the other
+    /// has, or their depths differ by more than [`SILHOUETTE_DEPTH`] relatively.
+    fn apart(&self, i: usize, j: usize) -> bool {
+        match (self.covered(i), self.covered(j)) {
             (true, true) => {
                 (self.depth[i] - self.depth[j]).abs() > SILHOUETTE_DEPTH * self.depth[i].min(self.depth[j])
             }
             (covered_i, covered_j) => covered_i != covered_j,
-        };
-        (0..width * height)
-            .map(|i| {
-                let (x, y) = (i % width, i / width);
-                (x + 1 < width && apart(i, i + 1)) || (y + 1 < height && apart(i, i + width))
-            })
-            .collect()
+        }
     }
 
-    /// Per pixel, whether it lies at or beside (within one pixel of) a silhouette, and the
-    /// points there moved by at least [`MOVING`] pixels. The silhouette is marked on the left or
-    /// upper pixel of its pair, and its motion read there.
+    /// Per pixel, whether it lies at or beside (within one pixel of) a silhouette that moved:
+    /// one between two neighbouring pixels, either of which moved by at least [`MOVING`]
+    /// pixels (an object that slides over a still background moves on one side only, the
+    /// leading or the trailing).
     fn moving_edges(&self) -> Vec<bool> {
         let (width, height) = (self.width, self.height());
-        let silhouette = self.silhouettes();
         let moved = |i: usize| {
             let [dx, dy] = self.motion[i];
             dx.hypot(dy) >= MOVING
         };
+        let moving_pair = |i: usize, j: usize| self.apart(i, j) && (moved(i) || moved(j));
+        let silhouette: Vec<bool> = (0..width * height)
+            .map(|i| {
+                let (x, y) = (i % width, i / width);
+                (x + 1 < width && moving_pair(i, i + 1)) || (y + 1 < height && moving_pair(i, i + width))
+            })
+            .collect();
         (0..width * height)
             .map(|i| {
                 let (x, y) = (i % width, i / width);
-                let near = |j: usize| silhouette[j] && moved(j);
                 let rows = y.saturating_sub(1)..(y + 2).min(height);
                 rows.flat_map(|ny| (x.saturating_sub(1)..(x + 2).min(width)).map(move |nx| ny * width + nx))
-                    .any(near)
+                    .any(|j| silhouette[j])
             })
             .collect()
     }
@@ -312,14 +381,26 @@ impl Flow {
     /// How the frame of geometry `now` follows back into the frame of geometry `then`.
     pub fn between(now: &Geometry, then: &Geometry) -> Flow {
         assert_eq!(now.motion.len(), then.motion.len(), "geometries of different sizes");
-        let from: Vec<Option<Source>> = (0..now.motion.len()).map(|i| now.source(i, then)).collect();
-        let disoccluded = from.iter().filter(|from| from.is_none()).count() as f64 / from.len().max(1) as f64;
-        Flow { width: now.width, height: now.height(), from, edge: now.moving_edges(), disoccluded }
+        let sources: Vec<Result<Source, Unseen>> =
+            (0..now.motion.len()).map(|i| now.source(i, then)).collect();
+        let share = |unseen: Unseen| {
+            sources.iter().filter(|s| s.err() == Some(unseen)).count() as f64 / sources.len().max(1) as f64
+        };
+        let (entered_share, disoccluded) = (share(Unseen::Entered), share(Unseen::Hidden));
+        let entered = sources.iter().map(|s| s.err() == Some(Unseen::Entered)).collect();
+        let from = sources.into_iter().map(Result::ok).collect();
+        let (width, height, edge) = (now.width, now.height(), now.moving_edges());
+        Flow { width, height, from, entered, edge, entered_share, disoccluded }
     }
 
-    /// The share of pixels whose point the frame before did not see.
+    /// The share of pixels whose point the frame before had hidden behind another surface.
     pub fn disoccluded_share(&self) -> f64 {
         self.disoccluded
+    }
+
+    /// The share of pixels whose point lay off the frame before.
+    pub fn entered_share(&self) -> f64 {
+        self.entered_share
     }
 
     /// A mode's error over the frame pair: its image and the truth's now (`a`, `t`) and in the
@@ -338,9 +419,9 @@ impl Flow {
         self.follow(error, error_then, Some(per_pixel))
     }
 
-    /// The truth's own change along the motion, from `t_then` to `t`: the flicker of an image
-    /// that shows none of the truth's detail, and so the scale of a steady image's flicker
-    /// where the truth's fine detail aliases into moiré that no interpolation predicts.
+    /// The truth's own change along the motion, from `t_then` to `t`: the flicker of a blank
+    /// image (its error is the truth's negative), and so the scale of the modes' flicker where
+    /// the truth's fine detail aliases into moiré that no interpolation predicts.
     pub fn own_change(&self, t: &DisplayImage, t_then: &DisplayImage) -> (f64, u64) {
         self.follow(values(t), values(t_then), None).flicker
     }
@@ -358,7 +439,8 @@ impl Flow {
             let error = [0, 1, 2].map(|c| now(i, c));
             let squared = error.iter().map(|e| f64::from(e * e)).sum::<f64>();
             let Some(from) = from else {
-                sums.disoccluded = (sums.disoccluded.0 + squared, sums.disoccluded.1 + 3);
+                let sum = if self.entered[i] { &mut sums.entered } else { &mut sums.disoccluded };
+                *sum = (sum.0 + squared, sum.1 + 3);
                 continue;
             };
             let corners = from.corners(self.width, self.height);
@@ -422,8 +504,9 @@ mod tests {
         let travelling = flow.error([&moving(2), &t_now], [&moving(0), &t_then], &mut map);
         // Its frame before, kept: the frozen frame.
         let frozen = flow.error([&moving(0), &t_now], [&moving(0), &t_then], &mut map);
-        // Pixels 0 and 1 of each row came from outside the frame.
-        assert_eq!(travelling.disoccluded.1, 2 * h as u64 * 3);
+        // Pixels 0 and 1 of each row came from outside the frame: entered, not disoccluded.
+        assert_eq!(travelling.entered.1, 2 * h as u64 * 3);
+        assert_eq!(travelling.disoccluded.1, 0);
         assert_eq!(travelling.flicker.1, (w - 2) as u64 * h as u64 * 3);
         assert_eq!(mean(travelling.flicker), Some(0.0), "the error went with the surface");
         let frozen_flicker = mean(frozen.flicker).unwrap();
@@ -454,7 +537,8 @@ mod tests {
         // Where the frame before had geometry all around, the background was hidden.
         let covered = flat(w, h, 3.0, [0.0, 0.0]);
         let flow = Flow::between(&geometry, &covered);
-        assert_eq!(flow.disoccluded_share(), 1.0);
+        assert_eq!(flow.disoccluded_share() + flow.entered_share(), 1.0);
+        assert!(flow.disoccluded_share() > 0.8, "hidden, but for what entered at the edges");
         // Against itself, only what came in at the left edge was unseen (off screen), and at
         // the top and bottom rows, where the turn also moves the view's corners vertically.
         let flow = Flow::between(&geometry, &geometry);
@@ -480,7 +564,7 @@ mod tests {
         // Column 0 came from off screen; columns 3–5 from the centres of columns 2–4, behind
         // the nearer surface.
         assert_eq!(hidden, [0, 3, 4, 5], "{:?}", flow.from[..w].to_vec());
-        assert_eq!(flow.disoccluded_share(), 4.0 / 8.0);
+        assert_eq!((flow.entered_share(), flow.disoccluded_share()), (1.0 / 8.0, 3.0 / 8.0));
         // A point that lay behind the camera then (its depth then negative) was not seen.
         let mut behind = now.clone();
         behind.depth_then[7] = -3.0;
@@ -497,5 +581,16 @@ mod tests {
         assert_eq!(edges, [2, 3, 4]);
         let still = Geometry { motion: vec![[0.0; 2]; w * h], ..edge.clone() };
         assert!(still.moving_edges().iter().all(|&e| !e), "a silhouette that did not move");
+        // An object in columns 4–7 slides right over a still background: the silhouette's
+        // left (background) side did not move, its right side did. It is a moving edge all the
+        // same: the trailing edge, where the background reappears.
+        let mut trailing = still.clone();
+        for y in 0..h {
+            for x in 4..w {
+                trailing.motion[y * w + x] = [1.0, 0.0];
+            }
+        }
+        let edges: Vec<usize> = (0..w).filter(|&x| trailing.moving_edges()[x]).collect();
+        assert_eq!(edges, [2, 3, 4], "the trailing silhouette between columns 3 and 4");
     }
 }

@@ -64,8 +64,9 @@ impl Source {
 /// How the gate decides a metric's change against its tolerance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Rule {
-    /// A level in dB, higher better (PSNR): moved by more than the tolerance, in dB.
-    Decibels,
+    /// A level, higher better, in `unit` (PSNR in dB, ColorVideoVDP in JOD): moved by more
+    /// than the tolerance, in its unit.
+    Level { unit: &'static str },
     /// An error whose value for identical images is `perfect` (0 for MSE and FLIP, 1 for SSIM):
     /// its distance from `perfect` moved by more than the tolerance, as a fraction of the
     /// baseline's distance.
@@ -79,14 +80,14 @@ impl Rule {
     /// Which way a check's change counts as an improvement: up for a level in dB, down for an
     /// error's distance from perfect or a share of samples (see [`Rule::better`] for values).
     pub fn higher_is_better(self) -> bool {
-        self == Rule::Decibels
+        matches!(self, Rule::Level { .. })
     }
 
     /// Whether the value `a` is better than `b`: a higher level, an error nearer perfect, a
     /// smaller share.
     pub fn better(self, a: f64, b: f64) -> bool {
         match self {
-            Rule::Decibels => a > b,
+            Rule::Level { .. } => a > b,
             Rule::Relative { perfect } => (a - perfect).abs() < (b - perfect).abs(),
             Rule::Points => a < b,
         }
@@ -95,12 +96,17 @@ impl Rule {
     /// The unit a check of this rule gives its change in.
     pub fn unit(self) -> &'static str {
         match self {
-            Rule::Decibels => "dB",
+            Rule::Level { unit } => unit,
             Rule::Relative { .. } => "relative",
             Rule::Points => "percentage points",
         }
     }
 }
+
+/// PSNR's rule.
+const DECIBELS: Rule = Rule::Level { unit: "dB" };
+/// ColorVideoVDP's rule: just-objectionable differences, 10 for no visible difference.
+const JOD: Rule = Rule::Level { unit: "JOD" };
 
 /// How the gate compares a metric with its baseline.
 #[derive(Debug, Clone, Copy)]
@@ -126,8 +132,9 @@ pub struct Plot {
     /// What the plot is called after the scene's name; a sequence's adds its speed.
     pub title: &'static str,
     pub axis: &'static str,
-    /// What a value is multiplied by on the axis.
-    pub scale: f64,
+    /// A value as the axis draws it: an error, lower better, on a log scale (JOD as its
+    /// distance below 10).
+    pub axis_value: fn(f64) -> f64,
     /// The figure's file name after the scene's, `front-flip`; a sequence's after the first
     /// speed adds the speed's number, `front-flicker-2`.
     pub file: &'static str,
@@ -141,6 +148,8 @@ pub enum Front {
     Recorded,
     /// The modes that no faster mode of the same stall beats, by medians.
     Medians,
+    /// None: the metric alone does not say which mode is better.
+    None,
 }
 
 /// The report's tables: the still's, and the one along the camera path.
@@ -191,7 +200,7 @@ pub const PSNR_VS_TRUTH: Metric = Metric {
     label: "PSNR against the truth",
     source: Source::Truth,
     read: Read::Mode(|mode| Some(mode.vs_ground_truth.as_ref()?.psnr_db.value())),
-    gate: Some(Gate { rule: Rule::Decibels, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
+    gate: Some(Gate { rule: DECIBELS, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
     column: Some(Column { table: Table::Still, header: "PSNR vs truth", cell: decibels }),
     plot: None,
 };
@@ -207,26 +216,62 @@ pub const FLIP_VS_TRUTH: Metric = Metric {
     plot: Some(Plot {
         title: "FLIP against run time",
         axis: "mean FLIP against the truth (log)",
-        scale: 1.0,
+        axis_value: |v| v,
         file: "front-flip",
         front: Front::Medians,
     }),
 };
 
-/// The mean PSNR along a camera path: what a path's ranking orders modes by.
+/// The still's ColorVideoVDP score against the truth, in JOD: what the still's ranking orders
+/// modes by where there is no path.
+pub const JOD_VS_TRUTH: Metric = Metric {
+    id: "jod_vs_truth",
+    label: "JOD against the truth",
+    source: Source::Truth,
+    read: Read::Mode(|mode| mode.vs_ground_truth.as_ref()?.jod),
+    gate: Some(Gate { rule: JOD, tolerance: Tolerance::Jod, show: jod }),
+    column: Some(Column { table: Table::Still, header: "JOD vs truth", cell: jod }),
+    plot: Some(Plot {
+        title: "JOD against run time",
+        axis: "JOD below 10 against the truth (log)",
+        axis_value: jod_loss,
+        file: "front-jod",
+        front: Front::Medians,
+    }),
+};
+
+/// ColorVideoVDP along a camera path against the truth's frames: what a path's ranking orders
+/// modes by.
+pub const SEQUENCE_JOD_VS_TRUTH: Metric = Metric {
+    id: "sequence_jod_vs_truth",
+    label: "JOD against the truth's frames",
+    source: Source::Sequence,
+    read: Read::Along(|sequence| sequence.jod),
+    gate: Some(Gate { rule: JOD, tolerance: Tolerance::Jod, show: jod }),
+    column: Some(Column { table: Table::Path, header: "JOD along the path", cell: jod }),
+    plot: Some(Plot {
+        title: "JOD in motion against run time",
+        axis: "JOD below 10 along the camera path (log)",
+        axis_value: jod_loss,
+        file: "front-jod-path",
+        front: Front::Medians,
+    }),
+};
+
+/// The mean PSNR along a camera path.
 pub const SEQUENCE_PSNR_VS_TRUTH: Metric = Metric {
     id: "sequence_psnr_vs_truth",
     label: "mean PSNR against the truth's frames",
     source: Source::Sequence,
     read: Read::Along(|sequence| Some(sequence.mean_psnr_db.value())),
-    gate: Some(Gate { rule: Rule::Decibels, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
+    gate: Some(Gate { rule: DECIBELS, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
     column: Some(Column { table: Table::Path, header: "PSNR along the path", cell: decibels }),
     plot: None,
 };
 
 /// Every metric, in the order of the report's columns within each table (the gate checks them
 /// in this order too).
-pub const METRICS: [Metric; 14] = [
+pub const METRICS: [Metric; 16] = [
     Metric {
         id: "shaded_percent",
         label: "samples shaded",
@@ -250,7 +295,7 @@ pub const METRICS: [Metric; 14] = [
         plot: Some(Plot {
             title: "error against run time",
             axis: "MSE against the truth ×1e-5 (log)",
-            scale: 1e5,
+            axis_value: |v| v * 1e5,
             file: "front",
             front: Front::Recorded,
         }),
@@ -260,11 +305,12 @@ pub const METRICS: [Metric; 14] = [
         label: "PSNR against the reference",
         source: Source::Reference,
         read: Read::Mode(|mode| Some(mode.vs_reference.as_ref()?.psnr_db.value())),
-        gate: Some(Gate { rule: Rule::Decibels, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
+        gate: Some(Gate { rule: DECIBELS, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
         column: Some(Column { table: Table::Still, header: "PSNR vs ref", cell: decibels }),
         plot: None,
     },
     PSNR_VS_TRUTH,
+    JOD_VS_TRUTH,
     FLIP_VS_TRUTH,
     Metric {
         id: "ssim_vs_truth",
@@ -297,6 +343,7 @@ pub const METRICS: [Metric; 14] = [
         column: Some(Column { table: Table::Path, header: "samples %", cell: one_decimal }),
         plot: None,
     },
+    SEQUENCE_JOD_VS_TRUTH,
     SEQUENCE_PSNR_VS_TRUTH,
     Metric {
         id: "sequence_flip_vs_truth",
@@ -322,9 +369,10 @@ pub const METRICS: [Metric; 14] = [
         plot: Some(Plot {
             title: "flicker against run time",
             axis: "flicker along the camera path (log)",
-            scale: 1.0,
+            axis_value: |v| v,
             file: "front-flicker",
-            front: Front::Medians,
+            // A front of flicker against time promotes blur and lag, which flicker little.
+            front: Front::None,
         }),
     },
     Metric {
@@ -467,6 +515,15 @@ fn percent(value: f64) -> String {
 
 fn one_decimal(value: f64) -> String {
     format!("{value:.1}")
+}
+
+fn jod(value: f64) -> String {
+    format!("{value:.3}")
+}
+
+/// A JOD's distance below 10 (no visible difference): an error, for a log axis.
+fn jod_loss(value: f64) -> f64 {
+    10.0 - value
 }
 
 fn two_decimals(value: f64) -> String {

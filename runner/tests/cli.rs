@@ -310,6 +310,7 @@ fn bad_arguments_exit_two_before_any_work() {
         (vec!["run", "--shard", "-1/2"], "--shard -1/2: expected I/N"),
         (vec!["run", "--repetitions", "-1"], "-1 is not in 1..=10000"),
         (vec!["run", "--out", "/dev/full"], "--out /dev/full: exists and is not a folder"),
+        (vec!["run", "--jod-display", "crt"], "--jod-display: unknown display model `crt`"),
     ] {
         let output = ws.run(&args);
         assert_eq!(output.status.code(), Some(2), "{args:?}");

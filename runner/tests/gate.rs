@@ -699,7 +699,7 @@ fn screenshot(chromium: &str, index: &Path) {
             "--disable-dev-shm-usage",
             "--enable-logging=stderr",
             "--v=0",
-            "--window-size=1280,2400",
+            "--window-size=1280,3600",
         ])
         .arg(format!("--user-data-dir={}", dir.join("chromium-profile").display()))
         .arg(format!("--screenshot={}", shot.display()))
@@ -711,7 +711,7 @@ fn screenshot(chromium: &str, index: &Path) {
     let console: Vec<&str> = log.lines().filter(|l| l.contains(":CONSOLE")).collect();
     assert!(console.is_empty(), "console messages: {console:?}");
     let image = image::open(&shot).expect("a screenshot").to_rgb8();
-    assert_eq!(image.dimensions(), (1280, 2400));
+    assert_eq!(image.dimensions(), (1280, 3600));
     let colours: std::collections::HashSet<[u8; 3]> = image.pixels().map(|p| p.0).collect();
     assert!(colours.len() > 1000, "the page looks blank: {} colours", colours.len());
 }

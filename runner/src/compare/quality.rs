@@ -50,11 +50,14 @@ impl ModeContext<'_> {
         };
         let threshold = gate.threshold(tolerance);
         let (change, moved) = match gate.rule {
-            Rule::Decibels => {
+            Rule::Level { unit } => {
                 // Two infinities (identical images both times) are no change.
                 let change = if now == then { 0.0 } else { now - then };
-                let moved =
-                    if change.is_finite() { format!("{change:+.3} dB") } else { format!("{change} dB") };
+                let moved = if change.is_finite() {
+                    format!("{change:+.3} {unit}")
+                } else {
+                    format!("{change} {unit}")
+                };
                 (change, moved)
             }
             Rule::Relative { perfect } => {
@@ -65,7 +68,7 @@ impl ModeContext<'_> {
         };
         let outcome = beyond(change, threshold, gate.rule.higher_is_better());
         let shown_tolerance = match gate.rule {
-            Rule::Decibels => format!("±{threshold} dB"),
+            Rule::Level { unit } => format!("±{threshold} {unit}"),
             Rule::Relative { .. } => format!("±{:.1}%", threshold * 100.0),
             Rule::Points => format!("±{threshold}"),
         };

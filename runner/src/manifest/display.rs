@@ -93,7 +93,7 @@ pub enum DitherSpec {
 
 /// How the display image is encoded: transfer function (PQ with the display's peak), bits per
 /// channel and dither.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DisplaySpec {
     #[serde(default)]
@@ -104,6 +104,10 @@ pub struct DisplaySpec {
     pub bits: u32,
     #[serde(default)]
     pub dither: DitherSpec,
+    /// The display ColorVideoVDP judges on, one of its named models (`aabench_cvvdp::Display::
+    /// names`); omitted: [`DisplaySpec::jod_display`]'s default for the transfer.
+    #[serde(default)]
+    pub jod_display: Option<String>,
 }
 
 /// The largest exposure: 2⁴⁰ (40 stops), far past any scene, and far from f32's overflow.
@@ -111,6 +115,40 @@ pub(super) const MAX_EXPOSURE: f32 = 1.1e12;
 
 /// A PQ display's peak when the manifest names none: a common HDR monitor.
 pub const DEFAULT_PEAK_NITS: f64 = 1000.0;
+
+/// ColorVideoVDP's display when the manifest names none: its standard Full HD monitor for a
+/// display-referred transfer, its standard HDR monitor for PQ.
+pub const DEFAULT_JOD_DISPLAY: &str = aabench_cvvdp::display::STANDARD_FHD;
+pub const DEFAULT_HDR_JOD_DISPLAY: &str = "standard_hdr_pq";
+
+impl DisplaySpec {
+    /// The ColorVideoVDP display model a scene's JOD is judged on.
+    pub fn jod_display(&self) -> &str {
+        match (&self.jod_display, self.transfer) {
+            (Some(name), _) => name,
+            (None, TransferSpec::Pq) => DEFAULT_HDR_JOD_DISPLAY,
+            (None, _) => DEFAULT_JOD_DISPLAY,
+        }
+    }
+}
+
+/// Whether ColorVideoVDP's display model `name` exists and decodes a display image of
+/// `transfer`: a PQ image on a PQ display, any other on a display of sRGB or gamma code values.
+pub fn check_jod_display(name: &str, transfer: TransferSpec) -> Result<(), String> {
+    let display = aabench_cvvdp::Display::named(name)
+        .map_err(|error| format!("{error}; one of: {}", aabench_cvvdp::Display::names().join(", ")))?;
+    let pq_display = display.eotf == aabench_cvvdp::Eotf::Pq;
+    match (transfer == TransferSpec::Pq, pq_display) {
+        (true, false) => {
+            Err(format!("`{name}` does not decode PQ; a pq display needs a PQ model such as standard_hdr_pq"))
+        }
+        (false, true) => Err(format!("`{name}` decodes PQ, and this display's transfer is not pq")),
+        _ if display.eotf == aabench_cvvdp::Eotf::Linear => {
+            Err(format!("`{name}` takes linear values, not code values"))
+        }
+        _ => Ok(()),
+    }
+}
 
 fn eight() -> u32 {
     8

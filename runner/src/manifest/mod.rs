@@ -5,7 +5,9 @@
 mod display;
 mod sections;
 
-pub use display::{DEFAULT_PEAK_NITS, DisplaySpec, DitherSpec, DynamicRange, TonemapSpec, TransferSpec};
+pub use display::{
+    DEFAULT_PEAK_NITS, DisplaySpec, DitherSpec, DynamicRange, TonemapSpec, TransferSpec, check_jod_display,
+};
 pub use sections::{
     AdaptiveSpec, CameraSpec, DepthMetricSpec, FileLights, Generate, LightSpec, Resolutions, ShadowSpec,
     check_shadows,
@@ -332,6 +334,9 @@ impl Manifest {
         }
         if self.display.peak_nits.is_some() && self.display.transfer != TransferSpec::Pq {
             return fail("display.peak_nits", "only the pq transfer has a display peak".into());
+        }
+        if let Err(why) = display::check_jod_display(self.display.jod_display(), self.display.transfer) {
+            return fail("display.jod_display", why);
         }
         self.color_settings().validate().or_else(|error| {
             let section = if error.field == "peak_nits" { "display" } else { "tonemap" };

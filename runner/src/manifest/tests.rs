@@ -165,6 +165,18 @@ fn malformed_manifests_name_the_file_and_the_field() {
     check(|j| j["display"] = json!({"transfer": "pq", "peak_nits": 0}), "display.peak_nits", "> 0");
     check(|j| j["display"] = json!({"transfer": "pq", "peak_nits": 2e4}), "display.peak_nits", "10000");
     check(|j| j["display"] = json!({"peak_nits": 400}), "display.peak_nits", "only the pq");
+    check(
+        |j| j["display"] = json!({"jod_display": "crt"}),
+        "display.jod_display",
+        "unknown display model `crt`",
+    );
+    check(|j| j["display"] = json!({"jod_display": "standard_hdr_pq"}), "display.jod_display", "decodes PQ");
+    check(
+        |j| j["display"] = json!({"transfer": "pq", "jod_display": "standard_4k"}),
+        "display.jod_display",
+        "does not decode PQ",
+    );
+    check(|j| j["display"] = json!({"jod_display": "standard_hdr_hlg"}), "display.jod_display", "HLG");
     check(|j| j["display"] = json!({"transfer": "gamma2.4"}), "display.transfer", "unknown variant");
     check(|j| j["display"] = json!({"dither": "blue"}), "display.dither", "unknown variant");
     check(|j| j["gate"] = json!({"psnr_db": -0.1}), "gate.psnr_db", "≥ 0");

@@ -1,25 +1,24 @@
-//! Which technique for this scene: for each error level that a mode on the scene's front
-//! reaches, the fastest mode that reaches it. Where the scene has a camera path, the rankings
-//! are the path's, one per speed (mean PSNR along it, with FLIP, flicker and the error where
-//! the frame before did not see the surface beside), and the still's is labelled as the
-//! still's. A temporal mode
-//! (TAA) is never ranked by its still: that is 16 frames accumulated at one camera, its best
-//! case.
+//! Which technique for this scene, by what people see: ColorVideoVDP's JOD against the truth.
+//! For each JOD level that a mode on the scene's front reaches, the fastest mode that reaches
+//! it, with the mode's own level. Where the scene has a camera path, the rankings are the
+//! path's, one per speed (JOD of the frames as a video), with PSNR, FLIP, flicker and ghosting
+//! one click away; the still's is labelled as the still's. A temporal mode (TAA) is never
+//! ranked by its still: that is 16 frames accumulated at one camera, its best case.
 
 use std::fmt::Write;
 
 use super::html::escape;
 use crate::record::{ModeRecord, ModeSequence, RunRecord, SceneRecord};
-use crate::vocabulary::{Metric, PSNR_VS_TRUTH, SEQUENCE_PSNR_VS_TRUTH};
+use crate::vocabulary::{JOD_VS_TRUTH, Metric, SEQUENCE_JOD_VS_TRUTH};
 
 /// What a ranking measures a mode by.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Basis {
-    /// The still: PSNR against the truth and the still's frame time.
+    /// The still: JOD against the truth and the still's frame time.
     Still,
-    /// The scene's sequence `index` along its camera path: the PSNR of the frames' mean MSE
-    /// against the truth's frames, and the frame time along the path (the still's where the run
-    /// has none).
+    /// The scene's sequence `index` along its camera path: the JOD of the frames as a video
+    /// against the truth's, and the frame time along the path (the still's where the run has
+    /// none).
     Path(usize),
 }
 
@@ -29,13 +28,13 @@ impl Basis {
         (0..scene.sequences.len()).map(Basis::Path).chain([Basis::Still]).collect()
     }
 
-    /// `still`, or `along the path at 4 px a frame`.
+    /// `still`, or `along the path: 1.8 px a frame (median; 3.7 nominal)`.
     pub fn label(self, scene: &SceneRecord) -> String {
         match self {
             Basis::Still => "still".into(),
             Basis::Path(index) => {
                 let speed =
-                    scene.sequences.get(index).map_or_else(String::new, |s| format!(" at {}", s.speed()));
+                    scene.sequences.get(index).map_or_else(String::new, |s| format!(": {}", s.speed()));
                 format!("along the path{speed}")
             }
         }
@@ -44,8 +43,8 @@ impl Basis {
     /// The metric this basis ranks modes by.
     fn metric(self) -> &'static Metric {
         match self {
-            Basis::Still => &PSNR_VS_TRUTH,
-            Basis::Path(_) => &SEQUENCE_PSNR_VS_TRUTH,
+            Basis::Still => &JOD_VS_TRUTH,
+            Basis::Path(_) => &SEQUENCE_JOD_VS_TRUTH,
         }
     }
 
@@ -78,63 +77,52 @@ impl Basis {
             Basis::Path(index) => mode.sequence_at(index),
         }
     }
-
-    /// Whether `mode` is on the front of this basis among `measured`: on the still's, where
-    /// run.json places it (by PSNR with intervals), or where only modes left out of the ranking
-    /// dominate it (TAA's still); on the path's, where no faster mode has a higher PSNR.
-    fn on_front(
-        self,
-        (psnr, ms, mode): (f64, f64, &ModeRecord),
-        measured: &[(f64, f64, &ModeRecord)],
-    ) -> bool {
-        match self {
-            Basis::Still => mode.front.as_ref().is_some_and(|place| {
-                let ranked = |id: &str| measured.iter().any(|(_, _, m)| m.mode == id);
-                place.on_front || place.dominated_by.iter().all(|d| !ranked(&d.mode))
-            }),
-            Basis::Path(_) => !measured.iter().any(|&(p, t, _)| t < ms && self.better(p, psnr)),
-        }
-    }
 }
 
-/// For each PSNR that an unstalled mode on the basis's front reaches, lowest first, the fastest
-/// unstalled mode (by median) that reaches it, once per mode.
+/// For each JOD that an unstalled mode on the basis's front reaches (no faster mode scores
+/// higher), lowest first, the fastest unstalled mode (by median) that reaches it, with its own
+/// level: levels rise, each row's mode reaches its level, and no mode that reaches it is faster.
 pub fn fastest_by_level(scene: &SceneRecord, basis: Basis) -> Vec<(f64, &ModeRecord)> {
     let measured: Vec<(f64, f64, &ModeRecord)> = scene
         .modes
         .iter()
         .filter(|m| !m.stalled)
-        .filter_map(|m| basis.measure(m).map(|(psnr, ms)| (psnr, ms, m)))
+        .filter_map(|m| basis.measure(m).map(|(level, ms)| (level, ms, m)))
         .collect();
-    let mut levels: Vec<f64> = measured
-        .iter()
-        .filter(|&&point| basis.on_front(point, &measured))
-        .map(|&(psnr, _, _)| psnr)
-        .collect();
+    let on_front = |&(level, ms, _): &(f64, f64, &ModeRecord)| {
+        !measured.iter().any(|&(other, t, _)| t < ms && basis.better(other, level))
+    };
+    let mut levels: Vec<f64> = measured.iter().filter(|p| on_front(p)).map(|&(level, _, _)| level).collect();
     levels.sort_by(f64::total_cmp);
     let mut rows: Vec<(f64, &ModeRecord)> = Vec::new();
     for level in levels {
         let fastest = measured
             .iter()
-            .filter(|&&(psnr, _, _)| !basis.better(level, psnr))
+            .filter(|&&(own, _, _)| !basis.better(level, own))
             .min_by(|a, b| a.1.total_cmp(&b.1));
-        if let Some(&(_, _, mode)) = fastest
+        if let Some(&(own, _, mode)) = fastest
             && rows.last().is_none_or(|(_, last)| last.mode != mode.mode)
         {
-            rows.push((level, mode));
+            rows.push((own, mode));
         }
     }
     rows
 }
 
-/// `36.00 dB: reference-2x2 (280.7 ms, FLIP 0.0196)`; along the path with its flicker and its
-/// error where the frame before did not see the surface.
-pub fn technique_cell(level: f64, mode: &ModeRecord, basis: Basis) -> String {
-    let level = if level.is_finite() { format!("{level:.2} dB") } else { "∞ dB".into() };
+/// `reference-2x2 9.21 JOD, 40.1 ms`: a row's recommendation.
+fn recommendation(level: f64, mode: &ModeRecord, basis: Basis) -> String {
     let ms = basis.measure(mode).map_or(0.0, |(_, ms)| ms);
-    let mut details = format!("{ms:.1} ms");
+    format!("{} {level:.2} JOD, {ms:.1} ms", mode.mode)
+}
+
+/// `reference-2x2: 9.21 JOD, 40.1 ms, PSNR 36.00 dB, FLIP 0.0196`; along the path with its
+/// flicker and its error where the frame before had the surface hidden.
+pub fn technique_cell(level: f64, mode: &ModeRecord, basis: Basis) -> String {
+    let mut details = recommendation(level, mode, basis);
+    let psnr = |db: f64| if db.is_finite() { format!("{db:.2} dB") } else { "∞ dB".into() };
     match (basis, basis.sequence(mode)) {
         (Basis::Path(_), Some(sequence)) => {
+            let _ = write!(details, ", PSNR {}", psnr(sequence.mean_psnr_db.value()));
             if let Some(flip) = sequence.mean_flip {
                 let _ = write!(details, ", FLIP {flip:.4}");
             }
@@ -146,57 +134,123 @@ pub fn technique_cell(level: f64, mode: &ModeRecord, basis: Basis) -> String {
             }
         }
         _ => {
-            if let Some(flip) = mode.vs_ground_truth.as_ref().and_then(|q| q.flip) {
-                let _ = write!(details, ", FLIP {flip:.4}");
+            if let Some(quality) = mode.vs_ground_truth.as_ref() {
+                let _ = write!(details, ", PSNR {}", psnr(quality.psnr_db.value()));
+                if let Some(flip) = quality.flip {
+                    let _ = write!(details, ", FLIP {flip:.4}");
+                }
             }
         }
     }
-    format!("{level}: {} ({details})", mode.mode)
+    details
 }
 
-/// The rankings of every scene: per scene and basis, its cells.
-fn rankings(run: &RunRecord) -> Vec<(&str, String, Vec<String>)> {
-    let mut rows = Vec::new();
+/// One ranking: a scene's rows on one basis.
+struct Ranking<'a> {
+    scene: &'a str,
+    basis: String,
+    rows: Vec<(f64, &'a ModeRecord, f64)>,
+    details: Vec<String>,
+    recommended: Vec<String>,
+}
+
+/// The rankings of every scene: per scene and basis, its rows (level, mode, ms).
+fn rankings(run: &RunRecord) -> Vec<Ranking<'_>> {
+    let mut out = Vec::new();
     for scene in &run.scenes {
         for basis in Basis::of_scene(scene) {
-            let cells: Vec<String> = fastest_by_level(scene, basis)
-                .iter()
-                .map(|&(level, mode)| technique_cell(level, mode, basis))
-                .collect();
-            if !cells.is_empty() {
-                rows.push((scene.name.as_str(), basis.label(scene), cells));
+            let chosen = fastest_by_level(scene, basis);
+            if chosen.is_empty() {
+                continue;
             }
+            out.push(Ranking {
+                scene: &scene.name,
+                basis: basis.label(scene),
+                rows: chosen
+                    .iter()
+                    .map(|&(level, mode)| (level, mode, basis.measure(mode).map_or(0.0, |m| m.1)))
+                    .collect(),
+                details: chosen.iter().map(|&(level, mode)| technique_cell(level, mode, basis)).collect(),
+                recommended: chosen.iter().map(|&(level, mode)| recommendation(level, mode, basis)).collect(),
+            });
         }
     }
-    rows
+    out
 }
 
 /// What the table says, in one paragraph.
-const CAPTION: &str = "For each PSNR against the truth that a mode on the scene's front reaches, the \
-     fastest unstalled mode that reaches it. Along the path: the mean PSNR over the path's frames, the \
-     frame time along it, mean FLIP, flicker (the change of the error along the truth's motion) and the \
-     MSE where the frame before did not see the surface. The still's ranking leaves TAA out: its still \
-     is 16 frames accumulated at one camera.";
+const CAPTION: &str = "Ranked by ColorVideoVDP's JOD against the truth (10: no visible difference; a \
+     difference of 1 JOD is one that 75 % of viewers would notice), along the camera path at each \
+     speed where the scene has one: each line names, from the cheapest up, the fastest unstalled mode \
+     for each quality that a mode on the front reaches, with its own JOD and frame time; the chart \
+     draws them, JOD across and time up. The details add PSNR, mean FLIP, flicker (the change of the \
+     error along the truth's motion) and the MSE where the frame before had the surface hidden. The \
+     still's ranking leaves TAA out: its still is 16 frames accumulated at one camera.";
 
-/// The rankings as an HTML section.
+/// A small step chart of a ranking: JOD across (from the lowest level to 10), frame time up
+/// (log), a dot per row with its mode in a tooltip.
+fn step_chart(rows: &[(f64, &ModeRecord, f64)]) -> String {
+    let (width, height, pad) = (180.0, 48.0, 4.0);
+    let low = rows.iter().map(|r| r.0).fold(10.0f64, f64::min).min(9.5) - 0.1;
+    let times: Vec<f64> = rows.iter().map(|r| r.2.max(1e-3).ln()).collect();
+    let (t_low, t_high) =
+        times.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &t| (a.min(t), b.max(t)));
+    let x = |jod: f64| pad + (jod - low) / (10.0 - low) * (width - 2.0 * pad);
+    let y = |t: f64| {
+        height
+            - pad
+            - if t_high > t_low { (t - t_low) / (t_high - t_low) } else { 0.5 } * (height - 2.0 * pad)
+    };
+    let mut path = String::new();
+    for (i, ((level, _, _), &t)) in rows.iter().zip(&times).enumerate() {
+        let next = rows.get(i + 1).map_or(10.0, |r| r.0);
+        let _ = if i == 0 {
+            write!(path, "M{:.1} {:.1}", x(*level), y(t))
+        } else {
+            write!(path, " V{:.1}", y(t))
+        };
+        let _ = write!(path, " H{:.1}", x(next));
+    }
+    let mut svg = format!(
+        "<svg class=\"steps\" width=\"{width}\" height=\"{height}\" viewBox=\"0 0 {width} {height}\"><path d=\"{path}"
+    );
+    svg.push_str("\" fill=\"none\" stroke=\"#1f77b4\"/>");
+    for ((level, mode, ms), &t) in rows.iter().zip(&times) {
+        let _ = write!(
+            svg,
+            "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"2.5\"><title>{} {level:.2} JOD, {ms:.1} ms</title></circle>",
+            x(*level),
+            y(t),
+            escape(&mode.mode)
+        );
+    }
+    svg.push_str("</svg>");
+    svg
+}
+
+/// The rankings as an HTML section: a line a scene and basis, its chart, and the details one
+/// click away.
 pub(super) fn technique_table(page: &mut String, run: &RunRecord) {
-    let rows = rankings(run);
-    if rows.is_empty() {
+    let rankings = rankings(run);
+    if rankings.is_empty() {
         return;
     }
     let _ = writeln!(
         page,
         "<h2>Which technique for this scene</h2>\n<p>{}</p>\n<table><thead><tr><th>scene</th>\
-         <th>ranked</th><th>at least … dB: the fastest mode</th></tr></thead><tbody>",
+         <th>ranked</th><th>the fastest mode for each JOD, cheapest first</th><th>time against JOD</th></tr>\
+         </thead><tbody>",
         escape(CAPTION)
     );
-    for (scene, basis, cells) in rows {
+    for ranking in rankings {
         let _ = writeln!(
             page,
-            "<tr><td>{}</td><td>{}</td><td>{}</td></tr>",
-            escape(scene),
-            escape(&basis),
-            escape(&cells.join(" · "))
+            "<tr><td>{}</td><td>{}</td><td>{}<details><summary>details</summary>{}</details></td><td>{}</td></tr>",
+            escape(ranking.scene),
+            escape(&ranking.basis),
+            escape(&ranking.recommended.join(" → ")),
+            ranking.details.iter().map(|d| format!("<div>{}</div>", escape(d))).collect::<String>(),
+            step_chart(&ranking.rows)
         );
     }
     page.push_str("</tbody></table>\n");
@@ -204,16 +258,23 @@ pub(super) fn technique_table(page: &mut String, run: &RunRecord) {
 
 /// The rankings as a Markdown section; `cell` escapes a cell's text.
 pub(super) fn technique_markdown(out: &mut String, run: &RunRecord, cell: fn(&str) -> String) {
-    let rows = rankings(run);
-    if rows.is_empty() {
+    let rankings = rankings(run);
+    if rankings.is_empty() {
         return;
     }
     let _ = write!(
         out,
-        "\n### Which technique for this scene\n\n{CAPTION}\n\n| scene | ranked | at least … dB: the fastest \
-         mode |\n|---|---|---|\n"
+        "\n### Which technique for this scene\n\n{CAPTION}\n\n| scene | ranked | the fastest mode for each \
+         JOD, cheapest first | details |\n|---|---|---|---|\n"
     );
-    for (scene, basis, cells) in rows {
-        let _ = writeln!(out, "| {} | {} | {} |", cell(scene), basis, cell(&cells.join(" · ")));
+    for ranking in rankings {
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} |",
+            cell(ranking.scene),
+            ranking.basis,
+            cell(&ranking.recommended.join(" → ")),
+            cell(&ranking.details.join(" · "))
+        );
     }
 }

@@ -302,6 +302,31 @@ pub(super) fn flicker_region(
     Ok(())
 }
 
+/// Each mode's distortion map along the scene's first path: the frame where ColorVideoVDP
+/// found it furthest from the truth, where the run wrote one.
+pub(super) fn jod_maps(page: &mut String, scene: &SceneRecord) {
+    let maps: Vec<(&str, &str, u32)> = scene
+        .modes
+        .iter()
+        .filter_map(|mode| {
+            let sequence = mode.sequence_at(0)?;
+            Some((mode.mode.as_str(), sequence.jod_map.as_deref()?, sequence.jod_worst_frame?))
+        })
+        .collect();
+    if maps.is_empty() {
+        return;
+    }
+    page.push_str(
+        "<h3>Where a viewer sees the difference</h3>\n<p class=\"meta\">Per mode, ColorVideoVDP's \
+         distortion map of the path's frame it found furthest from the truth: black where no \
+         difference shows, yellow at 10 JOD below the truth or more.</p>\n<div class=\"row\">",
+    );
+    for (mode, map, frame) in maps {
+        figure(page, map, &format!("{mode}, frame {frame}"));
+    }
+    page.push_str("</div>\n");
+}
+
 /// Why a strip is missing: its animation cannot give it (the page says so), or it could not be
 /// written (the report fails).
 enum Strip {

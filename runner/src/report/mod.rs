@@ -209,6 +209,7 @@ fn scene_section(
     tables::verdict_table(page, &checks);
     images::images(page, run_dir, scene, left_out)?;
     images::flicker_region(page, run_dir, scene, left_out)?;
+    images::jod_maps(page, scene);
     history::history_plots(page, scene, history)?;
     page.push_str("</section>\n");
     Ok(())

@@ -165,7 +165,11 @@ pub fn error_against_time(title: &str, axes: [&str; 2], points: &[Point]) -> Res
             chart
                 .draw_series(DashedLineSeries::new(front_line(&series), 6, 4, colour.stroke_width(1)))
                 .map_err(fail)?
-                .label(format!("{name} (dashed: the front)"))
+                .label(if series.iter().any(|p| p.on_front) {
+                    format!("{name} (dashed: the front)")
+                } else {
+                    name.to_string()
+                })
                 .legend(move |(x, y)| Circle::new((x, y), 4, style));
             let markers = series.iter().flat_map(|p| {
                 let at = (p.time, p.error);

@@ -75,7 +75,7 @@ impl ErrorPlot {
     }
 
     fn of(&self, mode: &ModeRecord) -> Option<f64> {
-        Some(self.metric.value_at(mode, self.sequence)? * self.plot.scale)
+        Some((self.plot.axis_value)(self.metric.value_at(mode, self.sequence)?))
     }
 }
 
@@ -100,17 +100,20 @@ pub fn error_points(scene: &SceneRecord, plot: ErrorPlot) -> Vec<Point> {
             })
         })
         .collect();
-    if plot.plot.front == Front::Medians {
-        let better =
-            |a: f64, b: f64| plot.metric.better(a, b).expect("a plotted metric is gated: it has a direction");
-        let dominated: Vec<bool> = points
-            .iter()
-            .map(|p| {
-                points.iter().any(|q| q.stalled == p.stalled && q.time < p.time && better(q.error, p.error))
-            })
-            .collect();
-        for (point, dominated) in points.iter_mut().zip(dominated) {
-            point.on_front = !dominated;
+    match plot.plot.front {
+        Front::Recorded => {}
+        Front::None => points.iter_mut().for_each(|point| point.on_front = false),
+        Front::Medians => {
+            // Every axis is an error, lower better (a JOD is drawn as its distance below 10).
+            let dominated: Vec<bool> = points
+                .iter()
+                .map(|p| {
+                    points.iter().any(|q| q.stalled == p.stalled && q.time < p.time && q.error < p.error)
+                })
+                .collect();
+            for (point, dominated) in points.iter_mut().zip(dominated) {
+                point.on_front = !dominated;
+            }
         }
     }
     points

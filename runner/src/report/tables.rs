@@ -51,7 +51,7 @@ pub fn sequence_columns() -> Vec<&'static str> {
     ["mode", "ms per frame along the path"]
         .into_iter()
         .chain(metrics)
-        .chain(["disoccluded % · MSE there / at moving edges / elsewhere ×1e-3"])
+        .chain(["disoccluded % · entered % · MSE disoccluded / entered / at moving edges / elsewhere ×1e-3"])
         .collect()
 }
 
@@ -61,8 +61,8 @@ pub fn sequence_cells(mode: &ModeRecord, index: usize) -> Option<Vec<String>> {
     let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
     let ghosting = sequence.ghosting.as_ref().map(|g| {
         let mse = |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.2}", v * 1e3));
-        let mses = [g.mse, g.mse_edges, g.mse_elsewhere].map(mse).join(" / ");
-        format!("{:.2} · {mses}", g.disoccluded * 100.0)
+        let mses = [g.mse, g.mse_entered, g.mse_edges, g.mse_elsewhere].map(mse).join(" / ");
+        format!("{:.2} · {:.2} · {mses}", g.disoccluded * 100.0, g.entered * 100.0)
     });
     let metrics = vocabulary::columns(Table::Path)
         .map(|(metric, column)| vocabulary::cell(metric, column, mode, index));
@@ -100,13 +100,13 @@ pub(super) fn sequence_table(page: &mut String, scene: &SceneRecord, index: usiz
 }
 
 /// One line on a scene's sequence: its path, frames and the truth's own change along its
-/// motion, the flicker of a steady image.
+/// motion, the flicker of a blank image.
 pub fn sequence_summary(sequence: &SequenceRecord) -> String {
-    let steady = sequence.truth_flicker.map_or("–".into(), |c| format!("{:.3}", c * 1e4));
+    let blank = sequence.blank_flicker.map_or("–".into(), |c| format!("{:.3}", c * 1e4));
     let mut line = format!(
         "{} path at {}, {} of {} frames of {:.4} s. Flicker is the mean squared change of a mode's \
-         error along the truth's motion; a steady image that shows none of the truth's moiré scores \
-         {steady} ×1e-4 here",
+         error along the truth's motion; a blank image (its error the truth's own change) scores \
+         {blank} ×1e-4 here",
         sequence.path,
         sequence.speed(),
         sequence.frames_done,

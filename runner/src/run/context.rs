@@ -31,6 +31,8 @@ pub(super) struct SceneRun<'a> {
     /// Whether a material samples a texture: where none does, an adaptive mode's full windows
     /// reuse S (see `sample_stats`). Known once the scene is loaded.
     pub textured: bool,
+    /// ColorVideoVDP on the scene's display model, where quality is measured.
+    pub jod: Option<crate::perceptual::Jod>,
 }
 
 impl<'a> SceneRun<'a> {
@@ -43,7 +45,7 @@ impl<'a> SceneRun<'a> {
     ) -> SceneRun<'a> {
         let resolution = plan.tier.resolution(manifest);
         let dir = plan.run_dir.join(&manifest.name);
-        SceneRun { worker, plan, manifest, progress, cancel, resolution, dir, textured: false }
+        SceneRun { worker, plan, manifest, progress, cancel, resolution, dir, textured: false, jod: None }
     }
 
     /// Whether a signal asked the run to stop.

@@ -17,11 +17,14 @@
 //! rewards lag and blur: an image that never changes scores the truth's own change.
 //! `change_ratio` sets the mode's own mean squared frame-to-frame change against the truth's.
 
+use std::path::Path;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use aabench_renderer::{DisplayImage, Mode};
 
 use crate::metrics::{self, Decibels, FrameChecks};
+use crate::perceptual::VideoJod;
 use crate::record::{GhostFrame, Ghosting, ModeSequence, SequenceRecord, fingerprint};
 use crate::spool::Spool;
 use crate::temporal::{
@@ -74,6 +77,10 @@ pub(super) struct ModeState {
     mse: Vec<f64>,
     /// Per frame, FLIP against the truth's: filled in once the path is rendered.
     pub flip: Vec<f64>,
+    /// ColorVideoVDP of the frames against the truth's, once the path is rendered, and its
+    /// worst frame with the path of that frame's distortion map.
+    pub jod: Option<f64>,
+    pub jod_worst: Option<(u32, Option<String>)>,
     hashes: Vec<String>,
     /// Σ (ΔA − ΔT)² and Σ ΔA², in squared code steps.
     error_change: u64,
@@ -100,11 +107,13 @@ pub(super) struct TruthTrack {
     pairs: usize,
     /// Σ of the squared change along the motion, and its count of values.
     along_motion: (f64, u64),
+    /// How fast the truth's content moved over the pairs so far.
+    speeds: temporal::Speeds,
 }
 
 impl TruthTrack {
     /// Takes the next frame's truth and geometry, followed back into the frame before by
-    /// `flow`, and records the truth's own changes so far.
+    /// `flow`, and records the truth's own changes and its content's speed so far.
     pub fn advance(
         &mut self,
         truth: DisplayImage,
@@ -113,13 +122,15 @@ impl TruthTrack {
         record: &mut SequenceRecord,
     ) {
         if let Some((before, _)) = &self.previous {
+            self.speeds.add(&geometry);
+            record.measured_speed = self.speeds.measured();
             self.change += squared_difference(&truth, before);
             self.pairs += 1;
             record.truth_change = Some(per_value(self.change, &truth, self.pairs));
             if let Some(flow) = flow {
                 let (sum, count) = flow.own_change(&truth, before);
                 self.along_motion = (self.along_motion.0 + sum, self.along_motion.1 + count);
-                record.truth_flicker = temporal::mean(self.along_motion);
+                record.blank_flicker = temporal::mean(self.along_motion);
             }
         }
         self.previous = Some((truth, geometry));
@@ -168,6 +179,8 @@ impl ModeState {
                 self.ghosting.push(GhostFrame {
                     disoccluded: flow.disoccluded_share(),
                     mse: temporal::mean(error.disoccluded),
+                    entered: flow.entered_share(),
+                    mse_entered: temporal::mean(error.entered),
                 });
                 self.followed.add(&error);
             }
@@ -183,6 +196,8 @@ impl ModeState {
             previous,
             mse,
             flip,
+            jod,
+            jod_worst,
             hashes,
             error_change,
             own_change,
@@ -206,6 +221,9 @@ impl ModeState {
             mse,
             mean_flip: (flip.len() == frames).then(|| flip.iter().sum::<f64>() / frames as f64),
             flip,
+            jod,
+            jod_worst_frame: jod_worst.as_ref().map(|(frame, _)| *frame),
+            jod_map: jod_worst.and_then(|(_, map)| map),
             instability: per_value(error_change, &last.display, pairs),
             change_ratio: truth_change.filter(|&t| t > 0.0).map(|t| own / t),
             count_changes: mean_of(&count_changes),
@@ -217,6 +235,8 @@ impl ModeState {
                 |disoccluded| Ghosting {
                     disoccluded,
                     mse: temporal::mean(followed.disoccluded),
+                    entered: mean_of(&ghosting.iter().map(|g| g.entered).collect::<Vec<_>>()).unwrap_or(0.0),
+                    mse_entered: temporal::mean(followed.entered),
                     mse_edges: temporal::mean(followed.edges),
                     mse_elsewhere: temporal::mean(followed.elsewhere),
                     per_frame: ghosting,
@@ -271,6 +291,93 @@ pub(super) fn flip_along(spool: &Spool, frames: usize, cancel: &AtomicBool) -> R
         }
     }
     Ok(flips)
+}
+
+/// Per stream of the spool, ColorVideoVDP of its first `frames` frames as a video against the
+/// truth's (stream 0's) at `fps`, with the distortion map of its worst frame; `None` for the
+/// truth's, for a stream that holds fewer frames and for fewer than two frames. Streams whose frames equal another's (a stalled mode's and
+/// its twin's) are scored once; the streams are scored on every core, each reading its frames
+/// as it goes.
+pub(super) fn jod_along(
+    spool: &Spool,
+    frames: usize,
+    fps: f64,
+    jod: &crate::perceptual::Jod,
+    cancel: &AtomicBool,
+) -> Result<Vec<Option<Arc<VideoJod>>>, String> {
+    use std::hash::{Hash, Hasher};
+    let truth = (0..frames).map(|f| spool.frame(0, f)).collect::<Result<Vec<_>, _>>()?;
+    let complete: Vec<usize> =
+        (1..spool.streams()).filter(|&s| frames > 1 && spool.frames(s) >= frames).collect();
+    let mut first_of = std::collections::HashMap::new();
+    let mut scored_as = Vec::with_capacity(complete.len());
+    for &stream in &complete {
+        let mut hasher = std::collections::hash_map::DefaultHasher::new();
+        for frame in 0..frames {
+            spool.frame(stream, frame)?.hash(&mut hasher);
+        }
+        scored_as.push(*first_of.entry(hasher.finish()).or_insert(stream));
+    }
+    let distinct: Vec<usize> = first_of.into_values().collect();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let score = || {
+        let mut done = Vec::new();
+        while let Some(&stream) = distinct.get(next.fetch_add(1, Ordering::Relaxed)) {
+            if cancel.load(Ordering::SeqCst) {
+                break;
+            }
+            let clip = (0..frames).map(|f| spool.frame(stream, f)).collect::<Result<Vec<_>, _>>();
+            let pairs = clip.iter().flatten().map(Vec::as_slice).zip(truth.iter().map(Vec::as_slice));
+            let scored = clip.is_ok().then(|| jod.video(pairs, spool.size(), fps)).flatten();
+            done.push((stream, scored.map(Arc::new)));
+        }
+        done
+    };
+    let threads = std::thread::available_parallelism().map_or(1, usize::from);
+    let scores: std::collections::HashMap<usize, Option<Arc<VideoJod>>> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads).map(|_| scope.spawn(score)).collect();
+        workers.into_iter().flat_map(|w| w.join().expect("a JOD thread panicked")).collect()
+    });
+    if scores.len() < distinct.len() {
+        return Err(format!(
+            "interrupted: ColorVideoVDP stopped after {} of {} clips",
+            scores.len(),
+            distinct.len()
+        ));
+    }
+    let mut out = vec![None; spool.streams()];
+    for (&stream, first) in complete.iter().zip(scored_as) {
+        out[stream] = scores[&first].clone();
+    }
+    Ok(out)
+}
+
+/// Writes each scored stream's distortion map of its worst frame as `<dir>/<stream>.jod.png`
+/// (FLIP's colour scale: black where no difference shows, yellow at 10 JOD below the truth or
+/// more): per stream its path relative to `run_dir`, or why it could not be written.
+pub(super) fn write_jod_maps(
+    spool: &Spool,
+    jods: &[Option<Arc<VideoJod>>],
+    [run_dir, dir]: [&Path; 2],
+) -> Vec<Option<Result<String, String>>> {
+    jods.iter()
+        .enumerate()
+        .map(|(stream, jod)| {
+            let jod = jod.as_ref()?;
+            let path = dir.join(format!("{}.jod.png", spool.name(stream)));
+            let written = crate::images::write_png(
+                &path,
+                jod.width,
+                jod.height,
+                &crate::perceptual::magma_rgba(&jod.map),
+            );
+            Some(
+                written
+                    .map_err(|e| format!("{}: {e}", path.display()))
+                    .map(|()| path.strip_prefix(run_dir).unwrap_or(&path).to_string_lossy().into_owned()),
+            )
+        })
+        .collect()
 }
 
 #[cfg(test)]

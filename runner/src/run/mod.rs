@@ -172,6 +172,7 @@ fn empty_scene_at(manifest: &Path) -> SceneRecord {
         inputs: None,
         gate: Default::default(),
         exposure: None,
+        jod_display: None,
         truth: None,
         sequences: Vec::new(),
         modes: Vec::new(),

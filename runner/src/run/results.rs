@@ -37,7 +37,8 @@ pub(super) async fn finish_modes(
     // The truth's share of SSIM is computed once here, for all of them (a few tens of
     // milliseconds at 1024×768).
     let [width, height] = scene.resolution;
-    let truth = truth.map(|image| Arc::new(metrics::Truth::new(image, width, height)));
+    let jod = scene.jod.clone().expect("a scene that measures quality has its ColorVideoVDP");
+    let truth = truth.map(|image| Arc::new(metrics::Truth::new(image, width, height, jod)));
     let tasks: Vec<_> = modes
         .iter()
         .enumerate()

@@ -26,6 +26,13 @@ impl<'a> SceneRun<'a> {
         if let Err(error) = std::fs::create_dir_all(&self.dir) {
             return fail(record, format!("{}: {error}", self.dir.display()));
         }
+        if self.plan.quality {
+            let judged = self.plan.jod_display(self.manifest);
+            match judged.and_then(|name| Ok((crate::perceptual::Jod::new(&name)?, name))) {
+                Ok((jod, name)) => (self.jod, record.jod_display) = (Some(jod), Some(name)),
+                Err(error) => return fail(record, error),
+            }
+        }
         let (loaded, inputs) = match self.load(&mut record).await {
             Ok(loaded) => loaded,
             Err(error) => return fail(record, error),
@@ -103,6 +110,8 @@ impl<'a> SceneRun<'a> {
                 Ok(cameras) => cameras,
                 Err((field, message)) => return self.warn(&format!("no sequence: {field}: {message}")),
             };
+            let warmup =
+                motion.cameras_before(still_camera, pivot, aabench_renderer::taa::WARMUP_FRAMES, pace.rate);
             let modes = sequence::PathMode::of(&self.plan.modes, runs);
             // The first speed's animations in `path/`, the others' in `path-2/`, `path-3/`, ….
             let folder = if index == 0 { "path".into() } else { format!("path-{}", index + 1) };
@@ -110,7 +119,9 @@ impl<'a> SceneRun<'a> {
                 motion,
                 pace: *pace,
                 cameras: &cameras,
+                warmup: &warmup,
                 folder: &folder,
+                number: index + 1,
                 still_camera,
                 still_truth,
                 still_key: &still_key,

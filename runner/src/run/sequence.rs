@@ -23,7 +23,9 @@ use aabench_renderer::taa::WARMUP_FRAMES;
 use aabench_renderer::{DisplayImage, Mode};
 
 use super::context::{ModeRun, SceneRun};
-use super::measures::{ModeFrame, ModeOutcome, ModeState, TruthPair, TruthTrack, flip_along};
+use super::measures::{
+    ModeFrame, ModeOutcome, ModeState, TruthPair, TruthTrack, flip_along, jod_along, write_jod_maps,
+};
 use crate::flicker::{self, TRUTH_STREAM};
 use crate::metrics::{self, FrameChecks};
 use crate::motion::{MotionSpec, Pace, PathKind};
@@ -39,8 +41,13 @@ pub struct Along<'a> {
     pub motion: &'a MotionSpec,
     pub pace: Pace,
     pub cameras: &'a [Camera],
-    /// The folder under the scene's that holds the sequence's animations.
+    /// The cameras of the frames before the first, oldest first, along which the modes that
+    /// carry a history warm up, unmeasured.
+    pub warmup: &'a [Camera],
+    /// The folder under the scene's that holds the sequence's animations, and the sequence's
+    /// number in the scene (1 the first).
     pub folder: &'a str,
+    pub number: usize,
     pub still_camera: &'a Camera,
     pub still_truth: Option<&'a DisplayImage>,
     pub still_key: &'a str,
@@ -99,36 +106,24 @@ pub(super) async fn run(
         record.error = Some(error);
     }
     let done = record.frames_done as usize;
-    scene.status("sequence: FLIP and the worst-flickering region");
+    scene.status("sequence: FLIP, JOD and the worst-flickering region");
     // A mode that takes its twin's frames shows in its twin's animation.
-    let animated_streams: Vec<usize> =
+    let animated: Vec<usize> =
         (0..modes.len()).filter(|&i| modes[i].frames_of.is_none()).map(|i| i + 1).collect();
-    let (delay_s, run_dir) = (along.motion.time_step_s, scene.plan.run_dir.clone());
-    let cancel = Arc::clone(scene.cancel);
-    let after = tokio::task::spawn_blocking(move || {
-        let spool = spool?;
-        spool.check()?;
-        let start = Instant::now();
-        let flips = flip_along(&spool, done, &cancel)?;
-        let flip_s = start.elapsed().as_secs_f64();
-        let start = Instant::now();
-        let region =
-            flicker::region(&spool, &flicker, &animated_streams, done, delay_s, [&run_dir, &out_dir]);
-        Ok::<_, String>((flips, flip_s, region, start.elapsed().as_secs_f64()))
-    });
+    let measure = AfterRender {
+        done,
+        delay_s: along.motion.time_step_s,
+        dirs: [scene.plan.run_dir.clone(), out_dir],
+        // The first sequence's frames in `frames/1/`, the second's in `frames/2/`, ….
+        frames_dir: scene.plan.keep_frames.then(|| scene.dir.join("frames").join(along.number.to_string())),
+        jod: scene.jod.clone().expect("a scene that renders sequences measures quality"),
+        cancel: Arc::clone(scene.cancel),
+    };
+    let after = tokio::task::spawn_blocking(move || measure.run(spool?, &flicker, &animated));
     match after.await.map_err(|panic| format!("panicked: {panic}")).and_then(|after| after) {
-        Ok((flips, flip_s, region, region_s)) => {
-            for (state, flip) in states.iter_mut().zip(flips.into_iter().skip(1)) {
-                state.flip = flip;
-            }
-            (record.flip_s, record.region_s) = (flip_s, region_s);
-            match region {
-                Ok(region) => record.region = Some(region),
-                Err(error) => record.region_error = Some(error),
-            }
-        }
+        Ok(after) => after.record_into(scene, &mut record, &mut states),
         Err(error) => {
-            scene.warn(&format!("no FLIP along the path and no flicker region: {error}"));
+            scene.warn(&format!("no FLIP or JOD along the path and no flicker region: {error}"));
             record.region_error = Some(error);
         }
     }
@@ -160,10 +155,13 @@ fn empty_record(along: &Along) -> SequenceRecord {
         truth_rendered: 0,
         truth_render_s: 0.0,
         truth_change: None,
-        truth_flicker: None,
+        blank_flicker: None,
         seconds: 0.0,
         error: None,
         flip_s: 0.0,
+        jod_s: 0.0,
+        warmup_frames: 0,
+        measured_speed: None,
         region_s: 0.0,
         region: None,
         region_error: None,
@@ -192,6 +190,8 @@ async fn render_frames(
     };
     let mut track = TruthTrack::default();
     prepare_geometry(scene).await?;
+    warm_up(scene, along, modes, states).await?;
+    record.warmup_frames = along.warmup.len() as u32;
     for (frame, &camera) in along.cameras.iter().enumerate() {
         if scene.cancelled() {
             return Err(format!("interrupted after {frame} of {frames} frames"));
@@ -229,7 +229,7 @@ async fn render_frames(
                 continue;
             }
             status(scene, &mode.to_string());
-            match render(scene, index, mode.m, frame).await {
+            match render(scene, index, mode.m, frame, !mode.carries_history()).await {
                 Ok(Ok(rendered)) => {
                     keep(index + 1, &rendered.display);
                     state.add(*mode, rendered, &pair, flicker, scene.textured);
@@ -266,18 +266,131 @@ async fn set_view(scene: &mut SceneRun<'_>, camera: Camera, times: Option<(f64, 
         .map_err(|e| e.to_string())
 }
 
+/// What a sequence measures from its spool once every frame is rendered, off the worker.
+struct AfterRender {
+    done: usize,
+    delay_s: f64,
+    /// The run's folder and the sequence's (`<scene>/path/`).
+    dirs: [std::path::PathBuf; 2],
+    frames_dir: Option<std::path::PathBuf>,
+    jod: crate::perceptual::Jod,
+    cancel: Arc<std::sync::atomic::AtomicBool>,
+}
+
+/// Its results: FLIP and JOD per stream with their seconds, the distortion maps written, the
+/// worst-flickering region, and the frames kept on request.
+struct Measured {
+    flips: Vec<Vec<f64>>,
+    flip_s: f64,
+    jods: Vec<Option<Arc<crate::perceptual::VideoJod>>>,
+    maps: Vec<Option<Result<String, String>>>,
+    jod_s: f64,
+    region: Result<crate::record::FlickerRegion, String>,
+    region_s: f64,
+    kept: Option<Result<(), String>>,
+}
+
+impl AfterRender {
+    fn run(self, spool: Spool, flicker: &[f64], animated: &[usize]) -> Result<Measured, String> {
+        spool.check()?;
+        let [run_dir, out_dir] = [self.dirs[0].as_path(), self.dirs[1].as_path()];
+        let start = Instant::now();
+        let flips = flip_along(&spool, self.done, &self.cancel)?;
+        let flip_s = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let jods = jod_along(&spool, self.done, 1.0 / self.delay_s, &self.jod, &self.cancel)?;
+        let maps = write_jod_maps(&spool, &jods, [run_dir, out_dir]);
+        let jod_s = start.elapsed().as_secs_f64();
+        // Frames that cannot be written (a full disk) cost the user their copy, not the
+        // measures.
+        let kept = self.frames_dir.as_ref().map(|dir| spool.write_pngs(dir, self.done));
+        let start = Instant::now();
+        let region = flicker::region(&spool, flicker, animated, self.done, self.delay_s, [run_dir, out_dir]);
+        let region_s = start.elapsed().as_secs_f64();
+        Ok(Measured { flips, flip_s, jods, maps, jod_s, region, region_s, kept })
+    }
+}
+
+impl Measured {
+    /// Hands each mode its FLIP and JOD (stream `i + 1` is mode `i`'s) and the sequence its
+    /// seconds and region; what could not be written is a warning.
+    fn record_into(self, scene: &SceneRun, record: &mut SequenceRecord, states: &mut [ModeState]) {
+        if let Some(Err(error)) = self.kept {
+            scene.warn(&format!("--keep-frames: {error}"));
+        }
+        let per_stream = self.flips.into_iter().zip(self.jods).zip(self.maps).skip(1);
+        for (state, ((flip, jod), map)) in states.iter_mut().zip(per_stream) {
+            if let Some(Err(error)) = &map {
+                scene.warn(&format!("no JOD map: {error}"));
+            }
+            state.flip = flip;
+            state.jod = jod.as_ref().map(|j| j.jod);
+            state.jod_worst = jod.map(|j| (j.worst_frame, map.and_then(Result::ok)));
+        }
+        (record.flip_s, record.jod_s, record.region_s) = (self.flip_s, self.jod_s, self.region_s);
+        match self.region {
+            Ok(region) => record.region = Some(region),
+            Err(error) => record.region_error = Some(error),
+        }
+    }
+}
+
+/// Renders the modes that carry a history (TAA, the `-stable` modes) along the frames before
+/// the path's first, from a reset and unmeasured: their first measured frame then has a
+/// history that has been moving, as in a game, where a still's 16 frames at one camera would
+/// have converged. A mode whose warm-up fails fails the sequence.
+async fn warm_up(
+    scene: &mut SceneRun<'_>,
+    along: &Along<'_>,
+    modes: &[PathMode],
+    states: &mut [ModeState],
+) -> Result<(), String> {
+    let warming: Vec<usize> = (0..modes.len())
+        .filter(|&i| modes[i].renders() && modes[i].mode.carries_history() && states[i].error.is_none())
+        .collect();
+    let count = along.warmup.len();
+    for (k, &camera) in along.warmup.iter().enumerate().filter(|_| !warming.is_empty()) {
+        if scene.cancelled() {
+            return Err(format!("interrupted after {k} of {count} warm-up frames"));
+        }
+        let back = count - k;
+        let times =
+            along.motion.animation_time_before(back).zip(along.motion.animation_time_before(back + 1));
+        set_view(scene, camera, times).await?;
+        for &index in &warming {
+            scene.status(&format!("sequence warm-up frame {}/{count}: {}", k + 1, modes[index].mode));
+            let rendered = scene
+                .worker
+                .call(scene.plan.frame_timeout, move |state| {
+                    let prepared = state.modes[index].as_ref().expect("prepared mode");
+                    if k == 0 {
+                        prepared.reset_history();
+                    }
+                    prepared.render().map(|_| ())
+                })
+                .await
+                .map_err(|error| error.to_string())?;
+            if let Err(error) = rendered {
+                states[index].error.get_or_insert(format!("warm-up frame {}: {error}", k + 1));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Renders prepared mode `index` once at the current camera and reads back its frame `frame`;
-/// the path's first as a still, so that a temporal mode starts the path with the history of its
-/// warm-up frames at the first camera. The outer error is the worker's (it can render nothing
-/// more), the inner the mode's: a frame that shows nothing fails the mode, naming the frame,
-/// unless the scene is declared empty.
+/// the path's first from a reset where `still` (a mode without a history), else the next frame
+/// of its warmed-up history. The outer error is the worker's (it can render nothing more), the
+/// inner the mode's: a frame that shows nothing fails the mode, naming the frame, unless the
+/// scene is declared empty.
 async fn render(
     scene: &mut SceneRun<'_>,
     index: usize,
     m: u32,
     frame: usize,
+    still: bool,
 ) -> Result<Result<ModeFrame, String>, String> {
-    let (first, declared_empty) = (frame == 0, scene.manifest.empty);
+    let (first, declared_empty) = (frame == 0 && still, scene.manifest.empty);
     let frame_timeout = scene.plan.frame_timeout;
     let timeout = if first { frame_timeout.saturating_mul(WARMUP_FRAMES) } else { frame_timeout };
     let rendered = scene

@@ -1,8 +1,6 @@
 //! The run record, `reports/<run-id>/run.json`: everything a run measured, schema versioned.
 //! It is rewritten atomically after every scene, so a killed run leaves what finished.
 
-use std::collections::BTreeMap;
-
 use aabench_renderer::{DisplayImage, PlatformInfo};
 use serde::{Deserialize, Serialize};
 
@@ -15,6 +13,9 @@ use crate::plan::Tier;
 use crate::repetitions::{Confidence, Stop};
 use crate::stats::{Rounds, Summary};
 use crate::truth::TruthRecord;
+
+mod sequence;
+pub use sequence::{FlickerRegion, GhostFrame, Ghosting, ModeSequence, SequenceRecord};
 
 /// Version 2: the ground truth is an 8×8 render of its own (`truth`), scenes record their
 /// input hashes and gate tolerances, `ratio_to_deferred` is against plain deferred-1x1, and
@@ -163,6 +164,10 @@ pub struct SceneRecord {
     /// The exposure its frames rendered at, the truth's included.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub exposure: Option<ExposureRecord>,
+    /// The ColorVideoVDP display model its JOD was judged on (`display.jod_display`), where
+    /// quality was measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jod_display: Option<String>,
     /// The ground truth every mode's `vs_ground_truth` is measured against.
     pub truth: Option<TruthRecord>,
     /// The sequences along the manifest's camera path, where it has one: one per speed of the
@@ -509,165 +514,6 @@ impl FrontPlace {
             }
         }
     }
-}
-
-/// What a scene's sequence rendered (`run/sequence.rs`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SequenceRecord {
-    /// The camera path: `orbit`, `dolly`, `pan`, `static` or `keyframes`.
-    pub path: String,
-    /// A preset's rate (degrees a second, or for a dolly the share of the distance a second),
-    /// and the pixels a frame it moves the image at the tier's resolution (absent for keyframes,
-    /// the static path and runs from before).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub rate: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub pixels_per_frame: Option<f64>,
-    /// The glTF animation that played along the path (its name, or `animations[i]`), if one did.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub animation: Option<String>,
-    /// Frames asked for, and frames rendered by every mode still running (fewer when the
-    /// sequence stopped: `error` says why).
-    pub frames: u32,
-    pub frames_done: u32,
-    pub time_step_s: f64,
-    /// Truth frames rendered in this run (the others came from the cache or, frame 0, from
-    /// the still truth), and the seconds they took.
-    pub truth_rendered: u32,
-    pub truth_render_s: f64,
-    /// The truth's own mean squared frame-to-frame change: what every mode's `change_ratio`
-    /// is relative to.
-    pub truth_change: Option<f64>,
-    /// The truth's own mean squared change along its motion (`temporal.rs`): the flicker of a
-    /// steady image that shows none of the truth's moiré, the scale of the modes' `flicker`
-    /// (absent in runs from before).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub truth_flicker: Option<f64>,
-    /// Wall seconds of the whole sequence.
-    pub seconds: f64,
-    pub error: Option<String>,
-    /// Of those, the seconds spent on FLIP against the truth's frames (every mode's) and on
-    /// cutting and writing the animations of the region (absent in runs from before).
-    #[serde(default)]
-    pub flip_s: f64,
-    #[serde(default)]
-    pub region_s: f64,
-    /// Where the modes flicker most, with its animations; absent where fewer than two frames
-    /// were rendered or the frames could not be spooled (`region_error` says why).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub region: Option<FlickerRegion>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub region_error: Option<String>,
-}
-
-impl SequenceRecord {
-    /// How fast it moves: `4 px a frame`, or the path's name where it has no speed; and the
-    /// animation that plays (`static, animation crossing`).
-    pub fn speed(&self) -> String {
-        let speed = self
-            .pixels_per_frame
-            .map_or_else(|| self.path.clone(), |px| format!("{} px a frame", crate::motion::short(px)));
-        match &self.animation {
-            Some(animation) => format!("{speed}, animation {animation}"),
-            None => speed,
-        }
-    }
-}
-
-/// The square of the frame where the modes' error changes most from frame to frame
-/// (`flicker.rs`), and its animated PNGs.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FlickerRegion {
-    pub x: u32,
-    pub y: u32,
-    pub side: u32,
-    /// The consecutive frames within which it flickers most: the report's strips.
-    pub strip_first: u32,
-    pub strip_frames: u32,
-    /// Per stream (`truth` and the animated modes' ids), its animation of the region relative to
-    /// the run folder: every frame forwards, then back, at the path's time step.
-    pub animations: BTreeMap<String, String>,
-}
-
-/// One mode's sequence against the truth's.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ModeSequence {
-    /// Per frame, against the truth's frame: MSE and PSNR on display code values in [0, 1].
-    pub mse: Vec<f64>,
-    pub psnr_db: Vec<Decibels>,
-    /// The PSNR of the frames' mean MSE.
-    pub mean_psnr_db: Decibels,
-    /// Per frame, mean FLIP against the truth's frame, and its mean over the frames (absent in
-    /// runs from before).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub flip: Vec<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mean_flip: Option<f64>,
-    /// Mean squared change of the error image along the truth's motion, over the pixels seen
-    /// in both frames of each pair (`temporal.rs`): what lag and blur cannot pass. Absent in
-    /// runs from before.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub flicker: Option<f64>,
-    /// Mean squared frame-to-frame change of the error image without motion compensation
-    /// (`run/sequence.rs`); 0 where the mode changes exactly as the truth does. It rewards lag
-    /// and blur: kept for the gate, not for ranking.
-    pub instability: f64,
-    /// The mode's own mean squared frame-to-frame change over the truth's (absent where the
-    /// truth does not change).
-    pub change_ratio: Option<f64>,
-    /// Modes with a sample-count map (adaptive, msaa-4x): the share of pixels whose sample count
-    /// changes from one frame to the next, averaged over the frame pairs.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub count_changes: Option<f64>,
-    /// Modes with a sample-count map: the share of samples shaded (as the still's
-    /// `shaded_percent`), averaged over the frames: what the mode costs in motion.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub shaded_percent: Option<f64>,
-    /// The time of every frame after the first (which renders as a still), in ms, each frame
-    /// rendered once with the modes in turn: single samples, noisier than the still's median,
-    /// but the only time taken in motion, where a `-stable` mode's counts differ from its
-    /// still's.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub frame_ms: Option<Summary>,
-    /// The mode whose frames these are, where this one rendered no path of its own: a stalled
-    /// mode whose still is its unstalled twin's to the bit (the stall changes the time, not the
-    /// image). Such a sequence has no `frame_ms`; absent otherwise.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub frames_of: Option<String>,
-    /// What lag costs: the error where the frame before did not see the surface, at moving
-    /// silhouettes and elsewhere, by the truth's motion (`temporal.rs`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub ghosting: Option<Ghosting>,
-    /// FNV-1a 64 of each frame's display image and sample counts, as `output_hash`.
-    pub hashes: Vec<String>,
-}
-
-/// A mode's error where lag shows, over the frame pairs of a sequence: on the pixels whose
-/// surface point lay off screen or hidden behind another surface in the frame before
-/// (disoccluded), on those at or beside a silhouette that moved, and on the others.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Ghosting {
-    /// The share of pixels disoccluded, averaged over the frame pairs.
-    pub disoccluded: f64,
-    /// The mode's MSE against the truth on those pixels (display code values in [0, 1]);
-    /// absent where no pixel was disoccluded.
-    pub mse: Option<f64>,
-    /// The same at moving silhouettes, absent where none moved (absent in runs from before).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mse_edges: Option<f64>,
-    /// The same everywhere else, for scale.
-    pub mse_elsewhere: Option<f64>,
-    /// Frame by frame from the second (each against the frame before): the trail a moving
-    /// object leaves grows and shrinks as it crosses (empty in runs from before).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub per_frame: Vec<GhostFrame>,
-}
-
-/// One frame's disoccluded share and the mode's MSE on those pixels (absent where none was).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct GhostFrame {
-    pub disoccluded: f64,
-    pub mse: Option<f64>,
 }
 
 /// A list, or (in runs from before) one value or nothing in its place.

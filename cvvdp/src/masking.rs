@@ -76,8 +76,8 @@ impl PhaseBlur {
             return plane.clone();
         }
         let rows = self.along_rows(plane);
-        let columns = self.along_rows(&transpose(&rows));
-        transpose(&columns)
+        let columns = self.along_rows(&rows.transposed());
+        columns.transposed()
     }
 
     fn along_rows(&self, plane: &Plane) -> Plane {
@@ -113,16 +113,6 @@ impl PhaseBlur {
         }
         out
     }
-}
-
-fn transpose(plane: &Plane) -> Plane {
-    let mut out = Plane::zeros(plane.height, plane.width);
-    for y in 0..plane.height {
-        for x in 0..plane.width {
-            out.data[x * plane.height + y] = plane.data[y * plane.width + x];
-        }
-    }
-    out
 }
 
 /// What the masking model needs beside the band.

@@ -26,7 +26,7 @@ impl Plane {
     }
 
     /// The plane transposed, so that a filter along columns can run along rows.
-    fn transposed(&self) -> Plane {
+    pub(crate) fn transposed(&self) -> Plane {
         let mut out = Plane::zeros(self.height, self.width);
         for y in 0..self.height {
             for x in 0..self.width {

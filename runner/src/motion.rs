@@ -500,6 +500,16 @@ mod tests {
         let px = default[0].pixels_per_frame.unwrap();
         assert!((px - 0.135).abs() < 0.01, "{px}");
         assert_eq!(Pace { rate: 1.0, pixels_per_frame: Some(0.5) }.label().unwrap(), "0.5 px a frame");
+        // A pan of 90° or 180° a frame moves nothing tan ω can say (10¹⁷ px, or 0): no nominal
+        // speed; one just under half the field still has its own.
+        // (360° a second, frames 0.25 s and 0.5 s apart.)
+        for step in [0.25, 0.5] {
+            let fast = spec(&format!(r#"{{"path": "pan", "rate": 360, "time_step_s": {step}}}"#));
+            assert_eq!(fast.paces(None, base().fov_y, height)[0].pixels_per_frame, None, "{step} s");
+        }
+        // 18° a frame, under the 45° field's half.
+        let brisk = spec(r#"{"path": "pan", "rate": 360, "time_step_s": 0.05}"#);
+        assert!(brisk.paces(None, base().fov_y, height)[0].pixels_per_frame.unwrap() > 50.0);
     }
 
     #[test]

@@ -78,9 +78,10 @@ impl Jod {
 
     /// The JOD of `image` against `truth`, both `width` × `height`.
     pub fn image(&self, image: &DisplayImage, truth: &DisplayImage, width: u32, height: u32) -> f64 {
-        let (test, reference) = (code_values(image), code_values(truth));
-        let frame = |rgb| aabench_cvvdp::Frame { width: width as usize, height: height as usize, rgb };
-        self.metric.image(frame(&test), frame(&reference)).map_or(f64::NAN, |score| score.jod)
+        let max = f32::from(image.max_code());
+        let (test, reference) = (code_values(&image.rgba, max), code_values(&truth.rgba, max));
+        let size = [width, height];
+        self.metric.image(frame(&test, size), frame(&reference, size)).map_or(f64::NAN, |score| score.jod)
     }
 
     /// The JOD of RGBA8 frames against the truth's, shown at `fps` frames a second, and the
@@ -94,9 +95,8 @@ impl Jod {
     ) -> Option<VideoJod> {
         let mut video = self.metric.video(width as usize, height as usize, fps).ok()?.with_worst_map();
         for (image, truth) in frames {
-            let (test, reference) = (rgba8_code_values(image), rgba8_code_values(truth));
-            let frame = |rgb| aabench_cvvdp::Frame { width: width as usize, height: height as usize, rgb };
-            video.push(frame(&test), frame(&reference)).ok()?;
+            let (test, reference) = (code_values(image, 255.0), code_values(truth, 255.0));
+            video.push(frame(&test, [width, height]), frame(&reference, [width, height])).ok()?;
         }
         let score = video.finish().ok()?;
         let worst = score.worst.expect("a map was asked for");
@@ -116,14 +116,13 @@ pub struct VideoJod {
     pub height: u32,
 }
 
-/// A display image's RGB code values in [0, 1].
-fn code_values(image: &DisplayImage) -> Vec<f32> {
-    let max = f32::from(image.max_code());
-    image.rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(|v| f32::from(v) / max)).collect()
+fn frame(rgb: &[f32], [width, height]: [u32; 2]) -> aabench_cvvdp::Frame<'_> {
+    aabench_cvvdp::Frame { width: width as usize, height: height as usize, rgb }
 }
 
-fn rgba8_code_values(rgba: &[u8]) -> Vec<f32> {
-    rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(|v| f32::from(v) / 255.0)).collect()
+/// The RGB of RGBA code values (8- or 10-bit, `max` the largest) as values in [0, 1].
+fn code_values<T: Copy + Into<f32>>(rgba: &[T], max: f32) -> Vec<f32> {
+    rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]].map(|v| v.into() / max)).collect()
 }
 
 /// SSIM's window: a Gaussian of σ 1.5 truncated at 3.5σ, 11 taps.

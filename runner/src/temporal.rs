@@ -489,6 +489,34 @@ mod tests {
     }
 
     #[test]
+    fn the_measured_speed_is_the_covered_pixels_and_an_empty_frame_has_none() {
+        let (w, h) = (10, 10);
+        // Half the frame: an object moving 3 px right and 4 down (5 px); the other half: the
+        // background, without geometry, turning 40 px a frame. Only the object counts.
+        let mut geometry = flat(w, h, 5.0, [3.0, 4.0]);
+        for i in 0..w * h / 2 {
+            (geometry.depth[i], geometry.motion[i]) = (f64::INFINITY, [40.0, 0.0]);
+        }
+        // A slower object in one row of the covered half: 1 px.
+        for i in w * h / 2..w * h / 2 + w {
+            geometry.motion[i] = [1.0, 0.0];
+        }
+        let mut speeds = Speeds::default();
+        speeds.add(&geometry);
+        let measured = speeds.measured().unwrap();
+        assert!((measured.median - 5.0).abs() <= 1.0 / 64.0, "{measured:?}");
+        assert!((measured.p90 - 5.0).abs() <= 1.0 / 64.0 && measured.max == 5.0, "{measured:?}");
+        // Against the same frame with the slow row alone moving: 10 of 50 pixels at 1 px.
+        let still = flat(w, h, 5.0, [0.0, 0.0]);
+        assert_eq!(Speeds::default().measured(), None, "nothing added");
+        let mut empty = Speeds::default();
+        empty.add(&Geometry { depth: vec![f64::INFINITY; w * h], ..still.clone() });
+        assert_eq!(empty.measured(), None, "an empty frame has no covered pixel");
+        speeds.add(&still);
+        assert!(speeds.measured().unwrap().median < 0.05, "now most covered pixels stood still");
+    }
+
+    #[test]
     fn an_error_that_moves_with_the_surface_does_not_flicker_and_one_that_stays_does() {
         let (w, h) = (12, 6);
         // The scene moves 2 pixels right; the truth is a ramp that moves with it.

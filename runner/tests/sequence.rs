@@ -315,10 +315,30 @@ fn stable_counts_flicker_less_than_the_papers_on_a_moving_thin_scene_for_the_sam
     // At the quick tier's size: at 128×96 most of thin's detail is finer than a pixel wherever
     // it lies, and the counts have less to keep.
     let ws = moving_thin("stable-thin", [256, 192]);
-    let output = ws.run(&["run", "--modes", "adaptive-4x4,adaptive-4x4-stable", "--repetitions", "1"]);
+    let output = ws.run(&[
+        "run",
+        "--modes",
+        "adaptive-4x4,adaptive-4x4-stable",
+        "--repetitions",
+        "1",
+        "--keep-frames",
+    ]);
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
     let scene = &ws.record()["scenes"][0];
     let (paper, stable) = (sequence(scene, "adaptive-4x4", 8), sequence(scene, "adaptive-4x4-stable", 8));
+    // --keep-frames: every measured frame of each stream, display-encoded, as the metrics read
+    // them, in the scene's folder.
+    let frames = ws.run_dir().join("thin/frames/1");
+    for stream in ["truth", "adaptive-4x4", "adaptive-4x4-stable"] {
+        let kept: Vec<_> =
+            std::fs::read_dir(frames.join(stream)).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(kept.len(), 8, "{stream}: {kept:?}");
+        let last = image::open(frames.join(stream).join("007.png")).unwrap();
+        assert_eq!((last.width(), last.height()), (256, 192), "{stream}");
+    }
+    let last = image::open(frames.join("adaptive-4x4-stable/007.png")).unwrap().to_rgba8();
+    let shown = image::open(frames.join("adaptive-4x4/007.png")).unwrap().to_rgba8();
+    assert_ne!(last.as_raw(), shown.as_raw(), "the two modes' last frames differ, as their hashes do");
     let number = |s: &Value, key: &str| s[key].as_f64().unwrap_or_else(|| panic!("{key}: {s}"));
     // The still is the paper's; along the path the counts follow the frames before, from the
     // first measured frame on (the warm-up frames before it moved already).

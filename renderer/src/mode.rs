@@ -154,14 +154,13 @@ impl Mode {
 
 impl fmt::Display for Mode {
     fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        if let Technique::Adaptive(metrics, reconstruction, counts) = self.technique {
+            let variant = adaptive::Variant { metrics, reconstruction, counts };
+            return f.write_str(&adaptive::mode_id(variant, self.m, self.stalled));
+        }
         match self.technique.fixed_id() {
             Some(id) => f.write_str(id)?,
             None => write!(f, "{}-{m}x{m}", self.technique.name(), m = self.m)?,
-        }
-        if let Technique::Adaptive(metrics, reconstruction, counts) = self.technique {
-            for word in adaptive::id_suffixes(metrics, reconstruction, counts) {
-                write!(f, "-{word}")?;
-            }
         }
         if self.stalled {
             f.write_str("-stalled")?;

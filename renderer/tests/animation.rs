@@ -4,7 +4,8 @@
 //! A translation, a rotation and a scale track of the test triangle pose its vertices where the
 //! keyframes say, through a parent node too. Broken animation data (an unknown channel path or
 //! interpolation, samplers whose lengths disagree, NaN keyframes, times that do not increase,
-//! morph weights, outputs in formats glTF forbids, indices past the file's lists, a scale that
+//! morph weights, outputs in formats glTF forbids, indices past the file's lists, two channels of
+//! one node's property, a scale that
 //! turns a node inside out, a node flattened at rest) costs the file nothing: it loads, and the animation says what is
 //! wrong, naming itself and the part at fault. On lavapipe, the `crossing` scene's crate moves,
 //! and the geometry probe's motion vectors on it are its projected motion to a fiftieth of a
@@ -163,6 +164,15 @@ fn broken_animations_cost_the_file_nothing_and_say_what_is_wrong() {
             slide(&[0.0, 1.0], &two),
             |d| d["accessors"][2]["componentType"] = json!(5123),
             "not a format glTF allows",
+        ),
+        (
+            "doubled.gltf",
+            slide(&[0.0, 1.0], &two),
+            |d| {
+                let channel = d["animations"][0]["channels"][0].clone();
+                d["animations"][0]["channels"].as_array_mut().unwrap().push(channel);
+            },
+            "channels[0] and channels[1] both animate the translation of nodes[1], which glTF forbids",
         ),
     ];
     for (name, channel, edit, expected) in cases {

@@ -526,7 +526,7 @@ fn markdown_report(runs: &[PathBuf], figures: Option<&Path>) -> u8 {
             Err(message) => return fail(message),
         }
     }
-    say!("{}", aabench::report::markdown::document(&record).trim_end());
+    say!("{}", aabench::report::markdown::document(&dir, &record).trim_end());
     exit::OK
 }
 

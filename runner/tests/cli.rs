@@ -4,7 +4,8 @@
 //! frame's NaN, Inf and sample-count checks. A broken manifest fails alone with exit 3; no
 //! Vulkan adapter exits 2 with one line naming `mesa-vulkan-drivers`; bad arguments exit 2
 //! before any work; `gen-scenes` regenerates only stale files; Ctrl-C (a real SIGINT) keeps
-//! what was measured and `kill -9` leaves the scenes that finished.
+//! what was measured (a signal while a path's FLIP and JOD are measured leaves its scene
+//! `interrupted`, not `ok`) and `kill -9` leaves the scenes that finished.
 
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -378,6 +379,35 @@ fn ctrl_c_stops_after_the_current_frame_and_keeps_what_was_measured() {
     let frames = m["frame_ms"]["samples"].as_array().unwrap().len();
     assert!((1..10000).contains(&frames), "{frames} frames");
     assert!(ws.run_dir().join(m["images"]["display"].as_str().unwrap()).exists(), "{m}");
+}
+
+#[test]
+fn ctrl_c_while_the_path_is_measured_leaves_the_scene_interrupted_not_ok() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("interrupt-measures");
+    ws.manifest("edge", "edge", |m| {
+        m["resolution"]["quick"] = json!([384, 288]);
+        m["motion"] = json!({"path": "pan", "rate": 3.0, "frames": {"quick": 16, "nightly": 16}});
+    });
+    let modes = "deferred-1x1,fxaa,smaa,reference-2x2";
+    let mut child =
+        ws.command(&["run", "--modes", modes, "--repetitions", "1"]).stderr(Stdio::piped()).spawn().unwrap();
+    // The frames are rendered; FLIP and JOD along the path take seconds at this size.
+    wait_for_line(&stderr_lines(&mut child), "sequence: FLIP, JOD");
+    let sent = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(sent.success());
+    assert_eq!(child.wait().unwrap().code(), Some(130));
+
+    let record = ws.record();
+    assert_eq!(record["status"], "interrupted");
+    let scene = &record["scenes"][0];
+    assert_eq!(scene["status"], "interrupted", "a path without FLIP and JOD is no measurement: {scene}");
+    let error = scene["error"].as_str().unwrap();
+    assert!(error.starts_with("sequence (") && error.contains("interrupted: "), "{error}");
+    assert!(!error.contains("stopped after"), "every frame was rendered: {error}");
+    // What was measured is kept: the still's and the path's frames.
+    assert_eq!(mode(scene, "reference-2x2")["status"], "ok");
+    assert_eq!(scene["sequences"][0]["frames_done"], 16);
 }
 
 #[test]

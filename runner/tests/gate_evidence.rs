@@ -430,6 +430,11 @@ fn time_is_gated_against_the_base_build_process_by_process() {
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stdout));
     let few = outcomes(&verdict, "relative_time", "base");
     assert!(few.iter().all(|(_, o)| *o == "insufficient"), "{few:?}");
+    // And the headline says that no time was gated, not that time passed.
+    let summary = std::fs::read_to_string(ws.dir.join("gate-few").join("summary.md")).unwrap();
+    let headline = summary.lines().next().unwrap();
+    assert!(headline.ends_with("— time not gated"), "no time check could decide: {headline}");
+    assert!(summary.contains("but no time check had the evidence to decide"), "{summary}");
 }
 
 /// A quarter more time in one pass of adaptive-2x2 that is under a third of its frame moves the

@@ -137,6 +137,11 @@ fn a_sharded_gate_joins_its_shards_verdicts_and_refuses_joins_that_do_not_belong
         assert_eq!(verdict["shard"]["index"], index);
         assert_eq!(verdict["shard"]["scenes"], scenes);
         assert_eq!(verdict["shard"]["baseline_scenes"], json!(["a-edge", "b-plane", "c-thin"]));
+        let blessed = verdict["shard"]["baselines_blessed"].as_array().unwrap();
+        assert!(
+            blessed.len() == 3 && blessed[0].as_str().unwrap().starts_with("a-edge: blessed "),
+            "{blessed:?}"
+        );
     }
 
     let join = |dirs: &[&str], out: &str| {
@@ -174,6 +179,11 @@ fn a_sharded_gate_joins_its_shards_verdicts_and_refuses_joins_that_do_not_belong
     refused(&["verdicts/shard-1", "verdicts/shard-1"], "given twice");
     doctored(&ws, "verdicts/shard-2", "rebuilt", |v| v["build"] = json!("0123456789abcdef"));
     refused(&["verdicts/shard-1", "rebuilt"], "its build differs");
+    // Shards compared against other baselines (another folder, or the folder blessed again).
+    doctored(&ws, "verdicts/shard-2", "reblessed", |v| {
+        v["shard"]["baselines_blessed"][1] = json!("b-plane: blessed 2026-01-01T00:00:00Z from another-run");
+    });
+    refused(&["verdicts/shard-1", "reblessed"], "its baselines' blessing (another folder");
     doctored(&ws, "verdicts/shard-2", "unsharded", |v| v["shard"] = Value::Null);
     refused(&["verdicts/shard-1", "unsharded"], "not the verdict of a shard");
 

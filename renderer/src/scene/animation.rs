@@ -43,6 +43,17 @@ pub enum Property {
     Scale,
 }
 
+impl Property {
+    /// Its glTF name: `translation`, `rotation` or `scale`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Property::Translation => "translation",
+            Property::Rotation => "rotation",
+            Property::Scale => "scale",
+        }
+    }
+}
+
 /// How a track's values run between keyframes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Interpolation {

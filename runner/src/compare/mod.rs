@@ -190,6 +190,11 @@ fn shard_scope(run: &RunRecord, baselines: &BaselineSet) -> Option<ShardScope> {
         count: shard.count,
         scenes: run.scenes.iter().map(|s| s.name.clone()).collect(),
         baseline_scenes: baselines.baselines.iter().map(|b| b.scene.clone()).collect(),
+        baselines_blessed: baselines
+            .baselines
+            .iter()
+            .map(|b| format!("{}: blessed {} from {}", b.scene, b.blessed.at, b.blessed.run_ids.join(", ")))
+            .collect(),
     })
 }
 

@@ -5,7 +5,7 @@
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
-use super::verdict::{Against, Check, FailOn, Outcome, Verdict};
+use super::verdict::{Against, Check, FailOn, Outcome, Verdict, is_time_metric};
 use crate::markup::escape as xml;
 
 /// Writes summary.md, junit.xml, verdict.json and, when it names scenes, to-confirm.txt into
@@ -88,15 +88,25 @@ pub fn summary(verdict: &Verdict) -> String {
     out
 }
 
-/// What was compared with what, and what time was gated against.
-/// Whether time was gated at all: against base runs, against the baselines on the machine that
-/// blessed them, or everywhere (`--fail-on all`).
+/// Whether time was gated at all: its rule gates it (against base runs, against the baselines
+/// on the machine that blessed them, or everywhere with `--fail-on all`) and a gated time check
+/// had the evidence to decide.
 fn time_gated(verdict: &Verdict) -> bool {
+    gated_by_rule(verdict) && time_decided(verdict)
+}
+
+fn gated_by_rule(verdict: &Verdict) -> bool {
     match verdict.fail_on {
         FailOn::Quality => false,
         FailOn::All => true,
         _ => !verdict.base_run_ids.is_empty() || verdict.same_machine,
     }
+}
+
+/// Whether a gated time check reached an outcome that could have failed the gate: a gate whose
+/// time checks are all `insufficient` (too few processes or frames) gated no time.
+fn time_decided(verdict: &Verdict) -> bool {
+    verdict.checks.iter().any(|c| c.gated && is_time_metric(&c.metric) && c.outcome != Outcome::Insufficient)
 }
 
 fn provenance(out: &mut String, verdict: &Verdict) {
@@ -123,6 +133,11 @@ fn provenance(out: &mut String, verdict: &Verdict) {
         "the baselines (this is the machine that blessed them)".to_string()
     } else {
         "nothing: no base build was measured, and the baselines were blessed on another machine".to_string()
+    };
+    let time = if gated_by_rule(verdict) && !time_decided(verdict) {
+        format!("nothing in the end: {time}, but no time check had the evidence to decide (see Insufficient)")
+    } else {
+        time
     };
     let _ = writeln!(out, "Time is gated against {time}.\n");
     if let Some(scope) = &verdict.shard {

@@ -3,7 +3,7 @@
 //! against the baselines of those scenes); the joined verdict holds every shard's checks and
 //! notes, fails where any shard failed, and fails a baseline scene that no shard compared.
 //! Shards that do not belong together (missing, given twice, of another count, build, base,
-//! tier or platform) join into nothing.
+//! tier, platform or baselines) join into nothing.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -87,6 +87,10 @@ fn scopes(shards: &[(Verdict, PathBuf)]) -> Result<Vec<&ShardScope>, String> {
                 verdict.fail_on == first.fail_on && verdict.lenient == first.lenient,
             ),
             ("list of baseline scenes", scope.baseline_scenes == scope_of(&shards[0])?.baseline_scenes),
+            (
+                "baselines' blessing (another folder, or the folder blessed again)",
+                scope.baselines_blessed == scope_of(&shards[0])?.baselines_blessed,
+            ),
         ] {
             if !same {
                 return Err(differs(what));

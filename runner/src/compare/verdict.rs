@@ -238,4 +238,8 @@ pub struct ShardScope {
     pub scenes: Vec<String>,
     /// Every scene the baselines of the tier hold, the other shards' included.
     pub baseline_scenes: Vec<String>,
+    /// Per baseline, its scene and when and from which runs it was blessed: which baselines
+    /// these are, wherever their folder lies (absent in verdicts from before).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub baselines_blessed: Vec<String>,
 }

@@ -21,7 +21,7 @@ pub enum DynamicRange {
 pub struct TonemapSpec {
     /// A linear scale before tonemapping; omitted, the run meters it per scene (automatic
     /// exposure: `SceneRenderer::meter_exposure`).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "super::narrow::option")]
     pub exposure: Option<f32>,
     pub mid_in: Option<f64>,
     pub mid_out: Option<f64>,

@@ -3,6 +3,7 @@
 //! The sections of the scene itself are in `sections.rs`, the colour sections in `display.rs`.
 
 mod display;
+mod narrow;
 mod sections;
 
 pub use display::{
@@ -69,9 +70,9 @@ pub struct Manifest {
     pub file_lights: FileLights,
     /// When given, every point light of the file casts a shadow with these settings.
     pub file_light_shadows: Option<ShadowSpec>,
-    #[serde(default = "default_ambient")]
+    #[serde(default = "default_ambient", deserialize_with = "narrow::triple")]
     pub ambient: [f32; 3],
-    #[serde(default = "default_background")]
+    #[serde(default = "default_background", deserialize_with = "narrow::triple")]
     pub background: [f32; 3],
     #[serde(default = "default_stall")]
     pub stall_iterations: u32,

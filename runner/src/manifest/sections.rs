@@ -135,9 +135,11 @@ fn default_near() -> f64 {
 pub struct LightSpec {
     /// In the file's coordinates (f64: a scene placed far out keeps its lights where they are).
     pub position: [f64; 3],
-    #[serde(default = "white")]
+    #[serde(default = "white", deserialize_with = "super::narrow::triple")]
     pub color: [f32; 3],
+    #[serde(deserialize_with = "super::narrow::f32")]
     pub intensity: f32,
+    #[serde(deserialize_with = "super::narrow::f32")]
     pub range: f32,
     #[serde(default)]
     pub casts_shadows: bool,
@@ -168,7 +170,9 @@ impl LightSpec {
 #[serde(deny_unknown_fields)]
 pub struct ShadowSpec {
     pub resolution: Option<u32>,
+    #[serde(default, deserialize_with = "super::narrow::option")]
     pub bias: Option<f32>,
+    #[serde(default, deserialize_with = "super::narrow::option")]
     pub radius: Option<f32>,
 }
 
@@ -251,15 +255,23 @@ pub struct AdaptiveSpec {
     /// `relative` (the default: unit-free) or `world` (the paper's literal units²).
     pub depth_metric: Option<DepthMetricSpec>,
     /// Omitted: the default of the depth metric in use.
+    #[serde(default, deserialize_with = "super::narrow::option")]
     pub c_depth: Option<f32>,
+    #[serde(default, deserialize_with = "super::narrow::option")]
     pub c_normal: Option<f32>,
+    #[serde(default, deserialize_with = "super::narrow::option")]
     pub c_shading: Option<f32>,
+    #[serde(default, deserialize_with = "super::narrow::option")]
     pub c_shadow: Option<f32>,
+    #[serde(default, deserialize_with = "super::narrow::option")]
     pub t_min: Option<f32>,
+    #[serde(default, deserialize_with = "super::narrow::option")]
     pub t_edge: Option<f32>,
     /// `-stable` modes: the share of the window the metric may ask for fewer without the count
     /// falling, and the most a count falls in a frame, as a share of itself.
+    #[serde(default, deserialize_with = "super::narrow::option")]
     pub stable_hold: Option<f32>,
+    #[serde(default, deserialize_with = "super::narrow::option")]
     pub stable_decay: Option<f32>,
 }
 

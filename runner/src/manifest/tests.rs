@@ -118,6 +118,12 @@ fn malformed_manifests_name_the_file_and_the_field() {
     // Huge numbers are quoted in scientific notation, not as hundreds of digits.
     check(|j| j["adaptive"] = json!({"c_depth": 3e38}), "adaptive.c_depth", "3e38 must be within");
     check(|j| j["motion"] = json!({"rate": 1e308}), "motion.rate", "1e308 must be finite");
+    // A number past f32's range is quoted as written, not as the infinity it would round to.
+    let past = "is past the largest number this setting holds (a 32-bit float: ±3.4e38)";
+    check(|j| j["lights"][0]["intensity"] = json!(1e39), "lights[0].intensity", &format!("1e39 {past}"));
+    check(|j| j["tonemap"] = json!({"exposure": 1e300}), "tonemap.exposure", &format!("1e300 {past}"));
+    check(|j| j["ambient"] = json!([0, -4e38, 0]), "ambient", &format!("-4e38 {past}"));
+    check(|j| j["adaptive"] = json!({"stable_decay": 1e39}), "adaptive.stable_decay", "1e39 is past");
     check(
         |j| j["motion"] = json!({"path": "static", "animation": {"name": "a", "start_s": 1e300}}),
         "motion.animation.start_s",

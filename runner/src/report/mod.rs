@@ -1,9 +1,11 @@
 //! `aabench report`: a static, self-contained `index.html` beside a run's run.json. It opens
 //! from disk with no server and loads nothing from the network: CSS inline, plots as inline
 //! SVG (drawn with plotters), images by relative paths into the run folder. The page is built
-//! here from its tables (`tables.rs`, and which technique for each scene in `choice.rs`), plots (`points.rs`, `plots.rs`), images (`images.rs`)
-//! and history (`history.rs`); `markdown.rs` writes the same tables as Markdown.
+//! here from its tables (`tables.rs`, and which technique for each scene in `choice.rs`), plots
+//! (`points.rs`, `plots.rs`), images (`images.rs`), what a viewer sees against squared error
+//! (`agreement.rs`) and history (`history.rs`); `markdown.rs` writes the same tables as Markdown.
 
+mod agreement;
 mod choice;
 mod history;
 pub mod html;
@@ -209,6 +211,7 @@ fn scene_section(
     tables::verdict_table(page, &checks);
     images::images(page, run_dir, scene, left_out)?;
     images::flicker_region(page, run_dir, scene, left_out)?;
+    agreement::section(page, run_dir, scene, left_out)?;
     images::jod_maps(page, scene);
     history::history_plots(page, scene, history)?;
     page.push_str("</section>\n");

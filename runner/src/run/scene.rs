@@ -341,13 +341,17 @@ fn conclude(mut record: SceneRecord, worker_stuck: bool, interrupted: bool) -> S
         record.error = Some("the GPU worker stopped; see the failed mode".into());
     } else if let Some(stopped) = record.sequences.iter().find(|s| s.error.is_some()) {
         // Means over the frames a stopped sequence reached are no measurement of its path.
-        record.error = Some(format!(
-            "sequence ({}): stopped after {} of {} frames: {}",
-            stopped.speed(),
-            stopped.frames_done,
-            stopped.frames,
-            stopped.error.as_deref().unwrap_or_default()
-        ));
+        let error = stopped.error.as_deref().unwrap_or_default();
+        record.error = Some(if stopped.frames_done < stopped.frames {
+            format!(
+                "sequence ({}): stopped after {} of {} frames: {error}",
+                stopped.speed(),
+                stopped.frames_done,
+                stopped.frames
+            )
+        } else {
+            format!("sequence ({}): {error}", stopped.speed())
+        });
     }
     record.status = if record.error.is_none() && record.modes.iter().all(|m| m.status == Status::Ok) {
         Status::Ok

@@ -124,6 +124,11 @@ pub(super) async fn run(
         Ok(after) => after.record_into(scene, &mut record, &mut states),
         Err(error) => {
             scene.warn(&format!("no FLIP or JOD along the path and no flicker region: {error}"));
+            // A signal stopped the measures: without FLIP and JOD the path is not measured, and
+            // the scene says it was interrupted rather than ok.
+            if scene.cancelled() {
+                record.error = Some(error.clone());
+            }
             record.region_error = Some(error);
         }
     }

@@ -92,6 +92,18 @@ fn read_tracks(
     if tracks.is_empty() {
         return Err("no channels".into());
     }
+    // glTF forbids it: which of the two would set the property is left undefined.
+    for (second, track) in tracks.iter().enumerate() {
+        if let Some(first) =
+            tracks[..second].iter().position(|t| (t.node, t.property) == (track.node, track.property))
+        {
+            return Err(format!(
+                "channels[{first}] and channels[{second}] both animate the {} of nodes[{}], which glTF forbids",
+                track.property.name(),
+                track.node
+            ));
+        }
+    }
     if let Some(node) = rig.singular_mover(&tracks) {
         return Err(format!(
             "moves nodes[{node}], whose transform at rest flattens its vertices (a scale of zero), so \

@@ -78,6 +78,16 @@ pub fn id_suffixes(metrics: Metrics, reconstruction: Reconstruction, counts: Cou
     [metrics, reconstruction, counts].into_iter().flatten().collect()
 }
 
+/// An adaptive mode's id, the one [`crate::Mode`] writes: `adaptive-4x4-cells-stalled`.
+pub(crate) fn mode_id(variant: Variant, m: u32, stalled: bool) -> String {
+    let Variant { metrics, reconstruction, counts } = variant;
+    let words = id_suffixes(metrics, reconstruction, counts).into_iter().chain(stalled.then_some("stalled"));
+    std::iter::once(format!("adaptive-{m}x{m}"))
+        .chain(words.map(str::to_string))
+        .collect::<Vec<_>>()
+        .join("-")
+}
+
 /// The choices that the words after an adaptive mode id's size name ([`id_suffixes`] read
 /// back), or why they name none.
 pub fn parse_suffixes(words: &[&str]) -> Result<(Metrics, Reconstruction, Counts), &'static str> {
@@ -155,7 +165,8 @@ pub(crate) fn add(frame: &mut Frame, variant: Variant, m: u32, stalled: bool) ->
             Extra::Loop { stalled, shadows: cubes }
         }
         ExtraSamples::Loop | ExtraSamples::Compact => {
-            Extra::List(List::new(m, frame.width, frame.height, frame.limits)?)
+            let id = mode_id(variant, m, stalled);
+            Extra::List(List::new(&id, m, [frame.width, frame.height], frame.limits)?)
         }
     };
     let list = match extra {

@@ -78,7 +78,14 @@ pub(crate) struct List {
 }
 
 impl List {
-    pub fn new(m: u32, width: u32, height: u32, limits: &wgpu::Limits) -> Result<List, RenderError> {
+    /// The list of mode `mode` (its id, for errors) at M = `m` and `[width, height]`, or why
+    /// this device cannot hold it.
+    pub fn new(
+        mode: &str,
+        m: u32,
+        [width, height]: [u32; 2],
+        limits: &wgpu::Limits,
+    ) -> Result<List, RenderError> {
         let largest_side = 1u32 << LIST_TEXEL_BITS;
         let side = width.max(height).max(1);
         if u64::from(m) * u64::from(side) > u64::from(largest_side) {
@@ -86,7 +93,7 @@ impl List {
             let largest =
                 if fits >= 2 { format!("the largest M that fits is {fits}") } else { "no M fits".into() };
             return Err(RenderError::Limit(format!(
-                "adaptive-{m}x{m} at {width}×{height}: list entries address G-buffer sides up to \
+                "{mode} at {width}×{height}: list entries address G-buffer sides up to \
                  {largest_side} texels, so {largest}"
             )));
         }
@@ -97,7 +104,7 @@ impl List {
         let max_binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
         if compact_height > u64::from(limits.max_texture_dimension_2d) || entries_bytes > max_binding {
             return Err(RenderError::Limit(format!(
-                "adaptive-{m}x{m} at {width}×{height} lists up to {capacity} samples ({entries_bytes} bytes), \
+                "{mode} at {width}×{height} lists up to {capacity} samples ({entries_bytes} bytes), \
                  more than this device holds in one buffer ({max_binding} bytes) or target; lower the resolution"
             )));
         }
@@ -451,11 +458,17 @@ mod tests {
             max_buffer_size: u64::MAX,
             ..wgpu::Limits::default()
         };
-        assert!(List::new(4, 4096, 16, &limits).is_ok());
-        assert!(List::new(2, 16, 8192, &limits).is_ok());
-        let error = List::new(4, 4097, 16, &limits).unwrap_err().to_string();
+        assert!(List::new("adaptive-4x4", 4, [4096, 16], &limits).is_ok());
+        assert!(List::new("adaptive-2x2", 2, [16, 8192], &limits).is_ok());
+        let error = List::new("adaptive-4x4-cells", 4, [4097, 16], &limits).unwrap_err().to_string();
         assert!(error.contains("16384 texels, so the largest M that fits is 3"), "{error}");
-        let error = List::new(2, 16, 8193, &limits).unwrap_err().to_string();
+        assert!(error.starts_with("adaptive-4x4-cells at 4097×16"), "the mode by its own name: {error}");
+        let error = List::new("adaptive-2x2", 2, [16, 8193], &limits).unwrap_err().to_string();
         assert!(error.contains("16384 texels, so no M fits"), "{error}");
+        // A list larger than the device's largest buffer names the mode too.
+        let small = wgpu::Limits { max_storage_buffer_binding_size: 1 << 27, ..limits };
+        let error =
+            List::new("adaptive-4x4-coverage-stalled", 4, [4096, 4096], &small).unwrap_err().to_string();
+        assert!(error.starts_with("adaptive-4x4-coverage-stalled at 4096×4096 lists up to"), "{error}");
     }
 }

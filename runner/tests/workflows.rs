@@ -184,6 +184,10 @@ fn a_sharded_gate_joins_its_shards_verdicts_and_refuses_joins_that_do_not_belong
         v["shard"]["baselines_blessed"][1] = json!("b-plane: blessed 2026-01-01T00:00:00Z from another-run");
     });
     refused(&["verdicts/shard-1", "reblessed"], "its baselines' blessing (another folder");
+    doctored(&ws, "verdicts/shard-2", "older", |v| {
+        v["shard"].as_object_mut().unwrap().remove("baselines_blessed");
+    });
+    refused(&["verdicts/shard-1", "older"], "verdicts of two versions of aabench");
     doctored(&ws, "verdicts/shard-2", "unsharded", |v| v["shard"] = Value::Null);
     refused(&["verdicts/shard-1", "unsharded"], "not the verdict of a shard");
 

@@ -135,7 +135,15 @@ fn provenance(out: &mut String, verdict: &Verdict) {
         "nothing: no base build was measured, and the baselines were blessed on another machine".to_string()
     };
     let time = if gated_by_rule(verdict) && !time_decided(verdict) {
-        format!("nothing in the end: {time}, but no time check had the evidence to decide (see Insufficient)")
+        let insufficient =
+            verdict.checks.iter().any(|c| is_time_metric(&c.metric) && c.outcome == Outcome::Insufficient);
+        if insufficient {
+            format!(
+                "nothing in the end: {time}, but no time check had the evidence to decide (see Insufficient)"
+            )
+        } else {
+            format!("nothing in the end: {time}, but no time check was made")
+        }
     } else {
         time
     };

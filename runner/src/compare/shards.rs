@@ -78,6 +78,14 @@ fn scopes(shards: &[(Verdict, PathBuf)]) -> Result<Vec<&ShardScope>, String> {
                 scope.count
             ));
         }
+        // A verdict from before verdicts recorded their baselines' blessing lists none.
+        if scope.baselines_blessed.is_empty() != scope_of(&shards[0])?.baselines_blessed.is_empty() {
+            return Err(format!(
+                "{}: it and {} are verdicts of two versions of aabench (one records its baselines' blessing)",
+                file.display(),
+                first_file.display()
+            ));
+        }
         for (what, same) in [
             ("build", verdict.build == first.build),
             ("tier", verdict.tier == first.tier),

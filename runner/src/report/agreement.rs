@@ -86,7 +86,9 @@ fn ranks(values: &[f64]) -> Vec<f64> {
     let mut ranks = vec![0.0; values.len()];
     let mut start = 0;
     while start < order.len() {
-        let tied = order[start..].iter().take_while(|&&i| values[i] == values[order[start]]).count();
+        // Ties by `total_cmp`, so that a NaN ties with itself and the loop always moves on.
+        let first = values[order[start]];
+        let tied = order[start..].iter().take_while(|&&i| values[i].total_cmp(&first).is_eq()).count();
         let rank = start as f64 + (tied as f64 + 1.0) / 2.0;
         for &i in &order[start..start + tied] {
             ranks[i] = rank;
@@ -138,12 +140,16 @@ impl AtOdds<'_> {
         if let (Some(fa), Some(fb)) = (flicker(&a), flicker(&b))
             && fa > 1.1 * fb
         {
+            let how_much = if fb > 0.0 {
+                format!("{:.1}× as much as {name_b}'s", fa / fb)
+            } else {
+                format!("where {name_b}'s does not change")
+            };
             let _ = write!(
                 text,
-                " {name_a}'s error changes along the motion {:.1}× as much as {name_b}'s (flicker {:.2} against \
-                 {:.2} ×1e-4): the eye sees an error that shimmers more than a steady one of the same energy, \
-                 and squared error weighs them alike.",
-                fa / fb.max(f64::MIN_POSITIVE),
+                " {name_a}'s error changes along the motion {how_much} (flicker {:.2} against {:.2} ×1e-4): \
+                 the eye sees an error that shimmers more than a steady one of the same energy, and squared \
+                 error weighs them alike.",
                 fa * 1e4,
                 fb * 1e4
             );
@@ -463,6 +469,9 @@ mod tests {
         assert!((rho - 0.9).abs() < 1e-12, "{rho}");
         assert_eq!(spearman(&a, &[1.0; 4]), None, "no spread, no correlation");
         assert_eq!(spearman(&a[..2], &a[..2]), None);
+        // Identical images have an infinite PSNR, which ranks like any value; a NaN ends too.
+        assert_eq!(spearman(&a, &[1.0, 2.0, 3.0, f64::INFINITY]), Some(1.0));
+        assert_eq!(ranks(&[f64::NAN, 1.0, f64::NAN]), vec![2.5, 1.0, 2.5]);
     }
 
     #[test]

@@ -125,8 +125,9 @@ pub(super) async fn run(
         Err(error) => {
             scene.warn(&format!("no FLIP or JOD along the path and no flicker region: {error}"));
             // A signal stopped the measures: without FLIP and JOD the path is not measured, and
-            // the scene says it was interrupted rather than ok.
-            if scene.cancelled() {
+            // the scene says it was interrupted rather than ok (where the signal stopped the
+            // frames already, that is the error the scene keeps).
+            if scene.cancelled() && record.error.is_none() {
                 record.error = Some(error.clone());
             }
             record.region_error = Some(error);

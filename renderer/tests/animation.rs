@@ -5,9 +5,10 @@
 //! keyframes say, through a parent node too. Broken animation data (an unknown channel path or
 //! interpolation, samplers whose lengths disagree, NaN keyframes, times that do not increase,
 //! morph weights, outputs in formats glTF forbids, indices past the file's lists, two channels of
-//! one node's property, a scale that
-//! turns a node inside out, a node flattened at rest) costs the file nothing: it loads, and the animation says what is
-//! wrong, naming itself and the part at fault. On lavapipe, the `crossing` scene's crate moves,
+//! one node's property, a scale that turns a node inside out, a node flattened at rest) costs
+//! the file nothing: it loads, and the animation says what is wrong, naming itself and the part
+//! at fault. Every pose an animation takes, at its keyframes and along a cubic spline between
+//! them, is held to the bounds of a scene at rest. On lavapipe, the `crossing` scene's crate moves,
 //! and the geometry probe's motion vectors on it are its projected motion to a fiftieth of a
 //! pixel while the wall behind stays still.
 
@@ -104,6 +105,37 @@ fn translation_rotation_and_scale_tracks_pose_the_vertices_through_a_parent() {
     let path = grow.write(&folder, "grow.gltf", |_| {});
     let x = posed(&path, 0.25)[1].x;
     assert!((x - (1.0 + 2.0 * 0.15625)).abs() < 1e-6, "{x}");
+}
+
+/// Why the file's first animation may not play: its first pose beyond the bounds of a scene at
+/// rest, or none.
+fn pose_error(path: &Path) -> Option<String> {
+    let mut scene = load_gltf(path).expect("the file loads");
+    scene.playing = Some(0);
+    Poser::of(&scene).expect("an animation plays").check().err()
+}
+
+#[test]
+fn every_pose_an_animation_takes_is_held_to_the_bounds_of_a_scene_at_rest() {
+    let folder = Folder::new("animation-bounds");
+    let far = slide(&[0.0, 1.0], &[0.0, 0.0, 0.0, 1e30, 0.0, 0.0]).write(&folder, "far.gltf", |_| {});
+    let error = pose_error(&far).expect("a keyframe 10³⁰ away");
+    let said =
+        "channels[0] (translation of nodes[1]), keyframe 1 (t = 1 s), carries the vertices of nodes[0] to";
+    assert!(error.starts_with(said) && error.contains("beyond ±1e12"), "{error}");
+    let grow = Channel { path: "scale", ..slide(&[0.0, 2.0], &[1.0, 1.0, 1.0, 1e30, 1.0, 1.0]) };
+    let error = pose_error(&grow.write(&folder, "grow.gltf", |_| {})).expect("a scale of 10³⁰");
+    assert!(error.contains("(scale of nodes[1]), keyframe 1 (t = 2 s)"), "{error}");
+    // Both keys at the origin, the first's out-tangent huge: the spline passes far beyond
+    // between them, where a check of the keys alone would not look.
+    let flat = [0.0f32; 3];
+    let values: Vec<f32> = [flat, flat, [3e38, 0.0, 0.0], flat, flat, flat].concat();
+    let cubic = Channel { interpolation: "CUBICSPLINE", ..slide(&[0.0, 1.0], &values) };
+    let error = pose_error(&cubic.write(&folder, "tangent.gltf", |_| {})).expect("a tangent of 3·10³⁸");
+    assert!(error.contains("halfway between keyframes 0 and 1 (t = 0.5 s)"), "{error}");
+    // Within the bounds, every pose passes.
+    let near = slide(&[0.0, 1.0], &[0.0, 0.0, 0.0, 1e11, 0.0, 0.0]).write(&folder, "near.gltf", |_| {});
+    assert_eq!(pose_error(&near), None);
 }
 
 #[test]

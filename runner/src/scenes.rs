@@ -6,6 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use aabench_renderer::scene::generate::GENERATOR_STAMP;
+use aabench_renderer::scene::pose::Poser;
 use aabench_renderer::scene::{
     Camera, Light, LightKind, Lighting, MAX_LIGHTS, Scene, Shadow, load_gltf, read_generator,
 };
@@ -113,7 +114,7 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
 
 /// Sets the animation that the manifest's `motion.animation` picks playing, or says why it
 /// cannot: no such animation in the file (naming those it has), or one that cannot play (naming
-/// it and the part at fault). A file whose animations no manifest picks stands still, and says so.
+/// it and the part at fault, a pose beyond the scene's bounds included). A file whose animations no manifest picks stands still, and says so.
 fn pick_animation(manifest: &Manifest, scene: &mut Scene) -> anyhow::Result<()> {
     let pick = manifest.motion.as_ref().and_then(|motion| motion.animation.as_ref());
     let Some(pick) = pick else {
@@ -145,6 +146,16 @@ fn pick_animation(manifest: &Manifest, scene: &mut Scene) -> anyhow::Result<()> 
         bail!("{manifest_path}: motion.animation: {}: {}: {error}", gltf.display(), animation.label(index));
     }
     scene.playing = Some(index);
+    // Every pose it takes is held to the bounds that the rest pose was.
+    let checked = Poser::of(scene).map_or(Ok(()), |poser| poser.check());
+    if let Err(error) = checked {
+        scene.playing = None;
+        bail!(
+            "{manifest_path}: motion.animation: {}: {}: {error}",
+            gltf.display(),
+            scene.animations[index].label(index)
+        );
+    }
     Ok(())
 }
 

@@ -121,6 +121,21 @@ impl Track {
         self.values.iter().skip(skip).step_by(step)
     }
 
+    /// The times at which a pose of this track is checked, each with its name: every keyframe,
+    /// and for a cubic spline the middle between two keys too, where its tangents can carry
+    /// the value far past both.
+    pub fn checked_times(&self) -> Vec<(String, f64)> {
+        let keys = self.times.iter().enumerate().map(|(i, &t)| (format!("keyframe {i}"), f64::from(t)));
+        let middles = self.times.windows(2).enumerate().map(|(i, pair)| {
+            (
+                format!("halfway between keyframes {i} and {}", i + 1),
+                (f64::from(pair[0]) + f64::from(pair[1])) / 2.0,
+            )
+        });
+        let cubic = self.interpolation == Interpolation::CubicSpline;
+        keys.chain(middles.filter(|_| cubic)).collect()
+    }
+
     /// The track's value at `time` seconds: xyz, or a unit quaternion xyzw.
     pub fn sample(&self, time: f64) -> [f64; 4] {
         let times = &self.times;
@@ -212,6 +227,16 @@ impl Rig {
     /// it): its vertex range and the change of its world transform since the vertices were
     /// baked, which maps a baked vertex to where it lies at `time`.
     pub fn moves(&self, tracks: &[Track], time: f64) -> Vec<(Range<usize>, DMat4)> {
+        let mut moves = Vec::new();
+        for (rest, change) in self.node_changes(tracks, time) {
+            moves.extend(rest.vertices.iter().filter(|r| !r.is_empty()).map(|r| (r.clone(), change)));
+        }
+        moves
+    }
+
+    /// Each node with vertices that `tracks` move at `time`, with the change of its world
+    /// transform since its vertices were baked.
+    pub fn node_changes(&self, tracks: &[Track], time: f64) -> Vec<(&RestNode, DMat4)> {
         let moved = self.moved(tracks);
         let mut world: Vec<DMat4> = Vec::with_capacity(self.nodes.len());
         let mut changes = Vec::new();
@@ -220,9 +245,8 @@ impl Rig {
             let local = if own.is_empty() { rest.matrix } else { animated(rest, &own, time) };
             let parent = rest.parent.map_or(DMat4::IDENTITY, |p| world[p]);
             world.push(parent * local);
-            if moved[i] {
-                let change = world[i] * rest.world.inverse();
-                changes.extend(rest.vertices.iter().filter(|r| !r.is_empty()).map(|r| (r.clone(), change)));
+            if moved[i] && rest.vertices.iter().any(|r| !r.is_empty()) {
+                changes.push((rest, world[i] * rest.world.inverse()));
             }
         }
         changes

@@ -8,7 +8,7 @@ use std::ops::Range;
 use glam::{DMat3, DMat4, DVec3, Vec3};
 
 use super::animation::{Rig, Track};
-use super::{Scene, Vertex};
+use super::{MAX_COORDINATE, Scene, Vertex};
 
 /// What posing needs: the tracks, the rig, and the vertices as baked.
 #[derive(Debug, Clone)]
@@ -83,6 +83,43 @@ impl Poser {
             .collect()
     }
 
+    /// Checks every pose the animation takes against the bounds a rest pose keeps (finite and
+    /// within ±[`MAX_COORDINATE`] in world space): at each channel's keyframes, and for a cubic
+    /// spline between them ([`Track::checked_times`]). On failure, the first pose beyond them:
+    /// the channel, the keyframe, the node it animates and the node whose vertices it carries.
+    pub fn check(&self) -> Result<(), String> {
+        for (channel, track) in self.tracks.iter().enumerate() {
+            for (key, time) in track.checked_times() {
+                for (rest, change) in self.rig.node_changes(&self.tracks, time) {
+                    if let Some(place) = rest.vertices.iter().find_map(|r| self.beyond(r.clone(), change)) {
+                        return Err(format!(
+                            "channels[{channel}] ({} of nodes[{}]), {key} (t = {time} s), carries the vertices of \
+                             nodes[{}] to {place}, beyond ±{MAX_COORDINATE:e} (the bounds of a scene at rest)",
+                            track.property.name(),
+                            track.node,
+                            rest.node
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A corner of the box of the vertices `range` that `change` carries out of bounds, in
+    /// world space. The box's image is a parallelepiped whose farthest points are corners.
+    fn beyond(&self, range: Range<usize>, change: DMat4) -> Option<String> {
+        let positions = self.rest.get(range)?.iter().map(|v| Vec3::from(v.position).as_dvec3() + self.origin);
+        let (lo, hi) =
+            positions.fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        (0..8).find_map(|corner: u32| {
+            let pick = |bit: u32, a: f64, b: f64| if corner & bit == 0 { a } else { b };
+            let at = DVec3::new(pick(1, lo.x, hi.x), pick(2, lo.y, hi.y), pick(4, lo.z, hi.z));
+            let moved = change.transform_point3(at);
+            (!moved.is_finite() || moved.abs().max_element() > MAX_COORDINATE).then(|| place(moved))
+        })
+    }
+
     /// The moved nodes' positions at `time`: where their range starts, and the positions.
     pub fn positions_at(&self, time: f64) -> Vec<(usize, Vec<[f32; 3]>)> {
         self.changes(time)
@@ -93,6 +130,12 @@ impl Poser {
             })
             .collect()
     }
+}
+
+/// A place in a message: `(1.000e30, -1.000, 0.200)`.
+fn place(v: DVec3) -> String {
+    let short = |x: f64| if x.is_finite() && x.abs() < 1e6 { format!("{x:.3}") } else { format!("{x:.3e}") };
+    format!("({}, {}, {})", short(v.x), short(v.y), short(v.z))
 }
 
 fn moved(change: DMat4, position: [f32; 3]) -> [f32; 3] {

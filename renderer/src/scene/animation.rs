@@ -333,6 +333,32 @@ mod tests {
     }
 
     #[test]
+    fn cubic_tangents_are_per_second_whatever_the_spacing_of_the_keys() {
+        // glTF's tangents are rates per second: the segment scales them by its own length. Keys
+        // 0.5 s and then 3 s apart, on the line v = 2t with tangents of its slope, stay on it;
+        // unscaled tangents would bend the long segment and overshoot the short one.
+        let slope = [2.0, 0.0, 0.0, 0.0];
+        let at = |t: f32| [2.0 * t, 0.0, 0.0, 0.0];
+        let line = track(
+            Property::Translation,
+            Interpolation::CubicSpline,
+            &[0.0, 0.5, 3.5],
+            &[slope, at(0.0), slope, slope, at(0.5), slope, slope, at(3.5), slope],
+        );
+        for time in [0.1, 0.25, 0.4, 1.0, 2.0, 3.0, 3.4] {
+            let x = line.sample(time)[0];
+            assert!((x - 2.0 * time).abs() < 1e-9, "at {time} s: {x}");
+        }
+        // Flat tangents ease in and out alike on both: a quarter of each segment's time is
+        // 15.625 % of its way in value.
+        let zero = [0.0; 4];
+        let eased =
+            Track { values: vec![zero, at(0.0), zero, zero, at(0.5), zero, zero, at(3.5), zero], ..line };
+        assert!((eased.sample(0.125)[0] - 1.0 * 0.15625).abs() < 1e-9);
+        assert!((eased.sample(1.25)[0] - (1.0 + 6.0 * 0.15625)).abs() < 1e-9);
+    }
+
+    #[test]
     fn rotations_turn_along_the_shorter_arc_at_a_steady_rate() {
         let quarter = glam::Quat::from_rotation_y(std::f32::consts::FRAC_PI_2).to_array();
         // −q is the same turn as q: the interpolation must not go the long way round.

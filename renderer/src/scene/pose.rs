@@ -88,10 +88,18 @@ impl Poser {
     /// spline between them ([`Track::checked_times`]). On failure, the first pose beyond them:
     /// the channel, the keyframe, the node it animates and the node whose vertices it carries.
     pub fn check(&self) -> Result<(), String> {
+        // Each moved range's box once; each time once (channels often share their keyframe
+        // times, and a pose that passed for one channel passes for the next).
+        let boxes: std::collections::HashMap<Range<usize>, [DVec3; 2]> = (self.rig.nodes.iter())
+            .flat_map(|rest| rest.vertices.iter().filter_map(|r| Some((r.clone(), self.bounds(r.clone())?))))
+            .collect();
+        let mut checked = std::collections::HashSet::new();
         for (channel, track) in self.tracks.iter().enumerate() {
-            for (key, time) in track.checked_times() {
+            for (key, time) in track.checked_times().into_iter().filter(|(_, t)| checked.insert(t.to_bits()))
+            {
                 for (rest, change) in self.rig.node_changes(&self.tracks, time) {
-                    if let Some(place) = rest.vertices.iter().find_map(|r| self.beyond(r.clone(), change)) {
+                    let out = |r: &Range<usize>| beyond(boxes.get(r)?, change);
+                    if let Some(place) = rest.vertices.iter().find_map(out) {
                         return Err(format!(
                             "channels[{channel}] ({} of nodes[{}]), {key} (t = {time} s), carries the vertices of \
                              nodes[{}] to {place}, beyond ±{MAX_COORDINATE:e} (the bounds of a scene at rest)",
@@ -106,17 +114,12 @@ impl Poser {
         Ok(())
     }
 
-    /// A corner of the box of the vertices `range` that `change` carries out of bounds, in
-    /// world space. The box's image is a parallelepiped whose farthest points are corners.
-    fn beyond(&self, range: Range<usize>, change: DMat4) -> Option<String> {
+    /// The world-space box of the baked vertices `range`; none for an empty range.
+    fn bounds(&self, range: Range<usize>) -> Option<[DVec3; 2]> {
         let positions = self.rest.get(range)?.iter().map(|v| Vec3::from(v.position).as_dvec3() + self.origin);
-        let (lo, hi) =
-            positions.fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
-        (0..8).find_map(|corner: u32| {
-            let pick = |bit: u32, a: f64, b: f64| if corner & bit == 0 { a } else { b };
-            let at = DVec3::new(pick(1, lo.x, hi.x), pick(2, lo.y, hi.y), pick(4, lo.z, hi.z));
-            let moved = change.transform_point3(at);
-            (!moved.is_finite() || moved.abs().max_element() > MAX_COORDINATE).then(|| place(moved))
+        positions.fold(None, |bounds, p| match bounds {
+            None => Some([p, p]),
+            Some([lo, hi]) => Some([lo.min(p), hi.max(p)]),
         })
     }
 
@@ -130,6 +133,17 @@ impl Poser {
             })
             .collect()
     }
+}
+
+/// A corner of the box `[lo, hi]` that `change` carries out of bounds, in world space. The
+/// box's image is a parallelepiped whose farthest points are corners.
+fn beyond(&[lo, hi]: &[DVec3; 2], change: DMat4) -> Option<String> {
+    (0..8).find_map(|corner: u32| {
+        let pick = |bit: u32, a: f64, b: f64| if corner & bit == 0 { a } else { b };
+        let at = DVec3::new(pick(1, lo.x, hi.x), pick(2, lo.y, hi.y), pick(4, lo.z, hi.z));
+        let moved = change.transform_point3(at);
+        (!moved.is_finite() || moved.abs().max_element() > MAX_COORDINATE).then(|| place(moved))
+    })
 }
 
 /// A place in a message: `(1.000e30, -1.000, 0.200)`.

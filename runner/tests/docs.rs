@@ -191,7 +191,7 @@ fn every_chapter_is_in_the_book_and_the_readme_stays_a_front_door() {
 
 #[test]
 fn generated_results_name_their_run() {
-    for chapter in ["docs/results.md", "docs/results-nightly.md"] {
+    for chapter in ["docs/results.md", "docs/results-nightly.md", "docs/results-nightly-stills.md"] {
         let text = std::fs::read_to_string(workspace().join(chapter)).unwrap();
         let first = text.lines().next().unwrap_or_default();
         assert!(

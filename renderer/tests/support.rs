@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 
+use aabench_renderer::scene::animation::Track;
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::{Camera, Light, LightKind, Lighting, Scene, load_gltf};
 use aabench_renderer::{
@@ -43,6 +44,27 @@ pub fn generated(generator: Generator) -> (Scene, Camera) {
         (scene, camera)
     });
     entry.clone()
+}
+
+/// The `crossing` scene with its animation playing, a renderer of it under [`lit`] at `width` ×
+/// `height`, the crate's translation track, and the material indices (as the G-buffer stores
+/// them) of the crate and its bars, which that track moves.
+pub fn crossing_playing(
+    width: u32,
+    height: u32,
+) -> (SceneRenderer, Camera, Track, Vec<f32>, MutexGuard<'static, ()>) {
+    let (gpu, guard) = gpu();
+    let (mut scene, camera) = generated(Generator::Crossing);
+    let index = scene.animations.iter().position(|a| a.name.as_deref() == Some("crossing")).unwrap();
+    scene.playing = Some(index);
+    let track = scene.animations[index].tracks.as_ref().unwrap()[0].clone();
+    let moving: Vec<f32> = (scene.materials.iter().enumerate())
+        .filter(|(_, m)| m.name == "crate" || m.name == "bars")
+        .map(|(i, _)| i as f32)
+        .collect();
+    assert_eq!(moving.len(), 2, "the crate's two materials");
+    let renderer = SceneRenderer::new(gpu, &scene, &camera, &lit(), settings(width, height)).unwrap();
+    (renderer, camera, track, moving, guard)
 }
 
 /// Ambient light only: every surface shows exactly ambient × albedo.

@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use aabench_renderer::scene::generate::GENERATOR_STAMP;
-use aabench_renderer::scene::pose::Poser;
+use aabench_renderer::scene::pose::{CameraPath, Poser};
 use aabench_renderer::scene::{
     Camera, Light, LightKind, Lighting, MAX_LIGHTS, Scene, Shadow, load_gltf, read_generator,
 };
@@ -15,6 +15,7 @@ use glam::{DVec3, DVec4, Vec3};
 
 use crate::fs::regular_file;
 use crate::manifest::{FileLights, Manifest, check_shadows};
+use crate::motion::{MotionSpec, PathKind};
 
 #[derive(Debug)]
 pub struct LoadedScene {
@@ -23,6 +24,9 @@ pub struct LoadedScene {
     /// How far along the camera's view a preset path's target lies: what an orbit turns about
     /// (`motion.rs`). Every sequence's cameras in either tier were checked at load.
     pub pivot: f64,
+    /// Where the playing animation carries the file's camera, when it moves it: the view of
+    /// every frame of a sequence follows it (`camera` is its pose at the animation's start).
+    pub camera_path: Option<CameraPath>,
     pub lighting: Lighting,
     /// Seconds spent generating (if it had to) and importing.
     pub seconds: f64,
@@ -100,8 +104,13 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
     if scene.indices.is_empty() {
         bail!("{}: gltf: {} holds no triangles", manifest.path.display(), path.display());
     }
+    let camera_path = animated_camera(manifest, &scene)?;
     let camera = camera(manifest, &scene)?;
-    let pivot = path_pivot(manifest, &scene, &camera)?;
+    let camera = match &camera_path {
+        Some(path) => start_camera(manifest, path, camera)?,
+        None => camera,
+    };
+    let pivot = path_pivot(manifest, &scene, &camera, camera_path.as_ref())?;
     let lighting = Lighting {
         lights: lights(manifest, &scene)?,
         ambient: Vec3::from(manifest.ambient),
@@ -109,7 +118,7 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
         // Metered once the scene is uploaded where the manifest gives none.
         exposure: manifest.tonemap.exposure.unwrap_or(1.0),
     };
-    Ok(LoadedScene { scene, camera, pivot, lighting, seconds: start.elapsed().as_secs_f64() })
+    Ok(LoadedScene { scene, camera, pivot, camera_path, lighting, seconds: start.elapsed().as_secs_f64() })
 }
 
 /// Sets the animation that the manifest's `motion.animation` picks playing, or says why it
@@ -146,8 +155,11 @@ fn pick_animation(manifest: &Manifest, scene: &mut Scene) -> anyhow::Result<()> 
         bail!("{manifest_path}: motion.animation: {}: {}: {error}", gltf.display(), animation.label(index));
     }
     scene.playing = Some(index);
-    // Every pose it takes is held to the bounds that the rest pose was.
-    let checked = Poser::of(scene).map_or(Ok(()), |poser| poser.check());
+    // Every pose it takes is held to the bounds that the rest pose was, and some pose moves
+    // what a frame shows.
+    let camera = manifest.camera.is_none() && CameraPath::of(scene).is_some();
+    let checked = Poser::of(scene)
+        .map_or(Ok(()), |poser| poser.check().and_then(|()| poser.check_moves_something(camera)));
     if let Err(error) = checked {
         scene.playing = None;
         bail!(
@@ -165,7 +177,12 @@ fn pick_animation(manifest: &Manifest, scene: &mut Scene) -> anyhow::Result<()> 
 /// from the file or the framing camera has only a direction, so its target is the point of the
 /// view ray nearest the centre of the scene's bounds (at least a hundredth of the bounds'
 /// radius ahead). 0 without `motion`.
-fn path_pivot(manifest: &Manifest, scene: &Scene, camera: &Camera) -> anyhow::Result<f64> {
+fn path_pivot(
+    manifest: &Manifest,
+    scene: &Scene,
+    camera: &Camera,
+    camera_path: Option<&CameraPath>,
+) -> anyhow::Result<f64> {
     let Some(motion) = &manifest.motion else {
         return Ok(0.0);
     };
@@ -187,7 +204,8 @@ fn path_pivot(manifest: &Manifest, scene: &Scene, camera: &Camera) -> anyhow::Re
         |field: &str, message: String| anyhow::anyhow!("{}: {field}: {message}", manifest.path.display());
     for (frames, [width, height], speeds) in tiers {
         for pace in motion.paces(speeds, camera.fov_y, height) {
-            let cameras = motion.cameras(camera, pivot, frames, pace.rate).map_err(|(f, m)| fail(&f, m))?;
+            let (cameras, _) = path_cameras(motion, camera, pivot, (frames, pace.rate), camera_path)
+                .map_err(|(f, m)| fail(&f, m))?;
             let aspect = f64::from(width) / f64::from(height);
             let blind =
                 cameras.iter().position(|c| !manifest.empty && !any_triangle_in_view(scene, c, aspect));
@@ -199,11 +217,71 @@ fn path_pivot(manifest: &Manifest, scene: &Scene, camera: &Camera) -> anyhow::Re
                      `\"empty\": true`",
                     scene.triangle_count()
                 );
-                return Err(fail(motion.field(), message));
+                let field = if camera_path.is_some() { "motion.animation" } else { motion.field() };
+                return Err(fail(field, message));
             }
         }
     }
     Ok(pivot)
+}
+
+/// The file's camera as the picked animation moves it, where it does and the manifest keeps
+/// the file's camera. A path of the manifest's own would move that camera too: refused.
+fn animated_camera(manifest: &Manifest, scene: &Scene) -> anyhow::Result<Option<CameraPath>> {
+    let Some(path) = CameraPath::of(scene).filter(|_| manifest.camera.is_none()) else {
+        return Ok(None);
+    };
+    let motion = manifest.motion.as_ref().expect("an animation plays only where motion picks it");
+    if motion.path != PathKind::Static {
+        bail!(
+            "{}: motion.path: the {} path would move the camera of {}, which the animation it picks moves \
+             already; use \"static\" to follow the animation, or give the manifest a camera of its own",
+            manifest.path.display(),
+            motion.path.name(),
+            manifest.gltf_path().display()
+        );
+    }
+    Ok(Some(path))
+}
+
+/// The file's camera where the animation starts: the still's camera, and every sequence's
+/// first.
+fn start_camera(manifest: &Manifest, path: &CameraPath, rest: Camera) -> anyhow::Result<Camera> {
+    let start = manifest.motion.as_ref().and_then(|motion| motion.animation_time(0)).unwrap_or(0.0);
+    let camera = path.camera(&rest, start);
+    camera.validate().map_err(|e| {
+        anyhow::anyhow!("{}: motion.animation: the file's camera at {start} s: {e}", manifest.path.display())
+    })?;
+    Ok(camera)
+}
+
+/// A sequence's cameras, `frames` at `rate` (as [`MotionSpec::rate`]), and those of the
+/// warm-up before it: along the manifest's path from `camera`, or where the playing animation
+/// carries the file's camera (`camera_path`). `Err` names the field and the frame whose camera
+/// the renderer refuses.
+pub fn path_cameras(
+    motion: &MotionSpec,
+    camera: &Camera,
+    pivot: f64,
+    (frames, rate): (u32, f64),
+    camera_path: Option<&CameraPath>,
+) -> Result<(Vec<Camera>, Vec<Camera>), (String, String)> {
+    let warmup = aabench_renderer::taa::WARMUP_FRAMES;
+    let Some(path) = camera_path else {
+        let cameras = motion.cameras(camera, pivot, frames, rate)?;
+        return Ok((cameras, motion.cameras_before(camera, pivot, warmup, rate)));
+    };
+    let at = |time: Option<f64>| path.camera(camera, time.unwrap_or(0.0));
+    let cameras: Vec<Camera> = (0..frames as usize).map(|frame| at(motion.animation_time(frame))).collect();
+    if let Some((frame, e)) = cameras.iter().enumerate().find_map(|(f, c)| Some((f, c.validate().err()?))) {
+        let message = format!("frame {frame}: the file's camera's {}: {}", e.field, e.message);
+        return Err(("motion.animation".into(), message));
+    }
+    // A warm-up camera the animation cannot give (before its start it holds its first key, so
+    // this is only a guard) is the path's first.
+    let before = (1..=warmup as usize).rev().map(|back| at(motion.animation_time_before(back)));
+    let warmup = before.map(|c| if c.validate().is_ok() { c } else { cameras[0] }).collect();
+    Ok((cameras, warmup))
 }
 
 /// The file's lights (unless the manifest replaces them; with `file_light_shadows`, its point

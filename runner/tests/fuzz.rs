@@ -635,7 +635,7 @@ fn mutated_gltf_files_are_errors_or_sound_scenes_never_panics_or_hangs() {
 }
 
 /// Generators whose files take milliseconds to write: a mutated seed or placement regenerates.
-const CHEAP_GENERATORS: [&str; 5] = ["cornell", "degenerate", "subpixel", "plane", "crossing"];
+const CHEAP_GENERATORS: [&str; 6] = ["cornell", "degenerate", "subpixel", "plane", "crossing", "walker"];
 
 /// The suite's manifests (their generators swapped for cheap ones where needed), plus one that
 /// renders a user's own file (the textured seed) with the file's camera.

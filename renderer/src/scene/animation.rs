@@ -5,11 +5,14 @@
 //! appendix C), held at its first value before its first keyframe and at its last after. The
 //! importer bakes node transforms into world-space vertices, so a node that moves carries the
 //! ranges of vertices its meshes gave and the world transform they were baked with: a pose moves
-//! them by the change of that transform ([`Rig::moves`]).
+//! them by the change of that transform ([`Rig::moves`]). A skinned mesh's vertices follow its
+//! joints instead ([`super::skin`]).
 
 use std::ops::Range;
 
 use glam::{DMat4, DQuat, DVec3};
+
+use super::skin::Skin;
 
 /// One of a file's animations: how messages name it, and its tracks or why it cannot play.
 #[derive(Debug, Clone, PartialEq)]
@@ -216,10 +219,12 @@ pub struct RestNode {
     pub world: DMat4,
 }
 
-/// The default scene's node trees as the importer walked them: parents before children.
+/// The default scene's node trees as the importer walked them: parents before children; and
+/// the skinned meshes their joints carry.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Rig {
     pub nodes: Vec<RestNode>,
+    pub skins: Vec<Skin>,
 }
 
 impl Rig {
@@ -237,23 +242,38 @@ impl Rig {
     /// Each node with vertices that `tracks` move at `time`, with the change of its world
     /// transform since its vertices were baked.
     pub fn node_changes(&self, tracks: &[Track], time: f64) -> Vec<(&RestNode, DMat4)> {
-        let moved = self.moved(tracks);
+        let (moved, world) = (self.moved(tracks), self.worlds(tracks, time));
+        (self.nodes.iter().enumerate())
+            .filter(|(i, rest)| moved[*i] && rest.vertices.iter().any(|r| !r.is_empty()))
+            .map(|(i, rest)| (rest, world[i] * rest.world.inverse()))
+            .collect()
+    }
+
+    /// Every node's world transform with `tracks` sampled at `time`, in [`Rig::nodes`] order.
+    pub fn worlds(&self, tracks: &[Track], time: f64) -> Vec<DMat4> {
         let mut world: Vec<DMat4> = Vec::with_capacity(self.nodes.len());
-        let mut changes = Vec::new();
-        for (i, rest) in self.nodes.iter().enumerate() {
+        for rest in &self.nodes {
             let own: Vec<&Track> = tracks.iter().filter(|t| t.node == rest.node).collect();
             let local = if own.is_empty() { rest.matrix } else { animated(rest, &own, time) };
             let parent = rest.parent.map_or(DMat4::IDENTITY, |p| world[p]);
             world.push(parent * local);
-            if moved[i] && rest.vertices.iter().any(|r| !r.is_empty()) {
-                changes.push((rest, world[i] * rest.world.inverse()));
-            }
         }
-        changes
+        world
+    }
+
+    /// Every node's world transform at rest, in [`Rig::nodes`] order.
+    pub fn rest_worlds(&self) -> Vec<DMat4> {
+        self.nodes.iter().map(|rest| rest.world).collect()
+    }
+
+    /// The skins whose joints `tracks` move.
+    pub fn moved_skins(&self, tracks: &[Track]) -> Vec<&Skin> {
+        let moved = self.moved(tracks);
+        self.skins.iter().filter(|skin| skin.joints.iter().any(|&(place, _)| moved[place])).collect()
     }
 
     /// Which nodes `tracks` move, in [`Rig::nodes`] order: their own, and every node below one.
-    fn moved(&self, tracks: &[Track]) -> Vec<bool> {
+    pub fn moved(&self, tracks: &[Track]) -> Vec<bool> {
         let mut moved = vec![false; self.nodes.len()];
         for (i, rest) in self.nodes.iter().enumerate() {
             moved[i] = tracks.iter().any(|t| t.node == rest.node) || rest.parent.is_some_and(|p| moved[p]);
@@ -403,6 +423,7 @@ mod tests {
                 rest(Some(0), 1, 0..3, DVec3::Y),
                 rest(None, 2, 3..6, DVec3::Z),
             ],
+            skins: vec![],
         };
         rig.nodes[1].world = DMat4::from_translation(DVec3::X + DVec3::Y);
         rig.nodes[2].world = DMat4::from_translation(DVec3::Z);
@@ -452,6 +473,7 @@ mod tests {
                     world: parent_matrix * child_matrix,
                 },
             ],
+            skins: vec![],
         };
         let slide = track(Property::Translation, Interpolation::Step, &[0.0], &[[5.0, 0.0, 0.0, 0.0]]);
         let moves = rig.moves(&[slide], 0.0);

@@ -8,6 +8,7 @@ pub mod generate;
 mod import;
 pub mod pose;
 pub mod shadow;
+pub mod skin;
 pub mod textures;
 mod upload;
 pub mod write;
@@ -282,6 +283,8 @@ pub struct Scene {
     pub tangents: Vec<[f32; 4]>,
     /// The first camera found in the node hierarchy, if any (relative to `origin`).
     pub camera: Option<Camera>,
+    /// The glTF node that holds `camera`, which an animation can move.
+    pub camera_node: Option<usize>,
     /// Where the scene's coordinates start, in the file's world space: vertices, bounds and
     /// the camera are relative to it, so geometry far from the file's origin keeps f32
     /// precision. Manifest cameras and lights are moved by it before rendering.

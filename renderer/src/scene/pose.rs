@@ -1,16 +1,19 @@
 //! Posing a scene whose animation plays: the vertices of the nodes it moves, carried from where
 //! the importer baked them to where they lie at a time, with the normals and tangents turned
-//! along. The G-buffer pass reads each vertex's position at the frame before beside its own, so
-//! its motion vectors hold the objects' motion as well as the camera's.
+//! along, and the vertices of the skins whose joints it moves ([`super::skin`]). The G-buffer
+//! pass reads each vertex's position at the frame before beside its own, so its motion vectors
+//! hold the objects' motion as well as the camera's.
 
 use std::ops::Range;
 
 use glam::{DMat3, DMat4, DVec3, Vec3};
 
 use super::animation::{Rig, Track};
-use super::{MAX_COORDINATE, Scene, Vertex};
+use super::skin::BindPose;
+use super::{Camera, MAX_COORDINATE, Scene, Vertex};
 
-/// What posing needs: the tracks, the rig, and the vertices as baked.
+/// What posing needs: the tracks, the rig, the vertices as baked, and the moved skins' vertices
+/// in their bind pose.
 #[derive(Debug, Clone)]
 pub struct Poser {
     tracks: Vec<Track>,
@@ -18,6 +21,7 @@ pub struct Poser {
     origin: DVec3,
     rest: Vec<Vertex>,
     rest_tangents: Vec<[f32; 4]>,
+    skins: Vec<BindPose>,
 }
 
 /// The vertices of one moved node at a time: where its range starts, and its vertices (with
@@ -32,13 +36,24 @@ pub struct Moved {
 impl Poser {
     /// The poser of the scene's playing animation; none where no animation plays.
     pub fn of(scene: &Scene) -> Option<Poser> {
+        let tracks = scene.playing_tracks()?.to_vec();
+        let rest_worlds = scene.rig.rest_worlds();
+        let skins = (scene.rig.moved_skins(&tracks).into_iter())
+            .map(|skin| BindPose::new(skin, &rest_worlds, scene.origin, &scene.vertices, &scene.tangents))
+            .collect();
         Some(Poser {
-            tracks: scene.playing_tracks()?.to_vec(),
+            tracks,
             rig: scene.rig.clone(),
             origin: scene.origin,
             rest: scene.vertices.clone(),
             rest_tangents: scene.tangents.clone(),
+            skins,
         })
+    }
+
+    /// The rig's world transforms at `time`, where a skin needs them.
+    fn worlds(&self, time: f64) -> Vec<DMat4> {
+        if self.skins.is_empty() { Vec::new() } else { self.rig.worlds(&self.tracks, time) }
     }
 
     /// Each moved node's change at `time`, in the scene's coordinates (relative to its origin).
@@ -51,8 +66,20 @@ impl Poser {
             .collect()
     }
 
-    /// The moved nodes' vertices at `time`.
+    /// The moved nodes' and skins' vertices at `time`.
     pub fn vertices_at(&self, time: f64) -> Vec<Moved> {
+        let worlds = self.worlds(time);
+        let skinned = self.skins.iter().flat_map(|skin| {
+            let posed = skin.posed(&worlds, self.origin, &self.rest, &self.rest_tangents);
+            posed.into_iter().map(|(first, vertices, tangents)| Moved { first, vertices, tangents })
+        });
+        let mut moved = self.node_vertices_at(time);
+        moved.extend(skinned);
+        moved
+    }
+
+    /// The moved nodes' vertices at `time`.
+    fn node_vertices_at(&self, time: f64) -> Vec<Moved> {
         self.changes(time)
             .into_iter()
             .map(|(range, change)| {
@@ -86,8 +113,12 @@ impl Poser {
     /// Checks every pose the animation takes against the bounds a rest pose keeps (finite and
     /// within ±[`MAX_COORDINATE`] in world space): at each channel's keyframes, and for a cubic
     /// spline between them ([`Track::checked_times`]). On failure, the first pose beyond them:
-    /// the channel, the keyframe, the node it animates and the node whose vertices it carries.
+    /// the channel, the keyframe, the node it animates and the node (or skin) whose vertices it
+    /// carries. A skin whose joints flatten a vertex at rest fails too.
     pub fn check(&self) -> Result<(), String> {
+        for skin in &self.skins {
+            skin.check_rest()?;
+        }
         // Each moved range's box once; each time once (channels often share their keyframe
         // times, and a pose that passed for one channel passes for the next).
         let boxes: std::collections::HashMap<Range<usize>, [DVec3; 2]> = (self.rig.nodes.iter())
@@ -97,21 +128,46 @@ impl Poser {
         for (channel, track) in self.tracks.iter().enumerate() {
             for (key, time) in track.checked_times().into_iter().filter(|(_, t)| checked.insert(t.to_bits()))
             {
-                for (rest, change) in self.rig.node_changes(&self.tracks, time) {
-                    let out = |r: &Range<usize>| beyond(boxes.get(r)?, change);
-                    if let Some(place) = rest.vertices.iter().find_map(out) {
-                        return Err(format!(
-                            "channels[{channel}] ({} of nodes[{}]), {key} (t = {time} s), carries the vertices of \
-                             nodes[{}] to {place}, beyond ±{MAX_COORDINATE:e} (the bounds of a scene at rest)",
-                            track.property.name(),
-                            track.node,
-                            rest.node
-                        ));
-                    }
+                let beyond = self.node_beyond(&boxes, time).or_else(|| self.skin_beyond(time));
+                if let Some(what) = beyond {
+                    return Err(format!(
+                        "channels[{channel}] ({} of nodes[{}]), {key} (t = {time} s), carries {what}, beyond \
+                         ±{MAX_COORDINATE:e} (the bounds of a scene at rest)",
+                        track.property.name(),
+                        track.node,
+                    ));
                 }
             }
         }
         Ok(())
+    }
+
+    /// The first moved node whose vertices (`boxes`: each range's box) lie beyond the bounds at
+    /// `time`: `the vertices of nodes[2] to (…)`.
+    fn node_beyond(
+        &self,
+        boxes: &std::collections::HashMap<Range<usize>, [DVec3; 2]>,
+        time: f64,
+    ) -> Option<String> {
+        self.rig.node_changes(&self.tracks, time).into_iter().find_map(|(rest, change)| {
+            let out = |r: &Range<usize>| beyond(boxes.get(r)?, change);
+            let place = rest.vertices.iter().find_map(out)?;
+            Some(format!("the vertices of nodes[{}] to {place}", rest.node))
+        })
+    }
+
+    /// The first moved skin with a vertex beyond the bounds at `time`: `vertex 12 of skins[0]
+    /// (of nodes[4]) to (…)`.
+    fn skin_beyond(&self, time: f64) -> Option<String> {
+        let worlds = self.worlds(time);
+        self.skins.iter().find_map(|skin| {
+            let positions = skin.positions(&worlds, self.origin);
+            let mut placed = positions
+                .iter()
+                .flat_map(|(first, p)| p.iter().enumerate().map(move |(i, p)| (first + i, p)));
+            let (vertex, at) = placed.find(|(_, p)| out_of_bounds(**p + self.origin))?;
+            Some(format!("vertex {vertex} of {} to {}", skin.skin.label(), place(*at + self.origin)))
+        })
     }
 
     /// The world-space box of the baked vertices `range`; none for an empty range.
@@ -123,15 +179,72 @@ impl Poser {
         })
     }
 
-    /// The moved nodes' positions at `time`: where their range starts, and the positions.
+    /// The moved nodes' and skins' positions at `time`: where each range starts, and the
+    /// positions.
     pub fn positions_at(&self, time: f64) -> Vec<(usize, Vec<[f32; 3]>)> {
-        self.changes(time)
-            .into_iter()
-            .map(|(range, change)| {
-                let first = range.start;
-                (first, self.rest[range].iter().map(|v| moved(change, v.position)).collect())
-            })
-            .collect()
+        let nodes = self.changes(time).into_iter().map(|(range, change)| {
+            let first = range.start;
+            (first, self.rest[range].iter().map(|v| moved(change, v.position)).collect())
+        });
+        let worlds = self.worlds(time);
+        let skins = self
+            .skins
+            .iter()
+            .flat_map(|skin| skin.positions(&worlds, self.origin))
+            .map(|(first, p)| (first, p.into_iter().map(|p| p.as_vec3().to_array()).collect()));
+        nodes.chain(skins).collect()
+    }
+}
+
+/// The file's camera as the playing animation moves it (the node that holds it, or one above).
+#[derive(Debug, Clone)]
+pub struct CameraPath {
+    tracks: Vec<Track>,
+    rig: Rig,
+    place: usize,
+    origin: DVec3,
+}
+
+impl CameraPath {
+    /// The path of the scene's camera; none where no animation plays or it leaves the camera
+    /// where it is.
+    pub fn of(scene: &Scene) -> Option<CameraPath> {
+        let tracks = scene.playing_tracks()?.to_vec();
+        let node = scene.camera_node?;
+        let place = scene.rig.nodes.iter().position(|n| n.node == node)?;
+        let rig = Rig { nodes: scene.rig.nodes.clone(), skins: Vec::new() };
+        rig.moved(&tracks)[place].then_some(CameraPath { tracks, rig, place, origin: scene.origin })
+    }
+
+    /// The camera at `time`: `rest` (its lens and clip planes) placed where its node lies.
+    pub fn camera(&self, rest: &Camera, time: f64) -> Camera {
+        let world = self.rig.worlds(&self.tracks, time)[self.place];
+        Camera {
+            position: world.transform_point3(DVec3::ZERO) - self.origin,
+            forward: world.transform_vector3(-DVec3::Z),
+            up: world.transform_vector3(DVec3::Y),
+            ..*rest
+        }
+    }
+}
+
+impl Poser {
+    /// Whether the animation moves anything a frame shows: a node's vertices, a skin's, or the
+    /// file's camera (`camera`: [`CameraPath::of`] found one). On failure, the nodes it moves.
+    pub fn check_moves_something(&self, camera: bool) -> Result<(), String> {
+        let shows = camera || !self.skins.is_empty() || !self.rig.node_changes(&self.tracks, 0.0).is_empty();
+        if shows {
+            return Ok(());
+        }
+        let mut nodes: Vec<usize> = self.tracks.iter().map(|t| t.node).collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        let nodes: Vec<String> = nodes.iter().map(|n| format!("nodes[{n}]")).collect();
+        Err(format!(
+            "moves only {}, which hold no geometry and no camera, nor do the nodes below them: nothing \
+             in the frame would move",
+            nodes.join(", ")
+        ))
     }
 }
 
@@ -142,8 +255,13 @@ fn beyond(&[lo, hi]: &[DVec3; 2], change: DMat4) -> Option<String> {
         let pick = |bit: u32, a: f64, b: f64| if corner & bit == 0 { a } else { b };
         let at = DVec3::new(pick(1, lo.x, hi.x), pick(2, lo.y, hi.y), pick(4, lo.z, hi.z));
         let moved = change.transform_point3(at);
-        (!moved.is_finite() || moved.abs().max_element() > MAX_COORDINATE).then(|| place(moved))
+        out_of_bounds(moved).then(|| place(moved))
     })
+}
+
+/// Whether a world-space point lies beyond the bounds of a scene at rest.
+fn out_of_bounds(p: DVec3) -> bool {
+    !p.is_finite() || p.abs().max_element() > MAX_COORDINATE
 }
 
 /// A place in a message: `(1.000e30, -1.000, 0.200)`.

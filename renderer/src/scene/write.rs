@@ -86,6 +86,27 @@ impl MaterialDesc {
     }
 }
 
+/// A skin for [`GltfWriter::add_skinned_mesh`]: its joints (nodes added before), their
+/// inverse bind matrices (column-major), and each vertex's four joints (indices into `joints`)
+/// with their weights.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SkinDesc {
+    pub joints: Vec<usize>,
+    pub inverse_binds: Vec<[f32; 16]>,
+    pub vertex_joints: Vec<[u16; 4]>,
+    pub vertex_weights: Vec<[f32; 4]>,
+}
+
+/// One channel of an animation: a node's `translation`, `rotation` (quaternions xyzw) or
+/// `scale` at `times` (seconds), its values flattened.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Channel {
+    pub node: usize,
+    pub path: &'static str,
+    pub times: Vec<f32>,
+    pub values: Vec<f32>,
+}
+
 /// Collects meshes, materials, PNG textures and a camera, and writes them as one GLB file.
 #[derive(Debug, Clone)]
 pub struct GltfWriter {
@@ -102,12 +123,14 @@ pub struct GltfWriter {
     /// `KHR_lights_punctual` lights.
     lights: Vec<Value>,
     animations: Vec<Value>,
+    skins: Vec<Value>,
     /// A root node's uniform scale and translation over every node, if any.
     placement: Option<(f64, [f64; 3])>,
 }
 
 const FLOAT: u32 = 5126;
 const UNSIGNED_INT: u32 = 5125;
+const UNSIGNED_SHORT: u32 = 5123;
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 
@@ -127,6 +150,7 @@ impl GltfWriter {
             cameras: Vec::new(),
             lights: Vec::new(),
             animations: Vec::new(),
+            skins: Vec::new(),
             placement: None,
         }
     }
@@ -188,6 +212,57 @@ impl GltfWriter {
         if mesh.indices.is_empty() {
             return None;
         }
+        let primitive = self.add_primitive(mesh, material);
+        self.meshes.push(json!({"name": name, "primitives": [primitive]}));
+        self.nodes.push(json!({"name": name, "mesh": self.meshes.len() - 1}));
+        Some(self.nodes.len() - 1)
+    }
+
+    /// Adds a mesh that `skin` carries (its vertices in the skeleton's bind pose) as a node
+    /// of the scene, and returns the node. Empty meshes are skipped.
+    pub fn add_skinned_mesh(
+        &mut self,
+        name: &str,
+        mesh: &MeshData,
+        material: usize,
+        skin: &SkinDesc,
+    ) -> Option<usize> {
+        if mesh.indices.is_empty() {
+            return None;
+        }
+        let count = mesh.positions.len();
+        let mut primitive = self.add_primitive(mesh, material);
+        let joints = self.add_accessor(
+            bytemuck::cast_slice(&skin.vertex_joints),
+            ARRAY_BUFFER,
+            json!({"componentType": UNSIGNED_SHORT, "count": count, "type": "VEC4"}),
+        );
+        let weights = self.add_accessor(
+            bytemuck::cast_slice(&skin.vertex_weights),
+            ARRAY_BUFFER,
+            json!({"componentType": FLOAT, "count": count, "type": "VEC4"}),
+        );
+        primitive["attributes"]["JOINTS_0"] = json!(joints);
+        primitive["attributes"]["WEIGHTS_0"] = json!(weights);
+        let inverse_binds = self.add_data(
+            bytemuck::cast_slice(&skin.inverse_binds),
+            json!({"componentType": FLOAT, "count": skin.inverse_binds.len(), "type": "MAT4"}),
+        );
+        self.skins.push(json!({"joints": skin.joints, "inverseBindMatrices": inverse_binds}));
+        self.meshes.push(json!({"name": name, "primitives": [primitive]}));
+        self.nodes.push(json!({"name": name, "mesh": self.meshes.len() - 1, "skin": self.skins.len() - 1}));
+        Some(self.nodes.len() - 1)
+    }
+
+    /// Adds a node at `translation` in its parent that holds `children` (nodes added before,
+    /// which stop being roots): a joint of a skeleton. Returns it.
+    pub fn add_joint(&mut self, name: &str, translation: [f32; 3], children: &[usize]) -> usize {
+        self.nodes.push(json!({"name": name, "translation": translation, "children": children}));
+        self.nodes.len() - 1
+    }
+
+    /// A mesh's triangle primitive (its accessors added, triangles wound to its normals).
+    fn add_primitive(&mut self, mesh: &MeshData, material: usize) -> Value {
         let mut mesh = mesh.clone();
         mesh.orient_to_normals();
         let (min, max) =
@@ -215,16 +290,11 @@ impl GltfWriter {
             ELEMENT_ARRAY_BUFFER,
             json!({"componentType": UNSIGNED_INT, "count": mesh.indices.len(), "type": "SCALAR"}),
         );
-        self.meshes.push(json!({
-            "name": name,
-            "primitives": [{
-                "attributes": {"POSITION": position, "NORMAL": normal, "TEXCOORD_0": uv},
-                "indices": indices,
-                "material": material,
-            }],
-        }));
-        self.nodes.push(json!({"name": name, "mesh": self.meshes.len() - 1}));
-        Some(self.nodes.len() - 1)
+        json!({
+            "attributes": {"POSITION": position, "NORMAL": normal, "TEXCOORD_0": uv},
+            "indices": indices,
+            "material": material,
+        })
     }
 
     /// Adds a node that holds `children` (nodes added before, which stop being roots) and returns
@@ -243,20 +313,29 @@ impl GltfWriter {
         times: &[f32],
         translations: &[[f32; 3]],
     ) {
-        let (first, last) = (times.first().copied().unwrap_or(0.0), times.last().copied().unwrap_or(0.0));
-        let input = self.add_data(
-            bytemuck::cast_slice(times),
-            json!({"componentType": FLOAT, "count": times.len(), "type": "SCALAR", "min": [first], "max": [last]}),
-        );
-        let output = self.add_data(
-            bytemuck::cast_slice(translations),
-            json!({"componentType": FLOAT, "count": translations.len(), "type": "VEC3"}),
-        );
-        self.animations.push(json!({
-            "name": name,
-            "channels": [{"sampler": 0, "target": {"node": node, "path": "translation"}}],
-            "samplers": [{"input": input, "output": output, "interpolation": "LINEAR"}],
-        }));
+        let values = translations.iter().flatten().copied().collect();
+        self.add_animation(name, &[Channel { node, path: "translation", times: times.to_vec(), values }]);
+    }
+
+    /// Adds an animation of `channels`, each interpolated linearly (rotations spherically).
+    pub fn add_animation(&mut self, name: &str, channels: &[Channel]) {
+        let (mut targets, mut samplers) = (Vec::new(), Vec::new());
+        for (sampler, channel) in channels.iter().enumerate() {
+            let times = &channel.times;
+            let (first, last) = (times.first().copied().unwrap_or(0.0), times.last().copied().unwrap_or(0.0));
+            let input = self.add_data(
+                bytemuck::cast_slice(times),
+                json!({"componentType": FLOAT, "count": times.len(), "type": "SCALAR", "min": [first], "max": [last]}),
+            );
+            let (kind, width) = if channel.path == "rotation" { ("VEC4", 4) } else { ("VEC3", 3) };
+            let output = self.add_data(
+                bytemuck::cast_slice(&channel.values),
+                json!({"componentType": FLOAT, "count": channel.values.len() / width, "type": kind}),
+            );
+            targets.push(json!({"sampler": sampler, "target": {"node": channel.node, "path": channel.path}}));
+            samplers.push(json!({"input": input, "output": output, "interpolation": "LINEAR"}));
+        }
+        self.animations.push(json!({"name": name, "channels": targets, "samplers": samplers}));
     }
 
     /// An accessor of data that no vertex stage reads (its view has no target).
@@ -357,6 +436,9 @@ impl GltfWriter {
         }
         if !self.animations.is_empty() {
             document["animations"] = json!(self.animations);
+        }
+        if !self.skins.is_empty() {
+            document["skins"] = json!(self.skins);
         }
         if !self.lights.is_empty() {
             document["extensionsUsed"] = json!(["KHR_lights_punctual"]);

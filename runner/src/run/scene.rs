@@ -7,6 +7,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use aabench_renderer::scene::Camera;
+use aabench_renderer::scene::pose::CameraPath;
 use aabench_renderer::{DisplayImage, color};
 
 use super::context::{ModeRun, SceneRun};
@@ -37,7 +38,7 @@ impl<'a> SceneRun<'a> {
             Ok(loaded) => loaded,
             Err(error) => return fail(record, error),
         };
-        let (still_camera, pivot) = (loaded.camera, loaded.pivot);
+        let (still_camera, pivot, camera_path) = (loaded.camera, loaded.pivot, loaded.camera_path.clone());
         self.textured = loaded.scene.is_textured();
         match self.upload(loaded).await {
             Ok((budget, exposure)) => {
@@ -73,7 +74,8 @@ impl<'a> SceneRun<'a> {
         if self.plan.quality {
             self.temporal_stills(&mut runs).await;
         }
-        self.sequences(&mut record, &mut runs, (&still_camera, pivot), truth_image.as_ref()).await;
+        let view = (&still_camera, pivot, camera_path.as_ref());
+        self.sequences(&mut record, &mut runs, view, truth_image.as_ref()).await;
         // Free the scene's device memory before the CPU work below.
         self.free_scene().await;
         self.status("writing images and metrics");
@@ -94,7 +96,7 @@ impl<'a> SceneRun<'a> {
         &mut self,
         record: &mut SceneRecord,
         runs: &mut [ModeRun],
-        (still_camera, pivot): (&Camera, f64),
+        (still_camera, pivot, camera_path): (&Camera, f64, Option<&CameraPath>),
         still_truth: Option<&DisplayImage>,
     ) {
         let Some(motion) = self.manifest.motion.as_ref().filter(|_| self.plan.sequences) else { return };
@@ -106,12 +108,11 @@ impl<'a> SceneRun<'a> {
                 return;
             }
             // Checked when the scene loaded.
-            let cameras = match motion.cameras(still_camera, pivot, frames, pace.rate) {
-                Ok(cameras) => cameras,
-                Err((field, message)) => return self.warn(&format!("no sequence: {field}: {message}")),
-            };
-            let warmup =
-                motion.cameras_before(still_camera, pivot, aabench_renderer::taa::WARMUP_FRAMES, pace.rate);
+            let (cameras, warmup) =
+                match scenes::path_cameras(motion, still_camera, pivot, (frames, pace.rate), camera_path) {
+                    Ok(cameras) => cameras,
+                    Err((field, message)) => return self.warn(&format!("no sequence: {field}: {message}")),
+                };
             let modes = sequence::PathMode::of(&self.plan.modes, runs);
             // The first speed's animations in `path/`, the others' in `path-2/`, `path-3/`, ….
             let folder = if index == 0 { "path".into() } else { format!("path-{}", index + 1) };

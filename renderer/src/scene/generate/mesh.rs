@@ -118,6 +118,25 @@ pub fn rod(radius: f32, height: f32, segments: u32) -> Mesh {
     cylinder(height, segments, 1, |_, _| radius)
 }
 
+/// A capsule along y centred on the origin: a cylinder `length` long between two hemispheres
+/// of `radius`. The first and last quarter of the rings round its ends; the middle half runs
+/// straight, so that a skin can bend it there.
+pub fn capsule(radius: f32, length: f32, segments: u32, rings: u32) -> Mesh {
+    let half = length / 2.0;
+    Mesh::surface(segments, rings, |s, t| {
+        let (phi, y) = if t < 0.25 {
+            (t * TAU, half)
+        } else if t > 0.75 {
+            ((t - 0.5) * TAU, -half)
+        } else {
+            (PI / 2.0, half - (t - 0.25) * 2.0 * length)
+        };
+        let theta = s * TAU;
+        let n = Vec3::new(phi.sin() * theta.cos(), phi.cos(), phi.sin() * theta.sin());
+        (n * radius + Vec3::Y * y, n, Vec2::new(s, t * 2.0))
+    })
+}
+
 pub fn sphere(radius: f32, segments: u32, rings: u32) -> Mesh {
     Mesh::surface(segments, rings, |s, t| {
         let (theta, phi) = (s * TAU, t * PI);

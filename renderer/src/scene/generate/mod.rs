@@ -1,6 +1,7 @@
 //! The deterministic procedural scene generator. It writes glTF files that the importer then
 //! reads, so generated scenes and users' own files share one code path.
 
+mod figure;
 mod mesh;
 mod scenes;
 mod textures;
@@ -55,10 +56,13 @@ pub enum Generator {
     /// A finely checkered crate behind thin bars, sliding across a brick wall and a tiled floor
     /// before a still camera: what a moving object leaves behind.
     Crossing,
+    /// A striped figure, skinned on an eleven-joint skeleton, striding across a brick wall and a
+    /// tiled floor before a still camera: what a deforming object leaves behind.
+    Walker,
 }
 
 impl Generator {
-    pub const ALL: [Generator; 13] = [
+    pub const ALL: [Generator; 14] = [
         Generator::Atrium,
         Generator::Thin,
         Generator::Specular,
@@ -72,6 +76,7 @@ impl Generator {
         Generator::Texture,
         Generator::Wire,
         Generator::Crossing,
+        Generator::Walker,
     ];
 
     /// The `asset.generator` string of a current file made by this generator and seed.
@@ -151,6 +156,7 @@ impl Generated {
             Generator::Texture => scenes::texture(&mut builder),
             Generator::Wire => scenes::wire(&mut builder),
             Generator::Crossing => scenes::crossing(&mut builder),
+            Generator::Walker => scenes::walker(&mut builder),
         }
         let mut writer = builder.finish();
         if self.placement != Placement::IDENTITY {
@@ -181,6 +187,7 @@ impl fmt::Display for Generator {
             Generator::Texture => "texture",
             Generator::Wire => "wire",
             Generator::Crossing => "crossing",
+            Generator::Walker => "walker",
         })
     }
 }

@@ -2,9 +2,9 @@
 
 use glam::{Affine3A, Quat, Vec3};
 
-use super::Builder;
 use super::mesh::{self, Mesh};
 use super::textures;
+use super::{Builder, figure};
 use crate::scene::write::MaterialDesc;
 
 const TEXTURE_SIZE: u32 = 512;
@@ -378,6 +378,25 @@ pub(super) fn crossing(b: &mut Builder) {
         &[0.0, seconds],
         &[[from, -0.6, 0.0], [from + speed * seconds, -0.6, 0.0]],
     );
+    b.camera([0.0, 0.6, 4.0], [0.0, -0.2, 0.0], 60.0, 40.0);
+}
+
+/// A striped figure, skinned on an eleven-joint skeleton, striding across a brick wall and a
+/// tiled floor before a still camera: what a deforming object leaves behind.
+pub(super) fn walker(b: &mut Builder) {
+    let bricks = b.texture("bricks", &textures::bricks(TEXTURE_SIZE));
+    let tiles = b.texture("floor-tiles", &textures::floor_tiles(TEXTURE_SIZE));
+    let stripes = b.texture("stripes-24", &textures::stripes(TEXTURE_SIZE, 24));
+    let wall = b.material(MaterialDesc::new("wall", [1.0; 3], 0.9).textured(bricks));
+    let floor = b.material(MaterialDesc::new("floor", [1.0; 3], 0.5).textured(tiles));
+    b.mesh(wall).append(&mesh::wall(12.0, 6.0, 6, 3, 0.25), at(0.0, 2.0, -3.0));
+    b.mesh(floor).append(&mesh::floor(12.0, 10.0, 12, 10, 0.5), at(0.0, -1.0, 0.0));
+    let suit = b.material(MaterialDesc::new("suit", [1.0; 3], 0.6).textured(stripes));
+    // The feet meet the floor where the legs stand straight; the figure strides as fast as the
+    // crossing crate slides.
+    let speed = 4.0 * 4.0 * 60.0 * (30.0f32).to_radians().tan() / 96.0;
+    let seconds = 2.0;
+    figure::walker(b, "walk", suit, Vec3::new(-1.1, -0.055, 0.5), speed * seconds, seconds);
     b.camera([0.0, 0.6, 4.0], [0.0, -0.2, 0.0], 60.0, 40.0);
 }
 

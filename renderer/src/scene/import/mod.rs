@@ -2,11 +2,11 @@
 //! metallic-roughness, normal, emissive and occlusion textures with `KHR_texture_transform`;
 //! factors (emission with `KHR_materials_emissive_strength`), alpha MASK; UVs, normals (flat
 //! normals generated where a primitive has none) and tangents (MikkTSpace where a normal-mapped
-//! primitive has none); the first camera, and `KHR_lights_punctual` lights.
+//! primitive has none); skins; the first camera, and `KHR_lights_punctual` lights.
 //!
 //! This module walks the node trees and assembles the scene; its parts: `files` (the file and
 //! the files it names), `materials`, `primitives` (accessors checked, vertices to world space),
-//! `tangents`, `lights` (and the camera) and `images`.
+//! `skins` (joints and influences), `tangents`, `lights` (and the camera) and `images`.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -14,6 +14,7 @@ use std::path::Path;
 use glam::{DMat4, DVec3};
 
 use super::animation::{RestNode, Rig};
+use super::skin::Influence;
 use super::{DrawClass, Light, Scene};
 use crate::error::RenderError;
 
@@ -23,6 +24,7 @@ mod images;
 mod lights;
 mod materials;
 mod primitives;
+mod skins;
 mod tangents;
 
 use animations::import_animations;
@@ -32,6 +34,7 @@ pub use images::MAX_TEXTURE_SIDE;
 use images::decode_textures;
 use lights::{camera_from_node, light_from_node};
 use materials::{Materials, import_materials};
+use primitives::Placement;
 
 /// Reads a `.gltf` or `.glb` file and everything it references. Every error names the part of
 /// the file at fault (`nodes[3]`, `accessors[2]`, `images[0] (uri textures/a.png)`, …).
@@ -56,6 +59,7 @@ pub fn load_gltf(path: &Path) -> Result<Scene, RenderError> {
     }
     importer.scene.materials = materials;
     importer.visit_scene(&document, &buffers).map_err(fail)?;
+    importer.add_skinned(&document, &buffers).map_err(fail)?;
 
     let animations = import_animations(&document, &buffers, &broken_animations, &importer.rig);
     let mut scene = importer.finish();
@@ -92,6 +96,10 @@ struct Importer {
     /// Vertices that tangent generation split off at the end of the list: where the primitive
     /// they came from starts, and the range of its copies.
     split_off: Vec<(usize, std::ops::Range<usize>)>,
+    /// The skinned nodes the walk met, whose meshes wait until every joint is placed.
+    skinned: Vec<usize>,
+    /// Each vertex's joints from the first skinned vertex on (empty without skins).
+    influences: Vec<Influence>,
 }
 
 /// Where one primitive's vertices and triangles lie in the importer's lists.
@@ -168,13 +176,18 @@ impl Importer {
         if !world.is_finite() {
             return Err(format!("nodes[{}]: the transform is not finite", node.index()));
         }
-        if let Some(mesh) = node.mesh() {
-            for primitive in mesh.primitives() {
-                self.add_primitive(&mesh, &primitive, world, buffers)?;
+        match (node.mesh(), node.skin()) {
+            (Some(_), Some(_)) => self.skinned.push(node.index()),
+            (Some(mesh), None) => {
+                for primitive in mesh.primitives() {
+                    self.add_primitive(&mesh, &primitive, Placement::Node(world), buffers)?;
+                }
             }
+            (None, _) => {}
         }
         if let (Some(camera), None) = (node.camera(), &self.scene.camera) {
             self.scene.camera = camera_from_node(document, camera.index(), world)?;
+            self.scene.camera_node = self.scene.camera.is_some().then_some(node.index());
         }
         if let Some(light) = node.light() {
             self.lights
@@ -188,12 +201,18 @@ impl Importer {
     /// far from the file's origin keeps f32 precision (and a scene near it keeps its bits).
     fn finish(mut self) -> Scene {
         self.generate_tangents();
-        // A node moves the copies of its vertices with them.
+        // A node or skin moves the copies of its vertices with them.
         for (first, copies) in std::mem::take(&mut self.split_off) {
-            let owner = self.rig.nodes.iter_mut().find(|n| n.vertices.iter().any(|r| r.contains(&first)));
+            let holds = |ranges: &Vec<std::ops::Range<usize>>| ranges.iter().any(|r| r.contains(&first));
+            let node = self.rig.nodes.iter_mut().map(|n| &mut n.vertices).find(|v| holds(v));
+            let owner =
+                node.or_else(|| self.rig.skins.iter_mut().map(|s| &mut s.vertices).find(|v| holds(v)));
             if let Some(owner) = owner {
-                owner.vertices.push(copies);
+                owner.push(copies);
             }
+        }
+        for skin in &mut self.rig.skins {
+            skin.influences = skin.vertex_indices().map(|v| self.influences[v]).collect();
         }
         let (lo, hi) = self
             .world

@@ -5,23 +5,51 @@ use glam::{DMat3, DMat4, DVec3, Vec3};
 
 use super::Importer;
 use crate::scene::Vertex;
+use crate::scene::skin::Influence;
+
+/// Where a primitive's vertices go from its mesh's space: all by its node's world transform,
+/// or each by the blend of its joints at rest, with the influences the skin keeps.
+#[derive(Clone, Copy)]
+pub(super) enum Placement<'a> {
+    Node(DMat4),
+    Skinned { blends: &'a [DMat4], influences: &'a [Influence] },
+}
+
+impl Placement<'_> {
+    /// The transform of the primitive's vertex `v`.
+    fn matrix(&self, v: usize) -> DMat4 {
+        match self {
+            Placement::Node(world) => *world,
+            Placement::Skinned { blends, .. } => blends[v],
+        }
+    }
+
+    /// The influences of vertex `v`, where the primitive is skinned.
+    fn influence(&self, v: usize) -> Option<Influence> {
+        match self {
+            Placement::Node(_) => None,
+            Placement::Skinned { influences, .. } => Some(influences[v]),
+        }
+    }
+
+    /// The transform that turns vertex `v`'s normal: the inverse transpose of its own.
+    fn normal_matrix(&self, v: usize, node: &DMat3) -> DMat3 {
+        match self {
+            Placement::Node(_) => *node,
+            Placement::Skinned { blends, .. } => DMat3::from_mat4(blends[v]).inverse().transpose(),
+        }
+    }
+}
 
 impl Importer {
     pub(super) fn add_primitive(
         &mut self,
         mesh: &gltf::Mesh,
         primitive: &gltf::Primitive,
-        world: DMat4,
+        placement: Placement,
         buffers: &[gltf::buffer::Data],
     ) -> Result<(), String> {
-        let name = || {
-            format!(
-                "meshes[{}] ({}) primitives[{}]",
-                mesh.index(),
-                mesh.name().unwrap_or("unnamed"),
-                primitive.index()
-            )
-        };
+        let name = || primitive_name(mesh, primitive);
         if primitive.mode() != gltf::mesh::Mode::Triangles {
             // Points and lines have no surface to shade; skipping them keeps the rest usable.
             return Ok(());
@@ -32,9 +60,10 @@ impl Importer {
         let default_material = self.scene.materials.len() - 1;
         let material = primitive.material().index().unwrap_or(default_material);
         let class = self.scene.materials[material].draw_class();
-        let mirrored = DMat3::from_mat4(world).determinant() < 0.0;
-        let normal_matrix = DMat3::from_mat4(world).inverse().transpose();
-        let world_positions = to_world(&positions, world).map_err(|(i, p)| {
+        // A skin mirrors a primitive as its first vertex's blend does.
+        let mirrored = DMat3::from_mat4(placement.matrix(0)).determinant() < 0.0;
+        let normal_matrix = DMat3::from_mat4(placement.matrix(0)).inverse().transpose();
+        let world_positions = to_world(&positions, placement).map_err(|(i, p)| {
             format!(
                 "{}: vertex {i} lies at {} in world space, beyond ±{:e} (the node transforms multiply up)",
                 name(),
@@ -50,17 +79,23 @@ impl Importer {
         };
         let first_vertex = self.scene.vertices.len();
         let first_triangle = self.triangles.get(&class).map_or(0, Vec::len);
+        if placement.influence(0).is_some() {
+            self.influences.resize(first_vertex, Influence::default());
+        }
         let vertices = &mut self.scene.vertices;
         let positions_world = &mut self.world;
+        let influences = &mut self.influences;
         let triangles = self.triangles.entry(class).or_default();
 
         match normals {
             Some(normals) => {
                 let base = vertices.len() as u32;
-                for ((p, n), uv) in world_positions.iter().zip(&normals).zip(&uvs) {
-                    let n = (normal_matrix * DVec3::from(n.map(f64::from))).normalize_or_zero();
+                for (i, ((p, n), uv)) in world_positions.iter().zip(&normals).zip(&uvs).enumerate() {
+                    let turn = placement.normal_matrix(i, &normal_matrix);
+                    let n = (turn * DVec3::from(n.map(f64::from))).normalize_or_zero();
                     vertices.push(vertex(n.as_vec3(), *uv));
                     positions_world.push(*p);
+                    influences.extend(placement.influence(i));
                 }
                 let added: Vec<[u32; 3]> =
                     indices.chunks_exact(3).map(|t| wound(t, mirrored).map(|i| base + i)).collect();
@@ -72,20 +107,31 @@ impl Importer {
                 // Flat normals: every triangle gets its own three vertices.
                 for (normal, corners) in flat_triangles(&indices, &world_positions, &uvs, mirrored) {
                     let base = vertices.len() as u32;
-                    for (position, uv) in corners {
+                    for (position, uv, source) in corners {
                         vertices.push(vertex(normal, uv));
                         positions_world.push(position);
+                        influences.extend(placement.influence(source as usize));
                     }
                     triangles.push([base, base + 1, base + 2]);
                 }
             }
         }
         if self.scene.materials[material].normal_texture.is_some() {
-            let file_tangents = file_tangents.map(|tangents| world_tangents(&tangents, world, mirrored));
+            let file_tangents = file_tangents.map(|tangents| world_tangents(&tangents, placement, mirrored));
             self.add_tangents(class, first_vertex, first_triangle, file_tangents);
         }
         Ok(())
     }
+}
+
+/// `meshes[2] (wall) primitives[0]`, as messages name a primitive.
+pub(super) fn primitive_name(mesh: &gltf::Mesh, primitive: &gltf::Primitive) -> String {
+    format!(
+        "meshes[{}] ({}) primitives[{}]",
+        mesh.index(),
+        mesh.name().unwrap_or("unnamed"),
+        primitive.index()
+    )
 }
 
 /// A triangle's indices in front-face order: a mirroring transform turns counter-clockwise front
@@ -94,8 +140,8 @@ fn wound(t: &[u32], mirrored: bool) -> [u32; 3] {
     if mirrored { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] }
 }
 
-/// A triangle's corner: its world position and UV.
-type Corner = (DVec3, [f32; 2]);
+/// A triangle's corner: its world position, UV and the primitive's vertex it came from.
+type Corner = (DVec3, [f32; 2], u32);
 
 /// Each triangle's corners (world position and UV, in front-face order) with the normal of its
 /// plane: flat shading, where the file gives no normals.
@@ -108,7 +154,7 @@ fn flat_triangles(
     indices
         .chunks_exact(3)
         .map(|t| {
-            let corners = wound(t, mirrored).map(|i| (positions[i as usize], uvs[i as usize]));
+            let corners = wound(t, mirrored).map(|i| (positions[i as usize], uvs[i as usize], i));
             let normal = (corners[1].0 - corners[0].0)
                 .cross(corners[2].0 - corners[0].0)
                 .normalize_or_zero()
@@ -121,9 +167,10 @@ fn flat_triangles(
 /// The positions moved to world space, where they stay f64 until `finish` knows the scene's
 /// origin; or the index and place of the first that lies beyond what an f32 (and a camera) can
 /// hold: finite scales can multiply up to such places.
-fn to_world(positions: &[[f32; 3]], world: DMat4) -> Result<Vec<DVec3>, (usize, DVec3)> {
-    let world_positions: Vec<DVec3> =
-        positions.iter().map(|p| world.transform_point3(DVec3::from(p.map(f64::from)))).collect();
+fn to_world(positions: &[[f32; 3]], placement: Placement) -> Result<Vec<DVec3>, (usize, DVec3)> {
+    let world_positions: Vec<DVec3> = (positions.iter().enumerate())
+        .map(|(i, p)| placement.matrix(i).transform_point3(DVec3::from(p.map(f64::from))))
+        .collect();
     let beyond = |p: &DVec3| !p.is_finite() || p.abs().max_element() > crate::scene::MAX_COORDINATE;
     match world_positions.iter().position(beyond) {
         Some(i) => Err((i, world_positions[i])),
@@ -200,12 +247,11 @@ fn read_attributes(
 
 /// The file's tangents in world space: they move with the surface, and a mirroring transform
 /// flips the bitangent's sign.
-fn world_tangents(tangents: &[[f32; 4]], world: DMat4, mirrored: bool) -> Vec<[f32; 4]> {
-    let linear = DMat3::from_mat4(world);
+fn world_tangents(tangents: &[[f32; 4]], placement: Placement, mirrored: bool) -> Vec<[f32; 4]> {
     let handedness = if mirrored { -1.0 } else { 1.0 };
-    tangents
-        .iter()
-        .map(|t| {
+    (tangents.iter().enumerate())
+        .map(|(i, t)| {
+            let linear = DMat3::from_mat4(placement.matrix(i));
             let xyz = (linear * DVec3::new(t[0].into(), t[1].into(), t[2].into())).normalize_or_zero();
             let w = if t[3] < 0.0 { -handedness } else { handedness };
             [xyz.x as f32, xyz.y as f32, xyz.z as f32, w]
@@ -216,7 +262,10 @@ fn world_tangents(tangents: &[[f32; 4]], world: DMat4, mirrored: bool) -> Vec<[f
 /// Checks that an accessor the importer reads has a format glTF allows for it (`None` for
 /// indices): the gltf crate's readers assume it and panic otherwise. Sparse accessors are
 /// refused rather than read: their indices and values are not bounds-checked by the crate.
-fn check_format(semantic: Option<&gltf::Semantic>, accessor: &gltf::Accessor) -> Result<(), String> {
+pub(super) fn check_format(
+    semantic: Option<&gltf::Semantic>,
+    accessor: &gltf::Accessor,
+) -> Result<(), String> {
     use gltf::Semantic;
     use gltf::accessor::{DataType, Dimensions};
     let format = (accessor.data_type(), accessor.dimensions());
@@ -226,6 +275,11 @@ fn check_format(semantic: Option<&gltf::Semantic>, accessor: &gltf::Accessor) ->
         Some(Semantic::Tangents) => format == (DataType::F32, Dimensions::Vec4),
         Some(Semantic::TexCoords(_)) => {
             matches!(format, (DataType::F32 | DataType::U8 | DataType::U16, Dimensions::Vec2))
+        }
+        Some(Semantic::Joints(_)) => matches!(format, (DataType::U8 | DataType::U16, Dimensions::Vec4)),
+        Some(Semantic::Weights(_)) => {
+            let integer = matches!(format.0, DataType::U8 | DataType::U16) && accessor.normalized();
+            format.1 == Dimensions::Vec4 && (format.0 == DataType::F32 || integer)
         }
         // Read by no one here.
         Some(_) => return Ok(()),

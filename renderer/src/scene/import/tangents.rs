@@ -90,6 +90,12 @@ impl Importer {
                         self.scene.vertices.push(self.scene.vertices[v]);
                         self.world.push(self.world[v]);
                         self.scene.tangents.push(tangent);
+                        if !self.influences.is_empty() {
+                            // A skinned vertex's copy follows its joints too.
+                            let copied = self.influences.get(v).copied().unwrap_or_default();
+                            self.influences.resize(self.scene.vertices.len() - 1, Default::default());
+                            self.influences.push(copied);
+                        }
                         (self.scene.vertices.len() - 1) as u32
                     });
                 }

@@ -1,0 +1,155 @@
+//! Skinned meshes: their joints, inverse bind matrices and each vertex's influences read and
+//! checked, and their vertices placed where the skeleton's rest pose carries them.
+
+use std::collections::HashMap;
+
+use glam::DMat4;
+
+use super::Importer;
+use super::primitives::{Placement, check_accessor, check_format, primitive_name};
+use crate::scene::skin::{Influence, Skin};
+
+impl Importer {
+    /// Adds the meshes of the skinned nodes that the walk met, once it has placed every joint:
+    /// each vertex where the blend of its joints at rest carries it. The node that holds a
+    /// skinned mesh does not place it (glTF 2.0, 3.7.3.3).
+    pub(super) fn add_skinned(
+        &mut self,
+        document: &gltf::Document,
+        buffers: &[gltf::buffer::Data],
+    ) -> Result<(), String> {
+        let places: HashMap<usize, usize> =
+            self.rig.nodes.iter().enumerate().map(|(place, rest)| (rest.node, place)).collect();
+        let rest_worlds = self.rig.rest_worlds();
+        for index in std::mem::take(&mut self.skinned) {
+            let node = document.nodes().nth(index).expect("a node of the document");
+            let (Some(mesh), Some(skin)) = (node.mesh(), node.skin()) else {
+                continue;
+            };
+            let joints = read_joints(&skin, buffers, &places)
+                .map_err(|e| format!("nodes[{index}]: skins[{}]{e}", skin.index()))?;
+            let matrices: Vec<DMat4> =
+                joints.iter().map(|&(place, inverse_bind)| rest_worlds[place] * inverse_bind).collect();
+            let first = self.scene.vertices.len();
+            let triangles = mesh.primitives().filter(|p| p.mode() == gltf::mesh::Mode::Triangles);
+            for primitive in triangles {
+                let influences = read_influences(&primitive, buffers, joints.len())
+                    .map_err(|e| format!("{}: {e}", primitive_name(&mesh, &primitive)))?;
+                let blends: Vec<DMat4> = influences.iter().map(|i| i.blend(&matrices)).collect();
+                let placement = Placement::Skinned { blends: &blends, influences: &influences };
+                self.add_primitive(&mesh, &primitive, placement, buffers)?;
+            }
+            self.rig.skins.push(Skin {
+                skin: skin.index(),
+                node: index,
+                joints,
+                vertices: std::iter::once(first..self.scene.vertices.len()).collect(),
+                // Filled once tangent generation has split off its copies.
+                influences: Vec::new(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// A skin's joints: each its place in the rig (`places`, by glTF node) and its inverse bind
+/// matrix (the identity where the skin gives none). Errors start with the field at fault
+/// (`.joints[3]: …`); the caller names the skin.
+fn read_joints(
+    skin: &gltf::Skin,
+    buffers: &[gltf::buffer::Data],
+    places: &HashMap<usize, usize>,
+) -> Result<Vec<(usize, DMat4)>, String> {
+    let joints: Vec<gltf::Node> = skin.joints().collect();
+    let inverse_binds: Vec<DMat4> = match skin.inverse_bind_matrices() {
+        None => vec![DMat4::IDENTITY; joints.len()],
+        Some(accessor) => {
+            let index = accessor.index();
+            let format = (accessor.data_type(), accessor.dimensions());
+            if format != (gltf::accessor::DataType::F32, gltf::accessor::Dimensions::Mat4)
+                || accessor.sparse().is_some()
+            {
+                return Err(format!(
+                    ".inverseBindMatrices: accessors[{index}] must hold float MAT4s, not sparse"
+                ));
+            }
+            check_accessor(&accessor, buffers).map_err(|e| format!(".inverseBindMatrices: {e}"))?;
+            if accessor.count() < joints.len() {
+                return Err(format!(
+                    ".inverseBindMatrices: accessors[{index}] holds {} matrices for {} joints",
+                    accessor.count(),
+                    joints.len()
+                ));
+            }
+            let reader = skin.reader(|buffer| buffers.get(buffer.index()).map(|d| &d.0[..]));
+            let matrices =
+                reader.read_inverse_bind_matrices().ok_or(".inverseBindMatrices cannot be read")?;
+            let matrices: Vec<DMat4> =
+                matrices.map(|m| DMat4::from_cols_array_2d(&m.map(|c| c.map(f64::from)))).collect();
+            if let Some(j) = matrices.iter().position(|m| !m.is_finite()) {
+                return Err(format!(".inverseBindMatrices: matrix {j} is not finite"));
+            }
+            matrices
+        }
+    };
+    (joints.iter().zip(inverse_binds).enumerate())
+        .map(|(j, (joint, inverse_bind))| {
+            let place = places.get(&joint.index()).ok_or_else(|| {
+                format!(".joints[{j}]: nodes[{}] is not in the scene, so nothing places it", joint.index())
+            })?;
+            Ok((*place, inverse_bind))
+        })
+        .collect()
+}
+
+/// One set of `JOINTS_n` and `WEIGHTS_n`: per vertex, four joints and their weights.
+type InfluenceSet = (Vec<[u16; 4]>, Vec<[f32; 4]>);
+
+/// Each vertex's influences, from `JOINTS_0` and `WEIGHTS_0` and the second set where present,
+/// checked against the skin's `joints` and normalised. Errors name the attribute and vertex.
+fn read_influences(
+    primitive: &gltf::Primitive,
+    buffers: &[gltf::buffer::Data],
+    joints: usize,
+) -> Result<Vec<Influence>, String> {
+    use gltf::Semantic;
+    let count = primitive.get(&Semantic::Positions).map_or(0, |a| a.count());
+    let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(|d| &d.0[..]));
+    let mut sets: Vec<InfluenceSet> = Vec::new();
+    for set in 0..2u32 {
+        let pair = [Semantic::Joints(set), Semantic::Weights(set)].map(|s| primitive.get(&s).map(|a| (s, a)));
+        let present = pair.iter().filter(|p| p.is_some()).count();
+        let [Some(joints_accessor), Some(weights_accessor)] = pair else {
+            if set == 0 || present > 0 {
+                return Err(format!(
+                    "a skinned mesh's primitive needs attributes.JOINTS_{set} and WEIGHTS_{set} together"
+                ));
+            }
+            break;
+        };
+        for (semantic, accessor) in [joints_accessor, weights_accessor] {
+            check_format(Some(&semantic), &accessor)
+                .and_then(|()| check_accessor(&accessor, buffers))
+                .map_err(|e| format!("attributes.{}: {e}", semantic.to_string()))?;
+            if accessor.count() != count {
+                return Err(format!(
+                    "attributes.{}: {} elements for {count} vertices",
+                    semantic.to_string(),
+                    accessor.count()
+                ));
+            }
+        }
+        let read = (reader.read_joints(set), reader.read_weights(set));
+        let (Some(joints), Some(weights)) = read else {
+            return Err(format!("attributes.JOINTS_{set} or WEIGHTS_{set} cannot be read"));
+        };
+        sets.push((joints.into_u16().collect(), weights.into_f32().collect()));
+    }
+    (0..count)
+        .map(|v| {
+            let per_vertex: Vec<([u16; 4], [f32; 4])> = sets.iter().map(|(j, w)| (j[v], w[v])).collect();
+            Influence::from_sets(&per_vertex, joints)
+                .map_err(|e| format!("attributes.JOINTS and WEIGHTS: vertex {v}: {e}"))
+        })
+        .collect()
+}

@@ -1,12 +1,18 @@
 //! 4× MSAA: it shades per sample exactly the pixels that an edge crosses, once per pixel
 //! elsewhere as deferred shading does, and brings geometric edges nearer their truth, the
-//! edges that an alpha test cuts out of a texture included.
+//! edges that an alpha test cuts out of a texture included: its sample mask's bits are the
+//! standard sample positions in order.
 
 mod support;
 
+use std::sync::Arc;
+
 use aabench_renderer::scene::generate::Generator;
+use aabench_renderer::scene::load_gltf;
+use aabench_renderer::scene::write::{GltfWriter, MaterialDesc, MeshData};
 use aabench_renderer::{DisplayImage, SceneRenderer};
-use support::{generated, gpu, lit, render, renderer, settings};
+use glam::{DVec2, DVec3};
+use support::{Folder, ambient_only, generated, gpu, lit, project, render, renderer, settings};
 
 /// The standard 4× sample positions within a pixel.
 const SAMPLE_POSITIONS: [(f64, f64); 4] = [(0.375, 0.125), (0.875, 0.375), (0.125, 0.625), (0.625, 0.875)];
@@ -180,4 +186,142 @@ fn msaa_tests_alpha_per_sample_so_cut_out_edges_are_shaded_per_sample() {
     );
     assert!(split >= 400, "{split} foliage pixels shaded per sample");
     assert!(error < 0.85 * deferred, "msaa-4x {error} against deferred-1x1 {deferred}");
+}
+
+/// A flat mesh of quads in the plane z = `z`, each given by its corners' (x, y), counter-
+/// clockwise seen from +z; a quad's UVs map x ∈ [−2, 2] and y ∈ [2, −2] onto [0, 1]², so that
+/// the card's edges lie well inside its texture and its filtering never wraps.
+fn quads(z: f32, corners: &[[[f32; 2]; 4]]) -> MeshData {
+    let mut mesh = MeshData::default();
+    for quad in corners {
+        let first = mesh.positions.len() as u32;
+        for [x, y] in quad {
+            mesh.positions.push([*x, *y, z]);
+            mesh.normals.push([0.0, 0.0, 1.0]);
+            mesh.uvs.push([(x + 2.0) / 4.0, (2.0 - y) / 4.0]);
+        }
+        mesh.indices.extend([first, first + 1, first + 2, first, first + 2, first + 3]);
+    }
+    mesh
+}
+
+/// Where the card's cut crosses y (world units, on the card's plane z = 0): a line 7° from
+/// vertical through (0.1, 0). The card keeps what lies left of it.
+fn cut_x(y: f32) -> f32 {
+    0.1 + y * 7f32.to_radians().tan()
+}
+
+/// The alpha texture that cuts the card: a ramp of the signed distance to the cut, 0.5 on it and
+/// rising by 1 every four texels leftwards. Bilinear filtering reproduces a linear function
+/// exactly, so the alpha test at 0.5 finds the cut within the 8-bit rounding (under 0.01 texel).
+fn cut_texture(size: u32) -> Vec<u8> {
+    let image = image::RgbaImage::from_fn(size, size, |i, j| {
+        // The texel's centre on the card.
+        let texel = 4.0 / size as f32;
+        let (x, y) = ((i as f32 + 0.5) * texel - 2.0, 2.0 - (j as f32 + 0.5) * texel);
+        let distance = (x - cut_x(y)) * 7f32.to_radians().cos();
+        let alpha = (0.5 - distance / (4.0 * texel)).clamp(0.0, 1.0);
+        image::Rgba([255, 255, 255, (alpha * 255.0).round() as u8])
+    });
+    let mut png = std::io::Cursor::new(Vec::new());
+    image.write_to(&mut png, image::ImageFormat::Png).unwrap();
+    png.into_inner()
+}
+
+/// The height of the bars behind the card, in world units: at 128×96 under 0.9 px.
+const BAR_HEIGHT: f32 = 0.03;
+
+/// Where each bar begins along y: every 0.07, so that their edges, 2 px apart, fall at every
+/// fraction of a pixel.
+fn bar_bottoms() -> impl Iterator<Item = f32> {
+    (-40..40).map(|k| k as f32 * 0.07)
+}
+
+/// A card before thin horizontal bars before a wall, seen head-on. With `alpha_cut`, the card is
+/// the whole square x, y ∈ [−1, 1], alpha-masked by [`cut_texture`]; without, its geometric twin:
+/// the part of that square left of the cut, opaque.
+fn card_scene(folder: &Folder, alpha_cut: bool) -> aabench_renderer::scene::Scene {
+    let mut writer = GltfWriter::new("msaa sample mask test");
+    let wall = writer.add_material(&MaterialDesc::new("wall", [0.05; 3], 1.0));
+    writer.add_mesh("wall", &quads(-1.0, &[[[-3.0, -3.0], [3.0, -3.0], [3.0, 3.0], [-3.0, 3.0]]]), wall);
+    let bars: Vec<[[f32; 2]; 4]> =
+        bar_bottoms().map(|y| [[-3.0, y], [3.0, y], [3.0, y + BAR_HEIGHT], [-3.0, y + BAR_HEIGHT]]).collect();
+    let bar = writer.add_material(&MaterialDesc::new("bars", [0.35; 3], 1.0));
+    writer.add_mesh("bars", &quads(-0.5, &bars), bar);
+    let card = if alpha_cut {
+        let texture = writer.add_png("cut", &cut_texture(32));
+        let material = MaterialDesc::new("card", [0.8; 3], 1.0).textured(texture).masked(0.5);
+        (writer.add_material(&material), [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    } else {
+        let corners = [[-1.0, -1.0], [cut_x(-1.0), -1.0], [cut_x(1.0), 1.0], [-1.0, 1.0]];
+        (writer.add_material(&MaterialDesc::new("card", [0.8; 3], 1.0)), corners)
+    };
+    writer.add_mesh("card", &quads(0.0, &[card.1]), card.0);
+    writer.add_camera(DVec3::new(0.0, 0.0, 4.0), DVec3::ZERO, 40.0, 0.1, 20.0);
+    let path = folder.dir.join(format!("card-{alpha_cut}.glb"));
+    writer.write(&path).unwrap();
+    load_gltf(&path).unwrap()
+}
+
+/// The sample mask's bit i is the sample at the i-th of the standard positions. The card's
+/// alpha cut and the bars' geometric edges cross inside some pixels; which of those pixels'
+/// samples show the card, a bar or the wall then depends on which samples the mask names, so
+/// the cut card must resolve as its geometric twin does: within one code in every pixel whose
+/// samples lie further than 0.05 px from the cut. Listing the shader's sample offsets in
+/// another order (reversed, or the middle two swapped) moves 9 or 6 of the 18 pixels where the
+/// cut and a bar's edge cross, by 13 codes on average.
+#[test]
+fn msaa_sample_mask_bits_are_the_standard_sample_positions() {
+    let folder = Folder::new("msaa-sample-mask");
+    let (width, height) = (128u32, 96u32);
+    let size = DVec2::new(f64::from(width), f64::from(height));
+    let (gpu, _guard) = gpu();
+    let images = [true, false].map(|alpha_cut| {
+        let scene = card_scene(&folder, alpha_cut);
+        let camera = scene.camera.expect("the file's camera");
+        let mut renderer =
+            SceneRenderer::new(Arc::clone(&gpu), &scene, &camera, &ambient_only(), settings(width, height))
+                .expect("scene upload");
+        (render(&mut renderer, "msaa-4x"), camera)
+    });
+    let [(cut, camera), (twin, _)] = images;
+    // The cut and a bar's edge on screen: the planes face the camera, so lines stay lines.
+    let on_screen =
+        |x: f32, y: f32, z: f64| project(&camera, size, DVec3::new(f64::from(x), f64::from(y), z)).0;
+    let (bottom, top) = (on_screen(cut_x(-1.0), -1.0, 0.0), on_screen(cut_x(1.0), 1.0, 0.0));
+    let across = (top - bottom).perp().normalize();
+    let cut_side = |p: DVec2| (p - bottom).dot(across);
+    let bar_edges: Vec<f64> =
+        bar_bottoms().flat_map(|y| [y, y + BAR_HEIGHT]).map(|y| on_screen(0.0, y, -0.5).y).collect();
+    let (mut compared, mut crossed) = (0, 0);
+    for y in 0..height {
+        for x in 0..width {
+            let samples: Vec<DVec2> = SAMPLE_POSITIONS
+                .iter()
+                .map(|(dx, dy)| DVec2::new(f64::from(x) + dx, f64::from(y) + dy))
+                .collect();
+            let sides: Vec<f64> = samples.iter().map(|&s| cut_side(s)).collect();
+            if sides.iter().any(|d| d.abs() < 0.05) {
+                continue;
+            }
+            compared += 1;
+            let pixel = 4 * (y * width + x) as usize;
+            let (a, b) = (&cut.display.rgba[pixel..pixel + 3], &twin.display.rgba[pixel..pixel + 3]);
+            let step = a.iter().zip(b).map(|(p, q)| p.abs_diff(*q)).max().unwrap();
+            assert!(
+                step <= 1,
+                "pixel ({x}, {y}): alpha cut {a:?}, geometric twin {b:?}, samples' sides {sides:?}"
+            );
+            let split = |d: &dyn Fn(&DVec2) -> f64| {
+                samples.iter().any(|s| d(s) < 0.0) && samples.iter().any(|s| d(s) > 0.0)
+            };
+            let on_card = (top.y..bottom.y).contains(&(f64::from(y) + 0.5));
+            if on_card && split(&|s| cut_side(*s)) && bar_edges.iter().any(|&e| split(&|s| s.y - e)) {
+                crossed += 1;
+            }
+        }
+    }
+    println!("{compared} pixels compared, {crossed} crossed by the cut and a bar's edge");
+    assert!(compared > (width * height) as usize * 9 / 10, "only {compared} pixels compared");
+    assert!(crossed >= 10, "only {crossed} pixels where the cut and a bar's edge cross");
 }

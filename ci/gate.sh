@@ -22,8 +22,8 @@
 # (`aabench modes --tier quick --timed-by-gate`: the unstalled ones and one stalled);
 # `aabench compare` then decides time with the process as the unit. The scenes whose time
 # regressed are measured again in as many fresh processes a side, and a time regression stands
-# only where those find it again (`compare --confirm-runs`). When the code is the base's (only baselines or
-# docs changed), time cannot have changed through the change: one run of 5 rounds is compared
+# only where those find it again (`compare --confirm-runs`). When the code is the base's (only baselines,
+# docs or tests changed), time cannot have changed through the change: one run of 5 rounds is compared
 # with the baselines and its time is reported, not gated. Without a usable base (no git history), one
 # run is compared with the baselines and time is gated only on the machine that blessed them.
 #
@@ -171,8 +171,10 @@ finished_runs() {
     done
 }
 
-# What cannot change a time: the baselines themselves, the documentation and the CI workflows.
-code_paths=(. ':(exclude)baselines' ':(exclude)*.md' ':(exclude)docs' ':(exclude).github' ':(exclude)ci/lint')
+# What cannot change a time: the baselines themselves, the documentation, the CI workflows, and
+# the crates' tests and benchmarks (no part of the binary).
+code_paths=(. ':(exclude)baselines' ':(exclude)*.md' ':(exclude)docs' ':(exclude).github' ':(exclude)ci/lint'
+    ':(exclude)*/tests/*' ':(exclude)*/benches/*')
 began=$(date +%s)
 started=$began
 if [ -z "$base" ]; then

@@ -194,6 +194,24 @@ impl Poser {
             .map(|(first, p)| (first, p.into_iter().map(|p| p.as_vec3().to_array()).collect()));
         nodes.chain(skins).collect()
     }
+
+    /// Whether the animation moves anything a frame shows: a node's vertices, a skin's, or the
+    /// file's camera (`camera`: [`CameraPath::of`] found one). On failure, the nodes it moves.
+    pub fn check_moves_something(&self, camera: bool) -> Result<(), String> {
+        let shows = camera || !self.skins.is_empty() || !self.rig.node_changes(&self.tracks, 0.0).is_empty();
+        if shows {
+            return Ok(());
+        }
+        let mut nodes: Vec<usize> = self.tracks.iter().map(|t| t.node).collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        let nodes: Vec<String> = nodes.iter().map(|n| format!("nodes[{n}]")).collect();
+        Err(format!(
+            "moves only {}, which hold no geometry and no camera, nor do the nodes below them: nothing \
+             in the frame would move",
+            nodes.join(", ")
+        ))
+    }
 }
 
 /// The file's camera as the playing animation moves it (the node that holds it, or one above).
@@ -225,26 +243,6 @@ impl CameraPath {
             up: world.transform_vector3(DVec3::Y),
             ..*rest
         }
-    }
-}
-
-impl Poser {
-    /// Whether the animation moves anything a frame shows: a node's vertices, a skin's, or the
-    /// file's camera (`camera`: [`CameraPath::of`] found one). On failure, the nodes it moves.
-    pub fn check_moves_something(&self, camera: bool) -> Result<(), String> {
-        let shows = camera || !self.skins.is_empty() || !self.rig.node_changes(&self.tracks, 0.0).is_empty();
-        if shows {
-            return Ok(());
-        }
-        let mut nodes: Vec<usize> = self.tracks.iter().map(|t| t.node).collect();
-        nodes.sort_unstable();
-        nodes.dedup();
-        let nodes: Vec<String> = nodes.iter().map(|n| format!("nodes[{n}]")).collect();
-        Err(format!(
-            "moves only {}, which hold no geometry and no camera, nor do the nodes below them: nothing \
-             in the frame would move",
-            nodes.join(", ")
-        ))
     }
 }
 

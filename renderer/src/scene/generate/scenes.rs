@@ -354,13 +354,8 @@ pub(super) fn wire(b: &mut Builder) {
 /// (a 60° vertical field: 166 pixels of focal length) and 16 at the nightly's 1024×768: its
 /// trailing edge uncovers the wall's bricks, where a history that is not rejected ghosts.
 pub(super) fn crossing(b: &mut Builder) {
-    let bricks = b.texture("bricks", &textures::bricks(TEXTURE_SIZE));
-    let tiles = b.texture("floor-tiles", &textures::floor_tiles(TEXTURE_SIZE));
+    stage(b);
     let checks = b.texture("checker-16", &textures::checker(TEXTURE_SIZE, 16));
-    let wall = b.material(MaterialDesc::new("wall", [1.0; 3], 0.9).textured(bricks));
-    let floor = b.material(MaterialDesc::new("floor", [1.0; 3], 0.5).textured(tiles));
-    b.mesh(wall).append(&mesh::wall(12.0, 6.0, 6, 3, 0.25), at(0.0, 2.0, -3.0));
-    b.mesh(floor).append(&mesh::floor(12.0, 10.0, 12, 10, 0.5), at(0.0, -1.0, 0.0));
     let crate_ = b.material(MaterialDesc::new("crate", [1.0; 3], 0.6).textured(checks));
     let steel = b.material(MaterialDesc::new("bars", [0.1, 0.1, 0.12], 0.3).metallic(1.0));
     // One repeat of the 16-cell checker per 0.8 m: cells 5 cm wide.
@@ -369,34 +364,49 @@ pub(super) fn crossing(b: &mut Builder) {
     for i in 0..5 {
         bars.append(&mesh::cuboid(Vec3::new(0.02, 0.8, 0.02), 1.0), at(-0.32 + 0.16 * i as f32, 0.0, 0.25));
     }
-    // 4 px a frame at 4 m: 4 · 4 m / 166.28 px × 60 frames a second.
-    let speed = 4.0 * 4.0 * 60.0 * (30.0f32).to_radians().tan() / 96.0;
-    let (from, seconds) = (-0.9f32, 2.0f32);
+    let (speed, from, seconds) = (stage_speed(), -0.9f32, 2.0f32);
     b.moving(
         "crossing",
         &[(crate_, body), (steel, bars)],
         &[0.0, seconds],
         &[[from, -0.6, 0.0], [from + speed * seconds, -0.6, 0.0]],
     );
-    b.camera([0.0, 0.6, 4.0], [0.0, -0.2, 0.0], 60.0, 40.0);
+    stage_camera(b);
 }
 
 /// A striped figure, skinned on an eleven-joint skeleton, striding across a brick wall and a
 /// tiled floor before a still camera: what a deforming object leaves behind.
 pub(super) fn walker(b: &mut Builder) {
+    stage(b);
+    let stripes = b.texture("stripes-24", &textures::stripes(TEXTURE_SIZE, 24));
+    let suit = b.material(MaterialDesc::new("suit", [1.0; 3], 0.6).textured(stripes));
+    // The feet meet the floor where the legs stand straight; the figure strides as fast as the
+    // crossing crate slides.
+    let seconds = 2.0;
+    figure::walker(b, "walk", suit, Vec3::new(-1.1, -0.055, 0.5), stage_speed() * seconds, seconds);
+    stage_camera(b);
+}
+
+/// The stage of the moving-object scenes: a brick wall 3 m behind the origin over a tiled floor
+/// 1 m below it.
+fn stage(b: &mut Builder) {
     let bricks = b.texture("bricks", &textures::bricks(TEXTURE_SIZE));
     let tiles = b.texture("floor-tiles", &textures::floor_tiles(TEXTURE_SIZE));
-    let stripes = b.texture("stripes-24", &textures::stripes(TEXTURE_SIZE, 24));
     let wall = b.material(MaterialDesc::new("wall", [1.0; 3], 0.9).textured(bricks));
     let floor = b.material(MaterialDesc::new("floor", [1.0; 3], 0.5).textured(tiles));
     b.mesh(wall).append(&mesh::wall(12.0, 6.0, 6, 3, 0.25), at(0.0, 2.0, -3.0));
     b.mesh(floor).append(&mesh::floor(12.0, 10.0, 12, 10, 0.5), at(0.0, -1.0, 0.0));
-    let suit = b.material(MaterialDesc::new("suit", [1.0; 3], 0.6).textured(stripes));
-    // The feet meet the floor where the legs stand straight; the figure strides as fast as the
-    // crossing crate slides.
-    let speed = 4.0 * 4.0 * 60.0 * (30.0f32).to_radians().tan() / 96.0;
-    let seconds = 2.0;
-    figure::walker(b, "walk", suit, Vec3::new(-1.1, -0.055, 0.5), speed * seconds, seconds);
+}
+
+/// How fast an object crosses the stage, in m/s: 4 px a frame at 4 m from [`stage_camera`] in
+/// the quick tier (4 · 4 m / 166.28 px × 60 frames a second), 5.77 m/s.
+fn stage_speed() -> f32 {
+    4.0 * 4.0 * 60.0 * (30.0f32).to_radians().tan() / 96.0
+}
+
+/// The still camera 4 m before the stage, looking slightly down at it; added last, after the
+/// scene's nodes.
+fn stage_camera(b: &mut Builder) {
     b.camera([0.0, 0.6, 4.0], [0.0, -0.2, 0.0], 60.0, 40.0);
 }
 

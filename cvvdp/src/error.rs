@@ -13,6 +13,9 @@ pub enum Error {
     TooSmall { width: usize, height: usize },
     #[error("frames a second must be a finite number above 0, got {0}")]
     FrameRate(f64),
-    #[error("a video needs at least 2 frames, got {0} (score a single frame as an image)")]
-    TooFewFrames(usize),
+    #[error(
+        "a video needs at least 2 frames and one after its warm-up of {warmup}, got {frames} \
+         (score a single frame as an image)"
+    )]
+    TooFewFrames { frames: usize, warmup: usize },
 }

@@ -19,6 +19,11 @@
 //!
 //! Only the base model is ported: no colour rendering of the map, no HLG display, no temporal
 //! resampling; frames are streamed one at a time (`Video::push`).
+//!
+//! One addition to the reference: a video may be given a warm-up ([`Video::measured_from`]).
+//! Its frames pass the temporal filters, so that the first measured frame's 250 ms of history
+//! is real footage rather than the first frame repeated into the past, but only the measured
+//! frames are pooled. Without one, a video is scored exactly as the reference scores it.
 
 pub mod colour;
 pub mod csf;
@@ -64,12 +69,13 @@ pub struct Score {
     /// Just-objectionable differences, at most 10.
     pub jod: f64,
     /// Each frame's pooled difference per channel and band, `[frame][channel][band]` (the
-    /// reference's `Q_per_ch`), the baseband last.
+    /// reference's `Q_per_ch`), the baseband last; a video's warm-up frames included, though
+    /// only the measured ones are pooled into `jod`.
     pub per_channel: Vec<Vec<Vec<f32>>>,
     /// Each band's peak frequency, cycles a degree; the baseband's is 0.1.
     pub band_frequencies: Vec<f64>,
-    /// Where asked for ([`Video::with_worst_map`]): the frame whose pooled difference is the
-    /// largest, and its distortion map.
+    /// Where asked for ([`Video::with_worst_map`]): the measured frame whose pooled difference
+    /// is the largest, and its distortion map.
     pub worst: Option<Worst>,
 }
 
@@ -119,7 +125,7 @@ impl Cvvdp {
         let planes =
             |frame: &Frame| colour::dkl_planes(&self.display, frame.width, frame.height, frame.rgb).to_vec();
         let (per_channel, map) = self.frame(&planes(&test), &planes(&reference), map.then_some(true));
-        Ok((self.score(vec![per_channel], test.width, test.height, true), map))
+        Ok((self.score(vec![per_channel], [test.width, test.height], Pooled::Image), map))
     }
 
     /// A video comparison of `width` × `height` frames at `fps` frames a second, fed a frame
@@ -141,6 +147,7 @@ impl Cvvdp {
             test: Window::new(len),
             reference: Window::new(len),
             per_frame: Vec::new(),
+            measured_from: 0,
             worst_map: None,
         })
     }
@@ -189,15 +196,21 @@ impl Cvvdp {
         lp_norm(pooled.into_iter(), p.beta_tch, 1)
     }
 
-    /// Pools frames' differences into a score: each frame's (`frame_quality`), then over
-    /// frames, or for an image scaled by its integration correction; then maps to JOD.
-    fn score(&self, per_channel: Vec<Vec<Vec<f32>>>, width: usize, height: usize, is_image: bool) -> Score {
+    /// Pools frames' differences into a score: each frame's (`frame_quality`), then over the
+    /// frames from `first` on (a video's measured window), or for an image scaled by its
+    /// integration correction; then maps to JOD.
+    fn score(&self, per_channel: Vec<Vec<Vec<f32>>>, [width, height]: [usize; 2], pooled: Pooled) -> Score {
         let p = &self.parameters;
-        let per_frame: Vec<f32> = per_channel.iter().map(|channels| self.frame_quality(channels)).collect();
-        let quality = if is_image {
-            per_frame[0] * p.image_int
-        } else {
-            lp_norm(per_frame.iter().copied(), p.beta_t, per_frame.len())
+        let quality = match pooled {
+            Pooled::Image => self.frame_quality(&per_channel[0]) * p.image_int,
+            Pooled::From(first) => {
+                let measured = &per_channel[first..];
+                lp_norm(
+                    measured.iter().map(|channels| self.frame_quality(channels)),
+                    p.beta_t,
+                    measured.len(),
+                )
+            }
         };
         let mut band_frequencies = pyramid::band_frequencies(width, height, self.display.pixels_per_degree);
         *band_frequencies.last_mut().expect("a pyramid has a baseband") = 0.1;
@@ -215,6 +228,14 @@ impl Cvvdp {
             10.0 - p.jod_a * quality.powf(p.jod_exp)
         }
     }
+}
+
+/// How a score pools its frames: an image's one frame, or a video's frames from the first
+/// measured one on.
+#[derive(Debug, Clone, Copy)]
+enum Pooled {
+    Image,
+    From(usize),
 }
 
 /// The reference's p-norm with its guarded powers: (Σ safe_pow(x, p) / n)^(1/p), guarded.
@@ -245,7 +266,10 @@ pub struct Video<'a> {
     test: Window,
     reference: Window,
     per_frame: Vec<Vec<Vec<f32>>>,
-    /// Where a map was asked for: the worst frame so far, its pooled difference and its map.
+    /// The first frame pooled: those before it are the warm-up, history for the filters only.
+    measured_from: usize,
+    /// Where a map was asked for: the worst measured frame so far, its pooled difference and
+    /// its map.
     worst_map: Option<Option<(usize, f32, Plane)>>,
 }
 
@@ -257,6 +281,16 @@ impl Video<'_> {
         self
     }
 
+    /// Makes the first `warmup` frames a warm-up: they pass the temporal filters, so that the
+    /// frames after them are judged with a real history, as a viewer who has been watching
+    /// would judge them, but only the frames after them are pooled into the score (and
+    /// searched for the worst). Without it the first frame is repeated into the past, as the
+    /// reference does, and a short clip is mostly judged as its first frame.
+    pub fn measured_from(mut self, warmup: usize) -> Self {
+        self.measured_from = warmup;
+        self
+    }
+
     /// Takes the next test frame and reference frame.
     pub fn push(&mut self, test: Frame, reference: Frame) -> Result<(), Error> {
         check_frame(&test, self.width, self.height)?;
@@ -265,7 +299,9 @@ impl Video<'_> {
         self.test.push(colour::dkl_planes(display, self.width, self.height, test.rgb));
         self.reference.push(colour::dkl_planes(display, self.width, self.height, reference.rgb));
         let (test, reference) = (self.test.channels(&self.filters), self.reference.channels(&self.filters));
-        let (per_channel, map) = self.metric.frame(&test, &reference, self.worst_map.as_ref().map(|_| false));
+        let measured = self.per_frame.len() >= self.measured_from;
+        let map = self.worst_map.as_ref().filter(|_| measured).map(|_| false);
+        let (per_channel, map) = self.metric.frame(&test, &reference, map);
         if let (Some(worst), Some(map)) = (&mut self.worst_map, map) {
             let quality = self.metric.frame_quality(&per_channel);
             if worst.as_ref().is_none_or(|(_, most, _)| quality > *most) {
@@ -282,13 +318,15 @@ impl Video<'_> {
     }
 
     /// The score of the frames taken, at least two (the reference scores a single frame as an
-    /// image, without temporal channels: [`Cvvdp::image`]).
+    /// image, without temporal channels: [`Cvvdp::image`]), of which at least one is measured.
     pub fn finish(self) -> Result<Score, Error> {
-        if self.per_frame.len() < 2 {
-            return Err(Error::TooFewFrames(self.per_frame.len()));
+        let frames = self.per_frame.len();
+        if frames < 2 || frames <= self.measured_from {
+            return Err(Error::TooFewFrames { frames, warmup: self.measured_from });
         }
         let worst = self.worst_map.flatten().map(|(frame, _, map)| Worst { frame, map });
-        Ok(Score { worst, ..self.metric.score(self.per_frame, self.width, self.height, false) })
+        let pooled = Pooled::From(self.measured_from);
+        Ok(Score { worst, ..self.metric.score(self.per_frame, [self.width, self.height], pooled) })
     }
 }
 

@@ -18,7 +18,7 @@ impl Filters {
     /// ⌊N/2⌋ + 1 frequencies and turned into N symmetric taps by an inverse real DFT, N the odd
     /// number of frames in 250 ms.
     pub fn new(parameters: &Parameters, fps: f64) -> Self {
-        let n = ((0.250 * fps / 2.0).ceil() as usize) * 2 + 1;
+        let n = taps(fps);
         let bins = n / 2 + 1;
         let nyquist = (fps / 2.0) as f32;
         let omega: Vec<f32> = (0..bins).map(|i| linspace(0.0, nyquist, bins, i)).collect();
@@ -43,6 +43,12 @@ impl Filters {
     pub fn is_empty(&self) -> bool {
         self.taps[0].is_empty()
     }
+}
+
+/// The frames the filters span at `fps` frames a second: the odd number of frames in 250 ms
+/// (17 at 60). A frame's score reads the `taps(fps) - 1` frames before it.
+pub fn taps(fps: f64) -> usize {
+    ((0.250 * fps / 2.0).ceil() as usize) * 2 + 1
 }
 
 /// torch.linspace's `i`-th of `steps` values from `start` to `end`, in single precision: from

@@ -87,3 +87,52 @@ fn identical_clips_score_ten_and_more_noise_scores_lower() {
     let (small, large) = (score(&noisy(0.02)), score(&noisy(0.08)));
     assert!(10.0 > small && small > large, "10 > {small:.3} > {large:.3}");
 }
+
+/// A warm-up is history, not score: a clip whose warm-up differs from the reference and whose
+/// window matches it scores near 10 (the window's first frames still see the warm-up through
+/// the temporal filters), one whose warm-up matches and whose window differs scores as low as
+/// the window's difference says; each frame's pooled values are the clip's without a warm-up,
+/// and a warm-up of 0 is the reference's scoring.
+#[test]
+fn a_warm_up_feeds_the_filters_but_only_the_window_is_pooled() {
+    let metric = Cvvdp::new(Display::standard_fhd());
+    let (width, height) = (48, 40);
+    let base: Vec<f32> = (0..width * height * 3).map(|i| ((i * 7919) % 251) as f32 / 250.0).collect();
+    let noisy: Vec<f32> = base
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (v + 0.08 * (((i * 104_729) % 13) as f32 / 6.0 - 1.0)).clamp(0.0, 1.0))
+        .collect();
+    // A window longer than the filters' 17 taps: over a window of 16 frames the two clips
+    // below would weigh the same differences in reverse order (the taps are symmetric) and score
+    // alike.
+    let (warmup, window) = (16, 32);
+    // A clip of the warm-up's frames and the window's, each either the base or its noisy twin.
+    let score = |[early, late]: [&[f32]; 2], warm: usize| {
+        let frame = |rgb| Frame { width, height, rgb };
+        let mut video = metric.video(width, height, 60.0).unwrap().with_worst_map().measured_from(warm);
+        for f in 0..warmup + window {
+            video.push(frame(if f < warmup { early } else { late }), frame(&base)).unwrap();
+        }
+        video.finish().unwrap()
+    };
+    let bad_warmup = [noisy.as_slice(), base.as_slice()];
+    let bad_window = [base.as_slice(), noisy.as_slice()];
+    let (history, window_only) = (score(bad_warmup, warmup), score(bad_window, warmup));
+    assert!(history.jod > 9.0, "a bad warm-up before a perfect window: {:.3}", history.jod);
+    // The worst frame is the window's, where the warm-up's differences still echo.
+    assert_eq!(history.worst.as_ref().unwrap().frame, warmup);
+    // (8.59 against 9.32 JOD; scored whole, the bad warm-up's clip falls to 8.84.)
+    assert!(window_only.jod < history.jod - 0.5, "{:.3} against {:.3}", window_only.jod, history.jod);
+    // The same clip scored whole: its per-frame values are the same, its pooling is over all
+    // frames, so the bad warm-up now counts.
+    let whole = score(bad_warmup, 0);
+    assert_eq!(whole.per_channel, history.per_channel);
+    assert!(whole.jod < history.jod - 0.3, "{:.3} against {:.3}", whole.jod, history.jod);
+    // A warm-up of every frame leaves nothing to score.
+    let frame = |rgb| Frame { width, height, rgb };
+    let mut video = metric.video(width, height, 60.0).unwrap().measured_from(2);
+    video.push(frame(&base), frame(&base)).unwrap();
+    video.push(frame(&base), frame(&base)).unwrap();
+    assert!(video.finish().is_err());
+}

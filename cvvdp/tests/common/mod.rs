@@ -36,9 +36,11 @@ pub fn frame(width: usize, height: usize, rgb: &[f32]) -> Frame<'_> {
     Frame { width, height, rgb }
 }
 
-/// Scores a fixture with the port.
+/// Scores a fixture with the port: a clip with a warm-up (`warmup` frames, absent in fixtures
+/// from before it) pooled over the frames after it.
 pub fn score(metric: &Cvvdp, fixture: &Value) -> Score {
-    let name = fixture["name"].as_str().unwrap();
+    // A fixture with a warm-up reads another's strips (absent in fixtures from before: its own).
+    let name = fixture["strips"].as_str().or(fixture["name"].as_str()).unwrap();
     let dims = |key: &str| fixture[key].as_u64().unwrap() as usize;
     let (width, height, count) = (dims("width"), dims("height"), dims("frames"));
     let test = frames(name, "test", width, height, count);
@@ -46,7 +48,9 @@ pub fn score(metric: &Cvvdp, fixture: &Value) -> Score {
     if count == 1 {
         return metric.image(frame(width, height, &test[0]), frame(width, height, &reference[0])).unwrap();
     }
-    let mut video = metric.video(width, height, fixture["fps"].as_f64().unwrap()).unwrap();
+    let warmup = fixture["warmup"].as_u64().unwrap_or(0) as usize;
+    let mut video =
+        metric.video(width, height, fixture["fps"].as_f64().unwrap()).unwrap().measured_from(warmup);
     for (t, r) in test.iter().zip(&reference) {
         video.push(frame(width, height, t), frame(width, height, r)).unwrap();
     }

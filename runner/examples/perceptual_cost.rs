@@ -24,7 +24,8 @@ fn main() -> anyhow::Result<()> {
     let ssim_truth = perceptual::SsimTruth::new(&truth, w, h);
     for round in 1..=3 {
         let start = Instant::now();
-        let flip = perceptual::flip(&image, &truth, w, h).mean();
+        let flip =
+            perceptual::flip(&image, &truth, [w, h], perceptual::FLIP_DEFAULT_PIXELS_PER_DEGREE).mean();
         let flip_s = start.elapsed().as_secs_f64();
         let start = Instant::now();
         let ssim = ssim_truth.ssim(&image);

@@ -65,8 +65,8 @@ impl Tolerance {
             Tolerance::FlipRelative => ("flip_relative", "flip_relative_cross_platform", 0.005, 0.06),
             Tolerance::SsimRelative => ("ssim_relative", "ssim_relative_cross_platform", 0.005, 0.06),
             // The port is deterministic: on the baselines' platform the same bits score the
-            // same to 10⁻⁶. Across platforms 0.1 JOD is a tenth of the difference that 75 % of
-            // observers would notice.
+            // same to 10⁻⁶. Across platforms 0.1 JOD is a tenth of the difference at which 75 %
+            // of observers prefer the better image.
             Tolerance::Jod => ("jod", "jod_cross_platform", 0.01, 0.1),
         };
         Row { field, cross_field, default, cross_default }

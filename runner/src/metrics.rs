@@ -131,7 +131,8 @@ impl Truth {
 
 /// `quality` against the truth with the perceptual metrics added, and FLIP's error map.
 pub fn quality_vs_truth(image: &DisplayImage, truth: &Truth, against: &str) -> (Quality, FlipMap) {
-    let map = perceptual::flip(image, &truth.image, truth.width, truth.height);
+    let size = [truth.width, truth.height];
+    let map = perceptual::flip(image, &truth.image, size, truth.jod.pixels_per_degree());
     let quality = Quality {
         flip: Some(map.mean()),
         ssim: Some(truth.ssim.ssim(image)),

@@ -43,8 +43,10 @@ pub struct MotionSpec {
 }
 
 /// Which of the glTF file's animations plays (by `name` or by `index`, one of them), from
-/// `start_s` seconds into it: frame f shows it at `start_s + f · time_step_s`, and the still is
-/// its pose at `start_s`.
+/// `start_s` seconds into it: frame f of the measured window shows it at `start_s + f ·
+/// time_step_s`, and the still is its pose at `start_s`, unless the warm-up before the window
+/// would begin before the animation's first key: then the window starts that much later
+/// ([`Timeline`]).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AnimationPick {
@@ -141,7 +143,8 @@ pub fn short(value: f64) -> String {
     text.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
-/// Frames of the sequence per tier.
+/// Frames of the sequence's measured window per tier. Both defaults span at least the 250 ms
+/// that ColorVideoVDP's temporal filters take in ([`MIN_WINDOW_S`]) at 60 frames a second.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SequenceFrames {
@@ -151,7 +154,74 @@ pub struct SequenceFrames {
 
 impl Default for SequenceFrames {
     fn default() -> Self {
-        Self { quick: 8, nightly: 32 }
+        Self { quick: 16, nightly: 32 }
+    }
+}
+
+impl SequenceFrames {
+    /// The longer tier's.
+    pub fn longest(&self) -> u32 {
+        self.quick.max(self.nightly)
+    }
+}
+
+/// The shortest measured window that ColorVideoVDP judges as a video, in seconds: its temporal
+/// filters span 250 ms, and its authors ask for at least that much footage. A shorter window
+/// is scored, with a warning.
+pub const MIN_WINDOW_S: f64 = 0.25;
+
+/// One frame of a sequence: its camera and, where an animation plays, the animation's time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PathFrame {
+    pub camera: Camera,
+    pub time: Option<f64>,
+}
+
+/// When a sequence's frames are. The warm-up's `warmup` frames come first, then the measured
+/// window's; frame f of the window (negative in the warm-up) shows the path at
+/// `path_start_s + f · step_s` and the animation, where one plays, at
+/// `animation_start_s + f · step_s`. The still is frame 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Timeline {
+    pub step_s: f64,
+    pub warmup: u32,
+    /// The path's time at frame 0: 0 for a preset (its camera at 0 is the scene's camera), the
+    /// lead for keyframes.
+    pub path_start_s: f64,
+    /// The animation's time at frame 0: the manifest's `start_s` plus the lead.
+    pub animation_start_s: Option<f64>,
+    /// The animation's first and last keyframe times: outside them it holds a pose.
+    pub animation_keys_s: Option<[f64; 2]>,
+    /// How much later than the manifest's start the window begins, so that the warm-up before
+    /// it moves: 0 unless keyframes or an animation would hold still through part of it.
+    pub lead_s: f64,
+}
+
+impl Timeline {
+    /// The path's time at frame `frame` of the window (negative in the warm-up).
+    pub fn path_time(&self, frame: i64) -> f64 {
+        self.path_start_s + frame as f64 * self.step_s
+    }
+
+    /// The animation's time at frame `frame`, where one plays, kept within its keyframes (it
+    /// holds its first and last pose outside them, so that two frames of one pose have one
+    /// time).
+    pub fn animation_time(&self, frame: i64) -> Option<f64> {
+        let time = self.animation_start_s? + frame as f64 * self.step_s;
+        Some(self.animation_keys_s.map_or(time, |[first, last]| time.clamp(first, last.max(first))))
+    }
+
+    /// The window's frames from the warm-up's first: `-warmup..frames`.
+    pub fn frames(&self, frames: u32) -> std::ops::Range<i64> {
+        -i64::from(self.warmup)..i64::from(frames)
+    }
+
+    /// How messages name frame `frame`: `frame 3`, or `warm-up frame 2 of 16`.
+    pub fn frame_name(&self, frame: i64) -> String {
+        match frame {
+            0.. => format!("frame {frame}"),
+            _ => format!("warm-up frame {} of {}", frame + i64::from(self.warmup) + 1, self.warmup),
+        }
     }
 }
 
@@ -225,11 +295,6 @@ impl MotionSpec {
             );
         }
         Ok(())
-    }
-
-    /// The animation's time at frame `frame` of a sequence, where one plays.
-    pub fn animation_time(&self, frame: usize) -> Option<f64> {
-        Some(self.animation.as_ref()?.start_s + frame as f64 * self.time_step_s)
     }
 
     fn check_speeds(&self) -> Result<(), (String, String)> {
@@ -321,48 +386,61 @@ impl MotionSpec {
         Ok(())
     }
 
-    /// The cameras of the first `frames` frames, from the scene's camera `base` whose target
-    /// lies `pivot` along its view (near and far planes, field of view and up axis kept along
-    /// the path), each checked by the renderer's rules: `Err` names the frame's field
-    /// (`motion.keyframes` or the preset's `motion.rate`).
+    /// The sequence's clock (`Timeline`): when its measured window starts on the path's and
+    /// the animation's clocks, with `warmup` frames before it. A preset path moves at its rate
+    /// at any time, so its warm-up extends it backwards; keyframes and an animation hold their
+    /// first key before it, so where the warm-up would begin earlier, the window moves later
+    /// by what is missing (both by the same lead, so that a camera choreographed with the
+    /// animation stays in step), but never so far that the longest tier's window would run past
+    /// their last key: the measured frames move first. `keys_s` is the playing animation's
+    /// first and last keyframe times.
+    pub fn timeline(&self, warmup: u32, keys_s: Option<[f64; 2]>) -> Timeline {
+        let step = self.time_step_s;
+        let (warm, window) = (f64::from(warmup) * step, f64::from(self.frames.longest() - 1) * step);
+        let path_keys = (self.path == PathKind::Keyframes)
+            .then(|| [self.keyframes[0].time_s, self.keyframes[self.keyframes.len() - 1].time_s]);
+        let start = self.animation.as_ref().map(|pick| pick.start_s);
+        // Each absolute clock's keys, relative to where the window starts without a lead.
+        let clocks =
+            [path_keys, start.zip(keys_s).map(|(start, [first, last])| [first - start, last - start])];
+        let clocks = clocks.into_iter().flatten();
+        let needed = clocks.clone().map(|[first, _]| first + warm).fold(0.0, f64::max);
+        let room = clocks.map(|[_, last]| last - window).fold(f64::INFINITY, f64::min).max(0.0);
+        let lead_s = needed.min(room);
+        Timeline {
+            step_s: step,
+            warmup,
+            path_start_s: if path_keys.is_some() { lead_s } else { 0.0 },
+            animation_start_s: start.map(|start| start + lead_s),
+            animation_keys_s: start.and(keys_s),
+            lead_s,
+        }
+    }
+
+    /// The cameras of the window's frames `frames` (negative in the warm-up) on `timeline`,
+    /// from the scene's camera `base` whose target lies `pivot` along its view (near and far
+    /// planes, field of view and up axis kept along the path), each checked by the renderer's
+    /// rules: `Err` names the frame's field (`motion.keyframes` or the preset's `motion.rate`).
     pub fn cameras(
         &self,
         base: &Camera,
         pivot: f64,
-        frames: u32,
+        timeline: &Timeline,
+        frames: std::ops::Range<i64>,
         rate: f64,
     ) -> Result<Vec<Camera>, (String, String)> {
-        (0..frames)
+        frames
             .map(|frame| {
-                let camera = self.camera_at(base, pivot, f64::from(frame) * self.time_step_s, rate);
+                let camera = self.camera_at(base, pivot, timeline.path_time(frame), rate);
                 camera.validate().map(|()| camera).map_err(|e| {
+                    let field = self.field().to_string();
                     (
-                        self.field().to_string(),
-                        format!("frame {frame}: the camera's {}: {}", e.field, e.message),
+                        field,
+                        format!("{}: the camera's {}: {}", timeline.frame_name(frame), e.field, e.message),
                     )
                 })
             })
             .collect()
-    }
-
-    /// The path's cameras for the `count` frames before its first, oldest first: the path
-    /// extended backwards in time, where a temporal mode's history warms up. A camera that the
-    /// extension makes invalid (a keyframe path holds its first key; a dolly backs away) is the
-    /// path's first.
-    pub fn cameras_before(&self, base: &Camera, pivot: f64, count: u32, rate: f64) -> Vec<Camera> {
-        (1..=count)
-            .rev()
-            .map(|back| {
-                let camera = self.camera_at(base, pivot, -f64::from(back) * self.time_step_s, rate);
-                if camera.validate().is_ok() { camera } else { self.camera_at(base, pivot, 0.0, rate) }
-            })
-            .collect()
-    }
-
-    /// The animation's time `back` frames before the path's first (clamped to its first key
-    /// when it plays).
-    pub fn animation_time_before(&self, back: usize) -> Option<f64> {
-        Some(self.animation.as_ref()?.start_s - back as f64 * self.time_step_s)
     }
 
     /// The manifest field that decides where the path's cameras go: `motion.keyframes`,
@@ -432,10 +510,16 @@ mod tests {
         spec
     }
 
+    /// The cameras of the first `frames` frames of `motion`'s window, without a warm-up.
+    fn window(motion: &MotionSpec, frames: u32, rate: f64) -> Result<Vec<Camera>, (String, String)> {
+        let timeline = motion.timeline(0, None);
+        motion.cameras(&base(), 10.0, &timeline, timeline.frames(frames), rate)
+    }
+
     #[test]
     fn an_empty_section_orbits_the_target_slowly_and_starts_at_the_still() {
         let motion = spec("{}");
-        let cameras = motion.cameras(&base(), 10.0, 8, motion.rate()).unwrap();
+        let cameras = window(&motion, 8, motion.rate()).unwrap();
         assert_eq!(cameras.len(), 8);
         assert_eq!(cameras[0], base(), "frame 0 is the still frame");
         let target = DVec3::new(0.0, 2.0, 0.0);
@@ -446,15 +530,15 @@ mod tests {
             let angle = (camera.position - target).angle_between(base().position - target).to_degrees();
             assert!((angle - i as f64 / 30.0).abs() < 1e-9, "frame {i}: {angle}°");
         }
-        assert_eq!(motion.cameras(&base(), 10.0, 32, motion.rate()).unwrap().len(), 32);
+        assert_eq!(window(&motion, 32, motion.rate()).unwrap().len(), 32);
     }
 
     #[test]
     fn the_quick_sequence_is_the_start_of_the_nightly_one() {
         for path in ["orbit", "dolly", "pan"] {
             let motion = spec(&format!(r#"{{"path": "{path}"}}"#));
-            let quick = motion.cameras(&base(), 10.0, 8, motion.rate()).unwrap();
-            let nightly = motion.cameras(&base(), 10.0, 32, motion.rate()).unwrap();
+            let quick = window(&motion, 8, motion.rate()).unwrap();
+            let nightly = window(&motion, 32, motion.rate()).unwrap();
             assert_eq!(quick[..], nightly[..quick.len()], "{path}");
             assert_ne!(quick[0], quick[1], "{path} moves");
         }
@@ -480,7 +564,7 @@ mod tests {
             assert_eq!(motion.paces(Some(&speeds.quick), base().fov_y, height).len(), 1);
             for pace in motion.paces(Some(&speeds.nightly), base().fov_y, height) {
                 let px = pace.pixels_per_frame.unwrap();
-                let cameras = motion.cameras(&base(), 10.0, 2, pace.rate).unwrap();
+                let cameras = window(&motion, 2, pace.rate).unwrap();
                 // The pan and the orbit move the middle of the frame's far background (a point
                 // far along the view) and the dolly a point at the target's depth at the top edge.
                 let point = match path {
@@ -519,15 +603,62 @@ mod tests {
                 "keyframes": [{"time_s": 0, "position": [0, 0, 10], "target": [0, 0, 0]},
                               {"time_s": 1, "position": [2, 0, 10], "target": [2, 0, 0]}]}"#,
         );
-        let cameras = motion.cameras(&base(), 10.0, 4, 0.0).unwrap();
+        let cameras = window(&motion, 4, 0.0).unwrap();
         let xs: Vec<f64> = cameras.iter().map(|c| c.position.x).collect();
         assert_eq!(xs, [0.0, 1.0, 2.0, 2.0]);
         assert!(cameras.iter().all(|c| c.forward == DVec3::new(0.0, 0.0, -10.0)));
     }
 
     #[test]
+    fn the_window_starts_late_enough_that_the_warm_up_moves_and_early_enough_that_it_moves_itself() {
+        let step = 1.0 / 60.0;
+        let warm = 16.0 * step;
+        let near = |a: f64, b: f64| (a - b).abs() < 1e-12;
+        // An animation keyed from 0 s to 2 s, started at 0: its warm-up would hold the first
+        // key, so the window starts 16 frames later and the warm-up's first frame is the key's.
+        let motion = spec(r#"{"path": "static", "animation": {"name": "walk"}}"#);
+        let timeline = motion.timeline(16, Some([0.0, 2.0]));
+        assert!(near(timeline.lead_s, warm) && timeline.path_start_s == 0.0, "{timeline:?}");
+        assert!(near(timeline.animation_time(-16).unwrap(), 0.0));
+        assert!(near(timeline.animation_time(0).unwrap(), warm));
+        assert!(near(timeline.animation_time(5).unwrap(), warm + 5.0 * step));
+        assert_eq!(timeline.frames(8), -16..8);
+        assert_eq!(
+            (timeline.frame_name(-16), timeline.frame_name(-1)),
+            ("warm-up frame 1 of 16".into(), "warm-up frame 16 of 16".into())
+        );
+        assert_eq!(timeline.frame_name(3), "frame 3");
+        // Started a second in, the warm-up moves already: no lead.
+        let later = spec(r#"{"path": "static", "animation": {"name": "walk", "start_s": 1}}"#);
+        let timeline = later.timeline(16, Some([0.0, 2.0]));
+        assert_eq!((timeline.lead_s, timeline.animation_start_s), (0.0, Some(1.0)));
+        // An animation too short for the warm-up and the nightly's 32 frames: the window keeps
+        // what moves, and the warm-up holds its first pose, at one time.
+        let short = motion.timeline(16, Some([0.0, 0.4]));
+        assert_eq!(short.lead_s, 0.0);
+        assert_eq!((short.animation_time(-16), short.animation_time(-1)), (Some(0.0), Some(0.0)));
+        assert_eq!(short.animation_time(30), Some(0.4), "held at its last key");
+        // Between the two: as late as the longest window allows.
+        let timeline = motion.timeline(16, Some([0.0, 0.6]));
+        assert!(near(timeline.lead_s, 0.6 - 31.0 * step), "{timeline:?}");
+        // Keyframes hold their first key before it too, and share the lead with the animation;
+        // a preset's camera extends backwards and keeps its start (the still camera).
+        let keys = spec(
+            r#"{"path": "keyframes", "animation": {"name": "walk"},
+                "keyframes": [{"time_s": 0.1, "position": [0, 0, 10], "target": [0, 0, 0]},
+                              {"time_s": 3, "position": [2, 0, 10], "target": [2, 0, 0]}]}"#,
+        );
+        let timeline = keys.timeline(16, Some([0.0, 2.0]));
+        assert!(near(timeline.lead_s, 0.1 + warm) && near(timeline.path_start_s, timeline.lead_s));
+        assert!(near(timeline.animation_time(0).unwrap(), timeline.lead_s));
+        let orbit = spec(r#"{"animation": {"name": "walk"}}"#).timeline(16, Some([0.0, 2.0]));
+        assert!(near(orbit.lead_s, warm) && orbit.path_start_s == 0.0, "{orbit:?}");
+        assert_eq!(spec("{}").timeline(16, None).lead_s, 0.0, "a preset alone needs no lead");
+    }
+
+    #[test]
     fn a_static_path_repeats_the_still_camera() {
-        let cameras = spec(r#"{"path": "static"}"#).cameras(&base(), 10.0, 32, 0.0).unwrap();
+        let cameras = window(&spec(r#"{"path": "static"}"#), 32, 0.0).unwrap();
         assert!(cameras.iter().all(|c| *c == base()));
     }
 
@@ -577,7 +708,7 @@ mod tests {
                 {"time_s": 0, "position": [0, 0, 1], "target": [0, 0, 0]},
                 {"time_s": 1, "position": [0, 0, -1], "target": [0, 0, 0]}]}"#,
         );
-        let (field, message) = motion.cameras(&base(), 10.0, 8, 0.0).unwrap_err();
+        let (field, message) = window(&motion, 8, 0.0).unwrap_err();
         assert_eq!(field, "motion.keyframes");
         assert!(message.starts_with("frame 1: the camera's target"), "{message}");
     }

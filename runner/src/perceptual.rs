@@ -11,9 +11,10 @@
 
 use aabench_renderer::DisplayImage;
 
-/// The distance at which FLIP judges, in pixels per degree of visual angle: its default, a
-/// 0.7 m wide 4K display seen from 0.7 m.
-pub const FLIP_PIXELS_PER_DEGREE: f32 = nv_flip::DEFAULT_PIXELS_PER_DEGREE;
+/// FLIP's own default viewing distance, in pixels per degree: a 0.7 m wide 4K display seen from
+/// 0.7 m. aabench judges at its viewer's instead ([`Jod::pixels_per_degree`]); FLIP's reference
+/// values in the tests are at this one.
+pub const FLIP_DEFAULT_PIXELS_PER_DEGREE: f64 = nv_flip::DEFAULT_PIXELS_PER_DEGREE as f64;
 
 /// FLIP's per-pixel error of an image against the truth, in [0, 1], row by row.
 #[derive(Debug)]
@@ -48,18 +49,24 @@ pub fn magma_rgba(values: &[f32]) -> Vec<u8> {
         .collect()
 }
 
-/// FLIP of `image` against `truth`, both `width` × `height`.
-pub fn flip(image: &DisplayImage, truth: &DisplayImage, width: u32, height: u32) -> FlipMap {
+/// FLIP of `image` against `truth`, both `width` × `height`, seen at `pixels_per_degree`.
+pub fn flip(
+    image: &DisplayImage,
+    truth: &DisplayImage,
+    [width, height]: [u32; 2],
+    pixels_per_degree: f64,
+) -> FlipMap {
     let rgba8 = crate::images::display_rgba8;
-    flip_rgba8(&rgba8(image), &rgba8(truth), width, height)
+    flip_rgba8(&rgba8(image), &rgba8(truth), [width, height], pixels_per_degree)
 }
 
-/// FLIP of an RGBA8 display image (alpha ignored) against the truth's, both `width` × `height`.
-pub fn flip_rgba8(image: &[u8], truth: &[u8], width: u32, height: u32) -> FlipMap {
+/// FLIP of an RGBA8 display image (alpha ignored) against the truth's, both `width` × `height`,
+/// seen at `pixels_per_degree` (the viewer's: [`Jod::pixels_per_degree`]).
+pub fn flip_rgba8(image: &[u8], truth: &[u8], [width, height]: [u32; 2], pixels_per_degree: f64) -> FlipMap {
     let rgb = |rgba: &[u8]| -> Vec<u8> { rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect() };
     let reference = nv_flip::FlipImageRgb8::with_data(width, height, &rgb(truth));
     let test = nv_flip::FlipImageRgb8::with_data(width, height, &rgb(image));
-    let errors = nv_flip::flip(reference, test, FLIP_PIXELS_PER_DEGREE).to_vec();
+    let errors = nv_flip::flip(reference, test, pixels_per_degree as f32).to_vec();
     FlipMap { width, height, errors }
 }
 
@@ -76,6 +83,17 @@ impl Jod {
         Ok(Jod { metric: aabench_cvvdp::Cvvdp::new(display) })
     }
 
+    /// The display model it judges on.
+    pub fn display(&self) -> &aabench_cvvdp::Display {
+        self.metric.display()
+    }
+
+    /// How many of a frame's pixels a degree of the viewer's sight spans: ColorVideoVDP's
+    /// display model's, and FLIP's too, so that both metrics judge what one viewer sees.
+    pub fn pixels_per_degree(&self) -> f64 {
+        self.metric.display().pixels_per_degree
+    }
+
     /// The JOD of `image` against `truth`, both `width` × `height`.
     pub fn image(&self, image: &DisplayImage, truth: &DisplayImage, width: u32, height: u32) -> f64 {
         let max = f32::from(image.max_code());
@@ -84,23 +102,27 @@ impl Jod {
         self.metric.image(frame(&test, size), frame(&reference, size)).map_or(f64::NAN, |score| score.jod)
     }
 
-    /// The JOD of RGBA8 frames against the truth's, shown at `fps` frames a second, and the
-    /// distortion map of the frame that differs most; `None` for fewer than two frames or a
-    /// frame of the wrong size.
+    /// The JOD of RGBA8 frames against the truth's, shown at `fps` frames a second, the first
+    /// `warmup` of them history for the temporal filters and the rest pooled, and the distortion
+    /// map of the measured frame that differs most (counted from the first after the warm-up);
+    /// `None` for fewer than two frames, none measured, or a frame of the wrong size.
     pub fn video<'a>(
         &self,
         frames: impl Iterator<Item = (&'a [u8], &'a [u8])>,
         [width, height]: [u32; 2],
         fps: f64,
+        warmup: usize,
     ) -> Option<VideoJod> {
-        let mut video = self.metric.video(width as usize, height as usize, fps).ok()?.with_worst_map();
+        let video = self.metric.video(width as usize, height as usize, fps).ok()?;
+        let mut video = video.with_worst_map().measured_from(warmup);
         for (image, truth) in frames {
             let (test, reference) = (code_values(image, 255.0), code_values(truth, 255.0));
             video.push(frame(&test, [width, height]), frame(&reference, [width, height])).ok()?;
         }
         let score = video.finish().ok()?;
         let worst = score.worst.expect("a map was asked for");
-        Some(VideoJod { jod: score.jod, worst_frame: worst.frame as u32, map: worst.map.data, width, height })
+        let worst_frame = (worst.frame - warmup) as u32;
+        Some(VideoJod { jod: score.jod, worst_frame, map: worst.map.data, width, height })
     }
 }
 

@@ -75,9 +75,9 @@ pub struct RunArgs {
     /// `display.jod_display`: standard_fhd, or standard_hdr_pq for a pq display]
     #[arg(long, value_name = "MODEL")]
     pub jod_display: Option<String>,
-    /// Write each sequence's measured frames, display-encoded, as
-    /// <scene>/frames/<sequence>/<mode>/<NNN>.png (the truth's as `truth`), for a video metric
-    /// or an encoder of your own
+    /// Write every frame of each sequence that ColorVideoVDP saw (the warm-up's first),
+    /// display-encoded, as <scene>/frames/<sequence>/<mode>/<NNN>.png (the truth's as `truth`),
+    /// with sequence.json beside them, for a video metric or an encoder of your own
     #[arg(long)]
     pub keep_frames: bool,
     /// Longest a single frame may take, in seconds.

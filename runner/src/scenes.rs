@@ -15,7 +15,7 @@ use glam::{DVec3, DVec4, Vec3};
 
 use crate::fs::regular_file;
 use crate::manifest::{FileLights, Manifest, check_shadows};
-use crate::motion::{MotionSpec, PathKind};
+use crate::motion::{MotionSpec, PathFrame, PathKind, Timeline};
 
 #[derive(Debug)]
 pub struct LoadedScene {
@@ -27,6 +27,8 @@ pub struct LoadedScene {
     /// Where the playing animation carries the file's camera, when it moves it: the view of
     /// every frame of a sequence follows it (`camera` is its pose at the animation's start).
     pub camera_path: Option<CameraPath>,
+    /// When the sequences' frames are, where the manifest has a camera path.
+    pub timeline: Option<Timeline>,
     pub lighting: Lighting,
     /// Seconds spent generating (if it had to) and importing.
     pub seconds: f64,
@@ -105,12 +107,16 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
         bail!("{}: gltf: {} holds no triangles", manifest.path.display(), path.display());
     }
     let camera_path = animated_camera(manifest, &scene)?;
+    let keys =
+        scene.playing.map(|index| [scene.animations[index].start(), scene.animations[index].duration()]);
+    let timeline = manifest.motion.as_ref().map(|motion| motion.timeline(warmup_frames(motion), keys));
     let camera = camera(manifest, &scene)?;
-    let camera = match &camera_path {
-        Some(path) => start_camera(manifest, path, camera)?,
-        None => camera,
+    let camera = match (&camera_path, &timeline) {
+        (Some(path), Some(timeline)) => start_camera(manifest, path, timeline, camera)?,
+        _ => camera,
     };
-    let pivot = path_pivot(manifest, &scene, &camera, camera_path.as_ref())?;
+    let view = View { camera: &camera, camera_path: camera_path.as_ref(), timeline: timeline.as_ref() };
+    let pivot = path_pivot(manifest, &scene, view)?;
     let lighting = Lighting {
         lights: lights(manifest, &scene)?,
         ambient: Vec3::from(manifest.ambient),
@@ -118,7 +124,25 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
         // Metered once the scene is uploaded where the manifest gives none.
         exposure: manifest.tonemap.exposure.unwrap_or(1.0),
     };
-    Ok(LoadedScene { scene, camera, pivot, camera_path, lighting, seconds: start.elapsed().as_secs_f64() })
+    let seconds = start.elapsed().as_secs_f64();
+    Ok(LoadedScene { scene, camera, pivot, camera_path, timeline, lighting, seconds })
+}
+
+/// The frames every mode and the truth render along a path before its measured window: enough
+/// for TAA's history to settle ([`aabench_renderer::taa::WARMUP_FRAMES`]) and for
+/// ColorVideoVDP's temporal filters to see only frames of the path (16 at 60 frames a second).
+pub fn warmup_frames(motion: &MotionSpec) -> u32 {
+    let history = aabench_cvvdp::temporal::taps(1.0 / motion.time_step_s) - 1;
+    aabench_renderer::taa::WARMUP_FRAMES.max(history as u32)
+}
+
+/// What a path's cameras start from: the scene's camera, the file's camera as the playing
+/// animation carries it (where it does), and the sequences' clock.
+#[derive(Debug, Clone, Copy)]
+pub struct View<'a> {
+    pub camera: &'a Camera,
+    pub camera_path: Option<&'a CameraPath>,
+    pub timeline: Option<&'a Timeline>,
 }
 
 /// Sets the animation that the manifest's `motion.animation` picks playing, or says why it
@@ -171,21 +195,17 @@ fn pick_animation(manifest: &Manifest, scene: &mut Scene) -> anyhow::Result<()> 
     Ok(())
 }
 
-/// The pivot of the manifest's path (`motion.rs`) from `camera`, once the cameras of each of
-/// its sequences in either tier are checked: valid, and each with some of the scene's triangles
-/// in view unless the scene is declared empty. The target is the manifest camera's; a camera
-/// from the file or the framing camera has only a direction, so its target is the point of the
-/// view ray nearest the centre of the scene's bounds (at least a hundredth of the bounds'
-/// radius ahead). 0 without `motion`.
-fn path_pivot(
-    manifest: &Manifest,
-    scene: &Scene,
-    camera: &Camera,
-    camera_path: Option<&CameraPath>,
-) -> anyhow::Result<f64> {
-    let Some(motion) = &manifest.motion else {
+/// The pivot of the manifest's path (`motion.rs`) from the view's camera, once the cameras of
+/// each of its sequences in either tier are checked: valid, and each measured frame with some of
+/// the scene's triangles in view unless the scene is declared empty. The target is the manifest
+/// camera's; a camera from the file or the framing camera has only a direction, so its target
+/// is the point of the view ray nearest the centre of the scene's bounds (at least a hundredth
+/// of the bounds' radius ahead). 0 without `motion`.
+fn path_pivot(manifest: &Manifest, scene: &Scene, view: View) -> anyhow::Result<f64> {
+    let (Some(motion), Some(timeline)) = (&manifest.motion, view.timeline) else {
         return Ok(0.0);
     };
+    let camera = view.camera;
     let pivot = match &manifest.camera {
         Some(_) => camera.forward.length(),
         None => {
@@ -204,11 +224,12 @@ fn path_pivot(
         |field: &str, message: String| anyhow::anyhow!("{}: {field}: {message}", manifest.path.display());
     for (frames, [width, height], speeds) in tiers {
         for pace in motion.paces(speeds, camera.fov_y, height) {
-            let (cameras, _) = path_cameras(motion, camera, pivot, (frames, pace.rate), camera_path)
-                .map_err(|(f, m)| fail(&f, m))?;
+            let path = path_frames(motion, view, pivot, (frames, pace.rate)).map_err(|(f, m)| fail(&f, m))?;
             let aspect = f64::from(width) / f64::from(height);
-            let blind =
-                cameras.iter().position(|c| !manifest.empty && !any_triangle_in_view(scene, c, aspect));
+            let measured = &path[timeline.warmup as usize..];
+            let blind = measured
+                .iter()
+                .position(|f| !manifest.empty && !any_triangle_in_view(scene, &f.camera, aspect));
             if let Some(frame) = blind {
                 let speed = pace.label().map_or_else(String::new, |label| format!(" at {label}"));
                 let message = format!(
@@ -217,7 +238,7 @@ fn path_pivot(
                      `\"empty\": true`",
                     scene.triangle_count()
                 );
-                let field = if camera_path.is_some() { "motion.animation" } else { motion.field() };
+                let field = if view.camera_path.is_some() { "motion.animation" } else { motion.field() };
                 return Err(fail(field, message));
             }
         }
@@ -244,10 +265,15 @@ fn animated_camera(manifest: &Manifest, scene: &Scene) -> anyhow::Result<Option<
     Ok(Some(path))
 }
 
-/// The file's camera where the animation starts: the still's camera, and every sequence's
-/// first.
-fn start_camera(manifest: &Manifest, path: &CameraPath, rest: Camera) -> anyhow::Result<Camera> {
-    let start = manifest.motion.as_ref().and_then(|motion| motion.animation_time(0)).unwrap_or(0.0);
+/// The file's camera where the measured window starts: the still's camera, and every
+/// sequence's first.
+fn start_camera(
+    manifest: &Manifest,
+    path: &CameraPath,
+    timeline: &Timeline,
+    rest: Camera,
+) -> anyhow::Result<Camera> {
+    let start = timeline.animation_time(0).unwrap_or(0.0);
     let camera = path.camera(&rest, start);
     camera.validate().map_err(|e| {
         anyhow::anyhow!("{}: motion.animation: the file's camera at {start} s: {e}", manifest.path.display())
@@ -255,33 +281,40 @@ fn start_camera(manifest: &Manifest, path: &CameraPath, rest: Camera) -> anyhow:
     Ok(camera)
 }
 
-/// A sequence's cameras, `frames` at `rate` (as [`MotionSpec::rate`]), and those of the
-/// warm-up before it: along the manifest's path from `camera`, or where the playing animation
-/// carries the file's camera (`camera_path`). `Err` names the field and the frame whose camera
-/// the renderer refuses.
-pub fn path_cameras(
+/// A sequence's frames, its warm-up's first (`Timeline::frames`): `frames` measured at `rate`
+/// (as [`MotionSpec::rate`]), each with its camera, along the manifest's path from the view's
+/// camera or where the playing animation carries the file's camera, and the animation's time.
+/// `Err` names the field and the frame whose camera the renderer refuses.
+pub fn path_frames(
     motion: &MotionSpec,
-    camera: &Camera,
+    view: View,
     pivot: f64,
     (frames, rate): (u32, f64),
-    camera_path: Option<&CameraPath>,
-) -> Result<(Vec<Camera>, Vec<Camera>), (String, String)> {
-    let warmup = aabench_renderer::taa::WARMUP_FRAMES;
-    let Some(path) = camera_path else {
-        let cameras = motion.cameras(camera, pivot, frames, rate)?;
-        return Ok((cameras, motion.cameras_before(camera, pivot, warmup, rate)));
+) -> Result<Vec<PathFrame>, (String, String)> {
+    let timeline = view.timeline.expect("a path has a timeline");
+    let range = timeline.frames(frames);
+    let cameras = match view.camera_path {
+        None => motion.cameras(view.camera, pivot, timeline, range.clone(), rate)?,
+        Some(path) => range
+            .clone()
+            .map(|frame| {
+                let camera = path.camera(view.camera, timeline.animation_time(frame).unwrap_or(0.0));
+                camera.validate().map(|()| camera).map_err(|e| {
+                    let message = format!(
+                        "{}: the file's camera's {}: {}",
+                        timeline.frame_name(frame),
+                        e.field,
+                        e.message
+                    );
+                    ("motion.animation".to_string(), message)
+                })
+            })
+            .collect::<Result<_, _>>()?,
     };
-    let at = |time: Option<f64>| path.camera(camera, time.unwrap_or(0.0));
-    let cameras: Vec<Camera> = (0..frames as usize).map(|frame| at(motion.animation_time(frame))).collect();
-    if let Some((frame, e)) = cameras.iter().enumerate().find_map(|(f, c)| Some((f, c.validate().err()?))) {
-        let message = format!("frame {frame}: the file's camera's {}: {}", e.field, e.message);
-        return Err(("motion.animation".into(), message));
-    }
-    // A warm-up camera the animation cannot give (before its start it holds its first key, so
-    // this is only a guard) is the path's first.
-    let before = (1..=warmup as usize).rev().map(|back| at(motion.animation_time_before(back)));
-    let warmup = before.map(|c| if c.validate().is_ok() { c } else { cameras[0] }).collect();
-    Ok((cameras, warmup))
+    Ok(range
+        .zip(cameras)
+        .map(|(frame, camera)| PathFrame { camera, time: timeline.animation_time(frame) })
+        .collect())
 }
 
 /// The file's lights (unless the manifest replaces them; with `file_light_shadows`, its point

@@ -1,5 +1,8 @@
 //! A sequence's frames on disk: every frame of the truth and of each mode, as the RGBA8 display
-//! image (`images::display_rgba8`), appended to one file per stream as it is rendered.
+//! image (`images::display_rgba8`), appended to one file per stream as it is rendered, the
+//! warm-up's first. The warm-up's frames are there for ColorVideoVDP, whose temporal filters
+//! read the frames before each measured one ([`Spool::seen_frame`]); everything else reads the
+//! measured window's ([`Spool::frame`], 0 its first).
 //!
 //! What needs every frame at once waits for the last: FLIP along the path, computed once the
 //! renders are done so that it neither slows nor disturbs them (`run/sequence.rs`), and the
@@ -19,11 +22,13 @@ use aabench_renderer::DisplayImage;
 
 use crate::images;
 
-/// One file of RGBA8 frames per stream, named, with how many frames each holds.
+/// One file of RGBA8 frames per stream, named, with how many frames each holds, of which the
+/// first `warmup` are the warm-up's.
 #[derive(Debug)]
 pub struct Spool {
     dir: PathBuf,
     size: [u32; 2],
+    warmup: usize,
     streams: Vec<(String, File, usize)>,
 }
 
@@ -42,8 +47,9 @@ pub fn folder(dir: &Path) -> PathBuf {
 }
 
 impl Spool {
-    /// An empty spool of `size` frames for the named streams, in `dir` (created).
-    pub fn create(dir: PathBuf, size: [u32; 2], names: Vec<String>) -> Result<Self, String> {
+    /// An empty spool of `size` frames for the named streams, each to take `warmup` frames
+    /// before its measured window's, in `dir` (created).
+    pub fn create(dir: PathBuf, size: [u32; 2], warmup: usize, names: Vec<String>) -> Result<Self, String> {
         // The folder is this process's own: anything in it is a leftover.
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -60,7 +66,7 @@ impl Spool {
                 .map_err(|e| format!("{}: {e}", path.display()))?;
             streams.push((name, file, 0));
         }
-        Ok(Self { dir, size, streams })
+        Ok(Self { dir, size, warmup, streams })
     }
 
     /// Appends a frame to stream `stream`.
@@ -84,9 +90,14 @@ impl Spool {
         &self.streams[stream].0
     }
 
-    /// How many frames stream `stream` holds.
+    /// The frames before the measured window's first.
+    pub fn warmup(&self) -> usize {
+        self.warmup
+    }
+
+    /// How many frames of the measured window stream `stream` holds.
     pub fn frames(&self, stream: usize) -> usize {
-        self.streams[stream].2
+        self.streams[stream].2.saturating_sub(self.warmup)
     }
 
     /// Checks that every stream's file holds exactly the frames appended to it. A file cut short
@@ -108,39 +119,46 @@ impl Spool {
         Ok(())
     }
 
-    /// Frame `frame` of stream `stream`, whole.
+    /// Frame `frame` of stream `stream`'s measured window, whole.
     pub fn frame(&self, stream: usize, frame: usize) -> Result<Vec<u8>, String> {
+        self.seen_frame(stream, self.warmup + frame)
+    }
+
+    /// Frame `index` of stream `stream` counted from the warm-up's first, whole.
+    pub fn seen_frame(&self, stream: usize, index: usize) -> Result<Vec<u8>, String> {
         let [width, height] = self.size;
         let bytes = width as usize * height as usize * 4;
         let mut out = vec![0; bytes];
-        self.read(stream, (frame * bytes) as u64, &mut out)?;
+        self.read(stream, (index * bytes) as u64, &mut out)?;
         Ok(out)
     }
 
-    /// Writes each stream's first `frames` frames as PNGs, `<dir>/<stream name>/<NNN>.png`
-    /// (000 the first), each atomically; a stream that holds fewer frames (a mode that failed,
-    /// or one that took its twin's frames) is left out.
+    /// Writes each stream's warm-up and the first `frames` frames of its window as PNGs,
+    /// `<dir>/<stream name>/<NNN>.png` (000 the warm-up's first), each atomically; a stream
+    /// that holds fewer frames (a mode that failed, or one that took its twin's frames) is left
+    /// out.
     pub fn write_pngs(&self, dir: &Path, frames: usize) -> Result<(), String> {
         let [width, height] = self.size;
         for stream in (0..self.streams()).filter(|&s| self.frames(s) >= frames) {
             let folder = dir.join(self.name(stream));
             std::fs::create_dir_all(&folder).map_err(|e| format!("{}: {e}", folder.display()))?;
-            for frame in 0..frames {
-                let path = folder.join(format!("{frame:03}.png"));
-                images::write_png(&path, width, height, &self.frame(stream, frame)?)
+            for index in 0..self.warmup + frames {
+                let path = folder.join(format!("{index:03}.png"));
+                images::write_png(&path, width, height, &self.seen_frame(stream, index)?)
                     .map_err(|e| format!("{}: {e}", path.display()))?;
             }
         }
         Ok(())
     }
 
-    /// The `square` of frame `frame` of stream `stream`.
+    /// The `square` of frame `frame` of stream `stream`'s measured window.
     pub fn crop(&self, stream: usize, frame: usize, square: Square) -> Result<Vec<u8>, String> {
         let [width, height] = self.size.map(u64::from);
         let row = width * 4;
+        let index = (self.warmup + frame) as u64;
         let mut out = vec![0; square.side as usize * square.side as usize * 4];
         for (y, line) in (u64::from(square.y)..).zip(out.chunks_exact_mut(square.side as usize * 4)) {
-            self.read(stream, frame as u64 * row * height + y * row + u64::from(square.x) * 4, line)?;
+            self.read(stream, index * row * height + y * row + u64::from(square.x) * 4, line)?;
         }
         Ok(out)
     }
@@ -168,7 +186,8 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("aabench-spool-test-{}", std::process::id()));
         let spool_dir = folder(&dir);
         assert!(spool_dir.to_string_lossy().ends_with(&format!(".spool.tmp-{}", std::process::id())));
-        let mut spool = Spool::create(spool_dir.clone(), [2, 2], vec!["truth".into(), "taa".into()]).unwrap();
+        let mut spool =
+            Spool::create(spool_dir.clone(), [2, 2], 0, vec!["truth".into(), "taa".into()]).unwrap();
         let frame = DisplayImage::from_rgba8(&[7; 16]);
         for stream in [0, 1] {
             spool.append(stream, &frame).unwrap();

@@ -55,27 +55,36 @@ pub struct Geometry {
     pub depth: Vec<f64>,
 }
 
-/// How fast the truth's content moves: over every frame pair, the covered pixels' (those with
-/// geometry) motion from the frame before, in pixels. A path's nominal speed is its
-/// background's or the frame centre's; an orbit's content at the pivot moves slower, an object
-/// crossing a still view faster.
+/// How fast the truth's content moves: over every frame pair, the motion from the frame before
+/// of the covered pixels (those with geometry) whose point moved at all (by at least
+/// [`SPEED_BIN`]), in pixels, and what share of the frame they are. A path's nominal speed is
+/// its background's or the frame centre's; an orbit's content at the pivot moves slower, and an
+/// object crossing a still view is what moves, however little of the frame it covers.
 #[derive(Debug, Clone, Default)]
 pub struct Speeds {
-    /// Pixels per bin of [`SPEED_BIN`] px, the last holding everything beyond.
+    /// Moving pixels per bin of [`SPEED_BIN`] px, the last holding everything beyond (bin 0,
+    /// what stood still, stays empty).
     counts: Vec<u64>,
     max: f64,
+    /// All the pixels of the frames added.
+    pixels: u64,
 }
 
-/// The speed histogram's resolution, px, and its last bin's start.
+/// The speed histogram's resolution, px, and its last bin's start. A pixel moves when its point
+/// moved at least one bin: the probe's f16 motion leaves a still camera's a hair off 0.
 const SPEED_BIN: f64 = 1.0 / 64.0;
 const SPEED_BINS: usize = 64 * 512;
 
-/// A sequence's measured speed over its covered pixels and frame pairs, px a frame.
+/// A sequence's measured speed over its moving pixels and frame pairs, px a frame.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MeasuredSpeed {
     pub median: f64,
     pub p90: f64,
     pub max: f64,
+    /// The share of the frame's pixels that moved, over the frame pairs (absent in runs from
+    /// before, whose median and p90 were over every covered pixel, still or not).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub moving: Option<f64>,
 }
 
 impl Speeds {
@@ -84,15 +93,20 @@ impl Speeds {
         if self.counts.is_empty() {
             self.counts = vec![0; SPEED_BINS];
         }
+        self.pixels += geometry.motion.len() as u64;
         for (_, [dx, dy]) in geometry.motion.iter().enumerate().filter(|&(i, _)| geometry.covered(i)) {
             let speed = f64::from(dx.hypot(*dy));
             self.max = self.max.max(speed);
-            self.counts[((speed / SPEED_BIN) as usize).min(SPEED_BINS - 1)] += 1;
+            let bin = (speed / SPEED_BIN) as usize;
+            if bin > 0 {
+                self.counts[bin.min(SPEED_BINS - 1)] += 1;
+            }
         }
     }
 
-    /// The median, 90th percentile (each to a 64th of a pixel, the bin's middle) and maximum;
-    /// `None` where no pixel was covered.
+    /// The median and 90th percentile of the moving pixels' speeds (each to a 64th of a pixel,
+    /// the bin's middle), the fastest, and the share of the frame that moved; `None` where no
+    /// pixel moved.
     pub fn measured(&self) -> Option<MeasuredSpeed> {
         let total: u64 = self.counts.iter().sum();
         let quantile = |q: f64| -> f64 {
@@ -104,7 +118,13 @@ impl Speeds {
             });
             ((bin.unwrap_or(0) as f64 + 0.5) * SPEED_BIN).min(self.max)
         };
-        (total > 0).then(|| MeasuredSpeed { median: quantile(0.5), p90: quantile(0.9), max: self.max })
+        let moving = Some(total as f64 / self.pixels.max(1) as f64);
+        (total > 0).then(|| MeasuredSpeed {
+            median: quantile(0.5),
+            p90: quantile(0.9),
+            max: self.max,
+            moving,
+        })
     }
 }
 
@@ -489,7 +509,7 @@ mod tests {
     }
 
     #[test]
-    fn the_measured_speed_is_the_covered_pixels_and_an_empty_frame_has_none() {
+    fn the_measured_speed_is_the_moving_covered_pixels_and_an_empty_frame_has_none() {
         let (w, h) = (10, 10);
         // Half the frame: an object moving 3 px right and 4 down (5 px); the other half: the
         // background, without geometry, turning 40 px a frame. Only the object counts.
@@ -506,14 +526,22 @@ mod tests {
         let measured = speeds.measured().unwrap();
         assert!((measured.median - 5.0).abs() <= 1.0 / 64.0, "{measured:?}");
         assert!((measured.p90 - 5.0).abs() <= 1.0 / 64.0 && measured.max == 5.0, "{measured:?}");
-        // Against the same frame with the slow row alone moving: 10 of 50 pixels at 1 px.
+        assert_eq!(measured.moving, Some(0.5), "the covered half moved");
         let still = flat(w, h, 5.0, [0.0, 0.0]);
         assert_eq!(Speeds::default().measured(), None, "nothing added");
         let mut empty = Speeds::default();
         empty.add(&Geometry { depth: vec![f64::INFINITY; w * h], ..still.clone() });
         assert_eq!(empty.measured(), None, "an empty frame has no covered pixel");
+        let mut standing = Speeds::default();
+        standing.add(&flat(w, h, 5.0, [0.5 / 1024.0, 0.0]));
+        assert_eq!(standing.measured(), None, "f16's hair off 0 is no motion");
+        // A still frame beside it: the object is still what moves, at its own speed, over a
+        // quarter of the two frames' pixels (where the speed of every covered pixel would
+        // have put the median at 0).
         speeds.add(&still);
-        assert!(speeds.measured().unwrap().median < 0.05, "now most covered pixels stood still");
+        let measured = speeds.measured().unwrap();
+        assert!((measured.median - 5.0).abs() <= 1.0 / 64.0, "{measured:?}");
+        assert_eq!(measured.moving, Some(0.25));
     }
 
     #[test]

@@ -47,7 +47,8 @@ fn cameras(base: &Camera, pixels_per_frame: f64) -> Vec<Camera> {
         serde_json::from_value(serde_json::json!({"path": "pan", "pixels_per_frame": speeds})).unwrap();
     spec.check().unwrap();
     let [pace] = spec.paces(Some(&[pixels_per_frame]), base.fov_y, HEIGHT)[..] else { panic!("one pace") };
-    spec.cameras(base, 5.0, FRAMES as u32, pace.rate).unwrap()
+    let timeline = spec.timeline(0, None);
+    spec.cameras(base, 5.0, &timeline, timeline.frames(FRAMES as u32), pace.rate).unwrap()
 }
 
 /// Renders `mode` along the path: the first frame as a still (a temporal mode's warm-up), the

@@ -289,3 +289,49 @@ fn an_animated_camera_moves_the_view_and_an_animation_that_moves_nothing_is_refu
         &["idle.json", "animations[1] (\"idle\")", "moves only nodes[2]"],
     );
 }
+
+/// An animation that starts with the sequence would hold its first key through the warm-up: the
+/// window starts 16 frames into it instead, so that TAA's history and ColorVideoVDP's filters
+/// have seen the crate move (the still is the window's first frame, posed there). Started a
+/// second in, it needs no lead. Too short for the warm-up and the longest window both, the
+/// window keeps its motion, and the warm-up's still frames are counted and warned about.
+#[test]
+fn an_animation_warms_up_in_motion_and_a_warm_up_that_cannot_move_says_so() {
+    let space = support::Workspace::new("moving-warmup");
+    let run = |name: &str, motion: serde_json::Value| {
+        let manifest = space.manifest(name, "crossing", |m| m["motion"] = motion.clone());
+        // One run's record at a time.
+        let _ = std::fs::remove_dir_all(space.dir.join("reports"));
+        let output = space.run(&[
+            "run",
+            manifest.to_str().unwrap(),
+            "--modes",
+            "deferred-1x1,taa",
+            "--repetitions",
+            "1",
+        ]);
+        assert_eq!(output.status.code(), Some(0), "{}", support::stderr(&output));
+        let record = space.record();
+        (support::scene(&record, name)["sequences"][0].clone(), support::stderr(&output))
+    };
+    let frames = json!({"quick": 4, "nightly": 4});
+    let (led, _) = run("led", json!({"path": "static", "frames": frames, "animation": {"name": "crossing"}}));
+    assert!((led["lead_s"].as_f64().unwrap() - 16.0 * STEP).abs() < 1e-12, "{led}");
+    assert_eq!((led["warmup_frames"].as_u64(), led.get("warmup_still_frames")), (Some(16), None));
+    let moving = led["measured_speed"]["moving"].as_f64().unwrap();
+    assert!(moving > 0.0 && moving < 0.2, "the crate moves, the wall does not: {moving}");
+    let (later, _) = run(
+        "later",
+        json!({"path": "static", "frames": frames, "animation": {"name": "crossing", "start_s": 1.0}}),
+    );
+    assert!(later.get("lead_s").is_none(), "{later}");
+    // The crate slides for 2 s: a nightly window of 121 frames leaves no room for a lead, and
+    // the warm-up holds the first key (its first frame counts as moving).
+    let (held, stderr) = run(
+        "held",
+        json!({"path": "static", "frames": {"quick": 4, "nightly": 121}, "animation": {"name": "crossing"}}),
+    );
+    assert!(held.get("lead_s").is_none(), "{held}");
+    assert_eq!(held["warmup_still_frames"], 15, "{held}");
+    assert!(stderr.contains("15 of the 16 warm-up frames hold still"), "{stderr}");
+}

@@ -3,11 +3,12 @@
 //! of images that both sides build the same way; identical images score perfectly and more
 //! blur scores worse.
 
-use aabench::perceptual::{flip, ssim};
+use aabench::perceptual::{FLIP_DEFAULT_PIXELS_PER_DEGREE as FLIP_PPD, flip, ssim};
 use aabench_renderer::DisplayImage;
 
 const WIDTH: u32 = 64;
 const HEIGHT: u32 = 48;
+const SIZE: [u32; 2] = [WIDTH, HEIGHT];
 
 /// Ramps in red and green over a checker of 8-pixel cells in blue.
 fn pattern() -> Vec<[u8; 3]> {
@@ -47,7 +48,7 @@ fn display(pixels: &[[u8; 3]]) -> DisplayImage {
 #[test]
 fn identical_images_score_zero_flip_and_unit_ssim() {
     let image = display(&pattern());
-    assert_eq!(flip(&image, &image, WIDTH, HEIGHT).mean(), 0.0);
+    assert_eq!(flip(&image, &image, SIZE, FLIP_PPD).mean(), 0.0);
     assert!((ssim(&image, &image, WIDTH, HEIGHT) - 1.0).abs() < 1e-12);
 }
 
@@ -60,7 +61,7 @@ fn identical_images_score_zero_flip_and_unit_ssim() {
 #[test]
 fn a_known_pair_matches_the_reference_implementations() {
     let (reference, test) = (display(&pattern()), display(&blurred(&pattern(), 1)));
-    let flip_mean = flip(&test, &reference, WIDTH, HEIGHT).mean();
+    let flip_mean = flip(&test, &reference, SIZE, FLIP_PPD).mean();
     assert!((flip_mean - 0.160_607_516_765_594_48).abs() < 1e-4, "FLIP {flip_mean}");
     let ssim_mean = ssim(&test, &reference, WIDTH, HEIGHT);
     assert!((ssim_mean - 0.963_510_883_263_603_3).abs() < 1e-9, "SSIM {ssim_mean}");
@@ -71,7 +72,7 @@ fn more_blur_scores_worse_on_both() {
     let original = display(&pattern());
     let score = |radius| {
         let image = display(&blurred(&pattern(), radius));
-        (flip(&image, &original, WIDTH, HEIGHT).mean(), ssim(&image, &original, WIDTH, HEIGHT))
+        (flip(&image, &original, SIZE, FLIP_PPD).mean(), ssim(&image, &original, WIDTH, HEIGHT))
     };
     let (light, heavy) = (score(1), score(3));
     assert!(heavy.0 > light.0 && light.0 > 0.0, "FLIP: light {}, heavy {}", light.0, heavy.0);
@@ -81,13 +82,13 @@ fn more_blur_scores_worse_on_both() {
 #[test]
 fn the_flip_map_is_drawn_in_flips_magma_scale() {
     let (reference, test) = (display(&pattern()), display(&blurred(&pattern(), 1)));
-    let map = flip(&test, &reference, WIDTH, HEIGHT);
+    let map = flip(&test, &reference, SIZE, FLIP_PPD);
     let rgba = map.magma_rgba();
     assert_eq!(rgba.len(), 4 * map.errors.len());
     // No error is magma's near-black end; the largest error is drawn bright.
     let (worst, _) = map.errors.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).unwrap();
     let brightness = |i: usize| rgba[4 * i..4 * i + 3].iter().map(|&v| u32::from(v)).sum::<u32>();
-    let none = flip(&reference, &reference, WIDTH, HEIGHT).magma_rgba();
+    let none = flip(&reference, &reference, SIZE, FLIP_PPD).magma_rgba();
     assert!(none[..3].iter().all(|&v| v < 8), "{:?}", &none[..3]);
     assert!(brightness(worst) > 200);
 }

@@ -70,7 +70,8 @@ fn a_static_path_repeats_the_still_frame_in_every_mode_without_instability() {
         (region["x"].as_u64(), region["y"].as_u64(), region["strip_first"].as_u64()),
         (Some(0), Some(0), Some(0))
     );
-    // Every frame's camera is the still's: its truth is the still truth, rendered once.
+    // Every frame's camera is the still's, the warm-up's too: its truth is the still truth,
+    // rendered once.
     assert_eq!(record["truth_rendered"], 0);
     let cached = std::fs::read_dir(ws.dir.join("scenes/cache/truth")).unwrap().count();
     assert_eq!(cached, 1);
@@ -91,11 +92,11 @@ fn a_wire_under_a_slow_pan_flickers_at_one_sample_and_far_less_at_sixteen() {
     let scene = &ws.record()["scenes"][0];
     let truth_change = scene["sequences"][0]["truth_change"].as_f64().unwrap();
     assert!(truth_change > 0.0, "the view moves");
-    // Frame 0 is the still truth; the other five are rendered and cached beside it under keys
-    // of their own.
-    assert_eq!(scene["sequences"][0]["truth_rendered"], 5);
+    // Frame 0 is the still truth; the warm-up's 16 and the window's other five are rendered
+    // and cached beside it under keys of their own.
+    assert_eq!(scene["sequences"][0]["truth_rendered"], 16 + 5);
     let cached = std::fs::read_dir(ws.dir.join("scenes/cache/truth")).unwrap().count();
-    assert_eq!(cached, 6);
+    assert_eq!(cached, 1 + 16 + 5);
     let measure = |id: &str, key: &str| sequence(scene, id, 6)[key].as_f64().unwrap();
     let (deferred, reference) = (measure("deferred-1x1", "flicker"), measure("reference-4x4", "flicker"));
     // A single sample catches the wires and slats or misses them from frame to frame; sixteen
@@ -237,7 +238,7 @@ fn taa_flickers_less_than_deferred_on_a_moving_thin_scene_and_reports_what_lag_c
     // the path again, and says so; it has no time of its own along the path.
     let mut stalled = sequence(scene, "taa-stalled", 8).clone();
     assert_eq!(stalled["frames_of"], "taa", "{stalled}");
-    assert!(stalled.get("frame_ms").is_none() && taa["frame_ms"]["samples"].as_array().unwrap().len() == 7);
+    assert!(stalled.get("frame_ms").is_none() && taa["frame_ms"]["samples"].as_array().unwrap().len() == 8);
     let object = stalled.as_object_mut().unwrap();
     object.remove("frames_of");
     object.insert("frame_ms".into(), taa["frame_ms"].clone());
@@ -245,8 +246,13 @@ fn taa_flickers_less_than_deferred_on_a_moving_thin_scene_and_reports_what_lag_c
     let flicker = |s: &Value| s["flicker"].as_f64().unwrap();
     assert!(flicker(taa) < flicker(deferred), "taa {:e}, deferred-1x1 {:e}", flicker(taa), flicker(deferred));
     // Its path does not start from its still (16 frames at the first camera, converged): its
-    // history warmed up along the 16 frames of the path before the first, as in a game.
+    // history warmed up along the 16 frames of the path before the first, as in a game. The
+    // orbit moves there already: no lead, no still warm-up frame.
     assert_eq!(scene["sequences"][0]["warmup_frames"], 16);
+    assert!(
+        scene["sequences"][0].get("lead_s").is_none()
+            && scene["sequences"][0].get("warmup_still_frames").is_none()
+    );
     assert_ne!(taa["hashes"][0], mode(scene, "taa")["output_hash"]);
     // The still is rendered twice from a reset, and both agree.
     assert_eq!(mode(scene, "taa")["deterministic"], true);
@@ -326,18 +332,30 @@ fn stable_counts_flicker_less_than_the_papers_on_a_moving_thin_scene_for_the_sam
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
     let scene = &ws.record()["scenes"][0];
     let (paper, stable) = (sequence(scene, "adaptive-4x4", 8), sequence(scene, "adaptive-4x4-stable", 8));
-    // --keep-frames: every measured frame of each stream, display-encoded, as the metrics read
-    // them, in the scene's folder.
+    // --keep-frames: every frame the metric saw of each stream, the 16 of the warm-up first,
+    // display-encoded, as the metrics read them, in the scene's folder, and beside them what a
+    // reference implementation needs to score them as the run did.
     let frames = ws.run_dir().join("thin/frames/1");
     for stream in ["truth", "adaptive-4x4", "adaptive-4x4-stable"] {
         let kept: Vec<_> =
             std::fs::read_dir(frames.join(stream)).unwrap().map(|e| e.unwrap().file_name()).collect();
-        assert_eq!(kept.len(), 8, "{stream}: {kept:?}");
-        let last = image::open(frames.join(stream).join("007.png")).unwrap();
+        assert_eq!(kept.len(), 16 + 8, "{stream}: {kept:?}");
+        let last = image::open(frames.join(stream).join("023.png")).unwrap();
         assert_eq!((last.width(), last.height()), (256, 192), "{stream}");
     }
-    let last = image::open(frames.join("adaptive-4x4-stable/007.png")).unwrap().to_rgba8();
-    let shown = image::open(frames.join("adaptive-4x4/007.png")).unwrap().to_rgba8();
+    let kept: Value = serde_json::from_slice(&std::fs::read(frames.join("sequence.json")).unwrap()).unwrap();
+    assert_eq!(
+        (kept["first_measured_frame"].as_u64(), kept["frames"].as_u64()),
+        (Some(16), Some(24)),
+        "{kept}"
+    );
+    assert_eq!(
+        (kept["fps"].as_f64(), kept["display"].as_str()),
+        (Some(60.0), Some("standard_fhd")),
+        "{kept}"
+    );
+    let last = image::open(frames.join("adaptive-4x4-stable/023.png")).unwrap().to_rgba8();
+    let shown = image::open(frames.join("adaptive-4x4/023.png")).unwrap().to_rgba8();
     assert_ne!(last.as_raw(), shown.as_raw(), "the two modes' last frames differ, as their hashes do");
     let number = |s: &Value, key: &str| s[key].as_f64().unwrap_or_else(|| panic!("{key}: {s}"));
     // The still is the paper's; along the path the counts follow the frames before, from the
@@ -353,10 +371,10 @@ fn stable_counts_flicker_less_than_the_papers_on_a_moving_thin_scene_for_the_sam
     );
     assert!(fewer < number(paper, "count_changes"), "count changes: stable {fewer}, paper {paper}");
     // What that costs: a count never falls below the metric's, so it shades at least as many
-    // samples along the path; every frame after the first is timed.
+    // samples along the path; every measured frame is timed.
     assert!(number(stable, "shaded_percent") >= number(paper, "shaded_percent"), "{stable}\n{paper}");
     for s in [paper, stable] {
-        assert_eq!(s["frame_ms"]["samples"].as_array().map(Vec::len), Some(7), "{s}");
+        assert_eq!(s["frame_ms"]["samples"].as_array().map(Vec::len), Some(8), "{s}");
         assert!(number(&s["frame_ms"], "median") > 0.0);
     }
 }

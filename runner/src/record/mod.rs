@@ -168,6 +168,11 @@ pub struct SceneRecord {
     /// quality was measured.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub jod_display: Option<String>,
+    /// How many of its frame's pixels a degree of the viewer's sight spans, for JOD and FLIP
+    /// alike: the viewing conditions its rankings assume (absent in runs from before, whose
+    /// FLIP judged at 67 pixels a degree and JOD at the display model's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pixels_per_degree: Option<f64>,
     /// The ground truth every mode's `vs_ground_truth` is measured against.
     pub truth: Option<TruthRecord>,
     /// The sequences along the manifest's camera path, where it has one: one per speed of the

@@ -57,11 +57,20 @@ pub struct SequenceRecord {
     /// before it).
     #[serde(default)]
     pub jod_s: f64,
-    /// Frames along the path before its first that the modes carrying a history rendered,
-    /// unmeasured, to warm it up (absent in runs from before, whose first frame was such a
-    /// mode's converged still).
+    /// Frames along the path before its measured window that every mode and the truth
+    /// rendered, unmeasured: TAA's history builds up there, and ColorVideoVDP's temporal
+    /// filters read them as the window's past (only the window is pooled). In runs from before
+    /// only the modes carrying a history rendered them, and the metric saw the window alone.
     #[serde(default)]
     pub warmup_frames: u32,
+    /// Seconds the window starts later than the manifest's start on the keyframes' and the
+    /// animation's clocks, so that the warm-up before it moves (absent where 0).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub lead_s: f64,
+    /// Warm-up frames that show the same view as the frame before (neither the camera nor the
+    /// animation moved): a history built there has seen a still scene (absent where 0).
+    #[serde(default, skip_serializing_if = "is_zero_u32")]
+    pub warmup_still_frames: u32,
     #[serde(default)]
     pub region_s: f64,
     /// Where the modes flicker most, with its animations; absent where fewer than two frames
@@ -72,27 +81,48 @@ pub struct SequenceRecord {
     pub region_error: Option<String>,
 }
 
+fn is_zero(value: &f64) -> bool {
+    *value == 0.0
+}
+
+fn is_zero_u32(value: &u32) -> bool {
+    *value == 0
+}
+
 impl SequenceRecord {
     /// How fast it moves, by what the content did where measured: `1.8 px a frame (median;
-    /// 3.7 nominal)`, or on a path without a speed the fastest content (`static, content up to
-    /// 4.18 px a frame`); else the nominal `3.7 px a frame` or the path's name; and the
-    /// animation that plays (`…, animation crossing`).
+    /// 3.7 nominal)`; on a path without a speed, what moves: `static, animation crossing:
+    /// median 5.77, p90 5.86 px a frame over 4.1 % of the frame`; else the nominal `3.7 px a
+    /// frame` or the path's name; and the animation that plays (`…, animation crossing`).
     pub fn speed(&self) -> String {
         use crate::motion::short;
-        let speed = match (self.measured_speed, self.pixels_per_frame) {
-            (Some(measured), Some(px)) => {
-                format!("{} px a frame (median; {} nominal)", short(measured.median), short(px))
-            }
-            // A still camera's content moves where an animation moves it: its fastest.
-            (Some(measured), None) => {
-                format!("{}, content up to {} px a frame", self.path, short(measured.max))
-            }
-            (None, Some(px)) => format!("{} px a frame", short(px)),
-            (None, None) => self.path.clone(),
+        let path = match &self.animation {
+            Some(animation) => format!("{}, animation {animation}", self.path),
+            None => self.path.clone(),
         };
-        match &self.animation {
+        let with_animation = |speed: String| match &self.animation {
             Some(animation) => format!("{speed}, animation {animation}"),
             None => speed,
+        };
+        match (self.measured_speed, self.pixels_per_frame) {
+            (Some(measured), Some(px)) => with_animation(format!(
+                "{} px a frame (median; {} nominal)",
+                short(measured.median),
+                short(px)
+            )),
+            // A still camera's content moves where an animation moves it: how fast, and how much
+            // of the frame.
+            (Some(measured), None) => match measured.moving {
+                Some(share) => format!(
+                    "{path}: median {}, p90 {} px a frame over {} % of the frame",
+                    short(measured.median),
+                    short(measured.p90),
+                    crate::motion::short(share * 100.0)
+                ),
+                None => format!("{path}, content up to {} px a frame", short(measured.max)),
+            },
+            (None, Some(px)) => with_animation(format!("{px} px a frame", px = short(px))),
+            (None, None) => path,
         }
     }
 }
@@ -158,10 +188,10 @@ pub struct ModeSequence {
     /// `shaded_percent`), averaged over the frames: what the mode costs in motion.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shaded_percent: Option<f64>,
-    /// The time of every frame after the first (which renders as a still), in ms, each frame
-    /// rendered once with the modes in turn: single samples, noisier than the still's median,
-    /// but the only time taken in motion, where a `-stable` mode's counts differ from its
-    /// still's.
+    /// The time of every measured frame, in ms, each frame rendered once with the modes in
+    /// turn (in runs from before, every frame but the first): single samples, noisier than the
+    /// still's median, but the only time taken in motion, where a `-stable` mode's counts
+    /// differ from its still's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub frame_ms: Option<Summary>,
     /// The mode whose frames these are, where this one rendered no path of its own: a stalled

@@ -16,8 +16,8 @@ use super::images::figure;
 use crate::record::{ModeRecord, SceneRecord, SequenceRecord};
 use crate::truth::TRUTH_ID;
 
-/// The smallest differences that count as an order: a tenth of a JOD (a tenth of the step
-/// that 75 % of viewers notice) and a tenth of a decibel.
+/// The smallest differences that count as an order: a tenth of a JOD (a tenth of the step at
+/// which 75 % of viewers prefer the better image) and a tenth of a decibel.
 const JOD_MARGIN: f64 = 0.1;
 const PSNR_MARGIN_DB: f64 = 0.1;
 

@@ -178,14 +178,43 @@ fn rankings(run: &RunRecord) -> Vec<Ranking<'_>> {
     out
 }
 
-/// What the table says, in one paragraph.
-const CAPTION: &str = "Ranked by ColorVideoVDP's JOD against the truth (10: no visible difference; a \
-     difference of 1 JOD is one that 75 % of viewers would notice), along the camera path at each \
-     speed where the scene has one: each line names, from the cheapest up, the fastest unstalled mode \
-     for each quality that a mode on the front reaches, with its own JOD and frame time; the chart \
-     draws them, JOD across and time up. The details add PSNR, mean FLIP, flicker (the change of the \
-     error along the truth's motion) and the MSE where the frame before had the surface hidden. The \
-     still's ranking leaves TAA out: its still is 16 frames accumulated at one camera.";
+/// What the table says, in one paragraph, with the viewing conditions its rankings assume.
+fn caption(run: &RunRecord) -> String {
+    format!(
+        "Ranked by ColorVideoVDP's JOD against the truth (10: no visible difference; of two modes 1 JOD \
+         apart, 75 % of viewers prefer the better), {}, along the camera path at each speed where \
+         the scene has one, at steady state (after 16 warm-up frames): each line names, from the \
+         cheapest up, the fastest unstalled mode for each quality that a mode on the front reaches, \
+         with its own JOD and frame time; the chart draws them, JOD across and time up. The details \
+         add PSNR, mean FLIP, flicker (the change of the error along the truth's motion) and the MSE \
+         where the frame before had the surface hidden. The still's ranking leaves TAA out: its still \
+         is 16 frames accumulated at one camera.",
+        viewing_conditions(run)
+    )
+}
+
+/// The viewing conditions a run's rankings assume: `seen on standard_fhd at 37.8 pixels a
+/// degree (a 256-pixel-wide frame 6.8° across)`, or, where scenes differ, each scene's.
+pub fn viewing_conditions(run: &RunRecord) -> String {
+    let seen = |scene: &SceneRecord| -> Option<String> {
+        let (display, ppd) = (scene.jod_display.as_ref()?, scene.pixels_per_degree?);
+        let width = scene.resolution.map(|[w, _]| f64::from(w))?;
+        Some(format!(
+            "on {display} at {ppd:.1} pixels a degree (a {width}-pixel-wide frame {:.1}° across)",
+            width / ppd
+        ))
+    };
+    let all: Vec<(&str, String)> =
+        run.scenes.iter().filter_map(|scene| Some((scene.name.as_str(), seen(scene)?))).collect();
+    match all.first() {
+        None => "as seen on the scenes' displays".into(),
+        Some((_, first)) if all.iter().all(|(_, seen)| seen == first) => format!("as seen {first}"),
+        Some(_) => {
+            let each: Vec<String> = all.iter().map(|(name, seen)| format!("{name} {seen}")).collect();
+            format!("as seen {}", each.join("; "))
+        }
+    }
+}
 
 /// A small step chart of a ranking: JOD across (from the lowest level to 10), frame time up
 /// (log), a dot per row with its mode in a tooltip.
@@ -240,7 +269,7 @@ pub(super) fn technique_table(page: &mut String, run: &RunRecord) {
         "<h2>Which technique for this scene</h2>\n<p>{}</p>\n<table><thead><tr><th>scene</th>\
          <th>ranked</th><th>the fastest mode for each JOD, cheapest first</th><th>time against JOD</th></tr>\
          </thead><tbody>",
-        escape(CAPTION)
+        escape(&caption(run))
     );
     for ranking in rankings {
         let _ = writeln!(
@@ -264,8 +293,9 @@ pub(super) fn technique_markdown(out: &mut String, run: &RunRecord, cell: fn(&st
     }
     let _ = write!(
         out,
-        "\n### Which technique for this scene\n\n{CAPTION}\n\n| scene | ranked | the fastest mode for each \
-         JOD, cheapest first | details |\n|---|---|---|---|\n"
+        "\n### Which technique for this scene\n\n{}\n\n| scene | ranked | the fastest mode for each \
+         JOD, cheapest first | details |\n|---|---|---|---|\n",
+        caption(run)
     );
     for ranking in rankings {
         let _ = writeln!(

@@ -99,24 +99,44 @@ pub(super) fn sequence_table(page: &mut String, scene: &SceneRecord, index: usiz
     page.push_str("</tbody></table>\n");
 }
 
-/// One line on a scene's sequence: its path, frames and the truth's own change along its
-/// motion, the flicker of a blank image.
+/// One line on a scene's sequence: its path, frames and warm-up, and the truth's own change
+/// along its motion, the flicker of a blank image.
 pub fn sequence_summary(sequence: &SequenceRecord) -> String {
     let blank = sequence.blank_flicker.map_or("–".into(), |c| format!("{:.3}", c * 1e4));
     let mut line = format!(
-        "{} path at {}, {} of {} frames of {:.4} s. Flicker is the mean squared change of a mode's \
-         error along the truth's motion; a blank image (its error the truth's own change) scores \
-         {blank} ×1e-4 here",
+        "{} path at {}, {} of {} frames of {:.4} s after {}. Flicker is the mean squared change of \
+         a mode's error along the truth's motion; a blank image (its error the truth's own change) \
+         scores {blank} ×1e-4 here",
         sequence.path,
         sequence.speed(),
         sequence.frames_done,
         sequence.frames,
-        sequence.time_step_s
+        sequence.time_step_s,
+        warmup_summary(sequence)
     );
     if let Some(error) = &sequence.error {
         let _ = write!(line, "; stopped: {error}");
     }
     line
+}
+
+/// What came before the measured frames: `16 warm-up frames along the path (the window starts
+/// 0.267 s into the animation so that they move)`, and where some held still, how many.
+fn warmup_summary(sequence: &SequenceRecord) -> String {
+    let mut text = format!("{} warm-up frames along the path", sequence.warmup_frames);
+    if sequence.lead_s > 0.0 {
+        let _ =
+            write!(text, " (the window starts {:.3} s later than asked, so that they move)", sequence.lead_s);
+    }
+    if sequence.warmup_still_frames > 0 {
+        let _ = write!(
+            text,
+            ", {} of which show the frame before's view (the path and the animation hold still there: a \
+             history built on them has seen a still scene)",
+            sequence.warmup_still_frames
+        );
+    }
+    text
 }
 
 /// A PSNR to two decimals, `∞` for identical images, `–` without a comparison.

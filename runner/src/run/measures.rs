@@ -87,7 +87,7 @@ pub(super) struct ModeState {
     own_change: u64,
     count_changes: Vec<f64>,
     /// Per frame, the share of samples shaded (modes with a sample-count map), and the frame's
-    /// time (every frame but the first, which is rendered as a still).
+    /// time.
     shaded_percent: Vec<f64>,
     frame_seconds: Vec<f64>,
     /// The error along the truth's motion, summed over the frame pairs; per pair, the share of
@@ -156,9 +156,7 @@ impl ModeState {
         {
             self.shaded_percent.push(stats.shaded_percent);
         }
-        if self.previous.is_some() {
-            self.frame_seconds.push(frame.seconds);
-        }
+        self.frame_seconds.push(frame.seconds);
         self.hashes.push(fingerprint(&frame.display, frame.counts.as_deref()));
         self.mse.push(metrics::quality(&frame.display, truth.now, "truth").mse);
         if let (Some(before), Some(truth_before)) = (&self.previous, truth.then) {
@@ -252,8 +250,13 @@ impl ModeState {
 /// frame (stream 0's); empty for the truth's and for a stream that holds fewer frames (its mode
 /// failed on the way). Frames identical to another (a stalled mode's and its twin's) are
 /// compared once; the comparisons of a frame run on every core.
-pub(super) fn flip_along(spool: &Spool, frames: usize, cancel: &AtomicBool) -> Result<Vec<Vec<f64>>, String> {
-    let [width, height] = spool.size();
+pub(super) fn flip_along(
+    spool: &Spool,
+    frames: usize,
+    pixels_per_degree: f64,
+    cancel: &AtomicBool,
+) -> Result<Vec<Vec<f64>>, String> {
+    let size = spool.size();
     let complete: Vec<usize> = (1..spool.streams()).filter(|&s| spool.frames(s) >= frames).collect();
     let mut flips = vec![Vec::with_capacity(frames); spool.streams()];
     let threads = std::thread::available_parallelism().map_or(1, usize::from);
@@ -276,7 +279,10 @@ pub(super) fn flip_along(spool: &Spool, frames: usize, cancel: &AtomicBool) -> R
                 let Some(image) = distinct.get(i).filter(|_| !cancel.load(Ordering::SeqCst)) else {
                     return done;
                 };
-                done.push((*image, crate::perceptual::flip_rgba8(image, &truth, width, height).mean()));
+                done.push((
+                    *image,
+                    crate::perceptual::flip_rgba8(image, &truth, size, pixels_per_degree).mean(),
+                ));
             }
         };
         let values: std::collections::HashMap<&[u8], f64> = std::thread::scope(|scope| {
@@ -293,11 +299,12 @@ pub(super) fn flip_along(spool: &Spool, frames: usize, cancel: &AtomicBool) -> R
     Ok(flips)
 }
 
-/// Per stream of the spool, ColorVideoVDP of its first `frames` frames as a video against the
-/// truth's (stream 0's) at `fps`, with the distortion map of its worst frame; `None` for the
-/// truth's, for a stream that holds fewer frames and for fewer than two frames. Streams whose frames equal another's (a stalled mode's and
-/// its twin's) are scored once; the streams are scored on every core, each reading its frames
-/// as it goes.
+/// Per stream of the spool, ColorVideoVDP of its warm-up and the first `frames` frames of its
+/// window as a video against the truth's (stream 0's) at `fps`, pooled over the window alone,
+/// with the distortion map of its worst frame; `None` for the truth's, for a stream that holds
+/// fewer frames and for a window of no frame. Streams whose frames equal another's (a stalled
+/// mode's and its twin's) are scored once; the streams are scored on every core, each reading
+/// its frames as it goes.
 pub(super) fn jod_along(
     spool: &Spool,
     frames: usize,
@@ -306,15 +313,16 @@ pub(super) fn jod_along(
     cancel: &AtomicBool,
 ) -> Result<Vec<Option<Arc<VideoJod>>>, String> {
     use std::hash::{Hash, Hasher};
-    let truth = (0..frames).map(|f| spool.frame(0, f)).collect::<Result<Vec<_>, _>>()?;
+    let (warmup, seen) = (spool.warmup(), spool.warmup() + frames);
+    let truth = (0..seen).map(|f| spool.seen_frame(0, f)).collect::<Result<Vec<_>, _>>()?;
     let complete: Vec<usize> =
-        (1..spool.streams()).filter(|&s| frames > 1 && spool.frames(s) >= frames).collect();
+        (1..spool.streams()).filter(|&s| frames > 0 && seen > 1 && spool.frames(s) >= frames).collect();
     let mut first_of = std::collections::HashMap::new();
     let mut scored_as = Vec::with_capacity(complete.len());
     for &stream in &complete {
         let mut hasher = std::collections::hash_map::DefaultHasher::new();
-        for frame in 0..frames {
-            spool.frame(stream, frame)?.hash(&mut hasher);
+        for frame in 0..seen {
+            spool.seen_frame(stream, frame)?.hash(&mut hasher);
         }
         scored_as.push(*first_of.entry(hasher.finish()).or_insert(stream));
     }
@@ -326,9 +334,9 @@ pub(super) fn jod_along(
             if cancel.load(Ordering::SeqCst) {
                 break;
             }
-            let clip = (0..frames).map(|f| spool.frame(stream, f)).collect::<Result<Vec<_>, _>>();
+            let clip = (0..seen).map(|f| spool.seen_frame(stream, f)).collect::<Result<Vec<_>, _>>();
             let pairs = clip.iter().flatten().map(Vec::as_slice).zip(truth.iter().map(Vec::as_slice));
-            let scored = clip.is_ok().then(|| jod.video(pairs, spool.size(), fps)).flatten();
+            let scored = clip.is_ok().then(|| jod.video(pairs, spool.size(), fps, warmup)).flatten();
             done.push((stream, scored.map(Arc::new)));
         }
         done
@@ -388,15 +396,15 @@ mod tests {
     fn flip_along_the_path_stops_at_a_signal() {
         let dir = std::env::temp_dir().join(format!("aabench-flip-stop-{}", std::process::id()));
         let mut spool =
-            Spool::create(dir.join("spool"), [8, 8], vec!["truth".into(), "mode".into()]).unwrap();
+            Spool::create(dir.join("spool"), [8, 8], 0, vec!["truth".into(), "mode".into()]).unwrap();
         for value in [10, 200] {
             for stream in [0, 1] {
                 spool.append(stream, &DisplayImage::from_rgba8(&[value; 256])).unwrap();
             }
         }
-        let flips = flip_along(&spool, 2, &AtomicBool::new(false)).unwrap();
+        let flips = flip_along(&spool, 2, 67.0, &AtomicBool::new(false)).unwrap();
         assert_eq!((flips[1].len(), flips[1][0]), (2, 0.0), "identical frames: FLIP 0 at each");
-        let error = flip_along(&spool, 2, &AtomicBool::new(true)).unwrap_err();
+        let error = flip_along(&spool, 2, 67.0, &AtomicBool::new(true)).unwrap_err();
         assert!(error.contains("interrupted"), "{error}");
         drop(spool);
         let _ = std::fs::remove_dir_all(&dir);

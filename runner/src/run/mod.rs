@@ -173,6 +173,7 @@ fn empty_scene_at(manifest: &Path) -> SceneRecord {
         gate: Default::default(),
         exposure: None,
         jod_display: None,
+        pixels_per_degree: None,
         truth: None,
         sequences: Vec::new(),
         modes: Vec::new(),

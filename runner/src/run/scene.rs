@@ -6,8 +6,6 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use aabench_renderer::scene::Camera;
-use aabench_renderer::scene::pose::CameraPath;
 use aabench_renderer::{DisplayImage, color};
 
 use super::context::{ModeRun, SceneRun};
@@ -30,7 +28,10 @@ impl<'a> SceneRun<'a> {
         if self.plan.quality {
             let judged = self.plan.jod_display(self.manifest);
             match judged.and_then(|name| Ok((crate::perceptual::Jod::new(&name)?, name))) {
-                Ok((jod, name)) => (self.jod, record.jod_display) = (Some(jod), Some(name)),
+                Ok((jod, name)) => {
+                    record.pixels_per_degree = Some(jod.pixels_per_degree());
+                    (self.jod, record.jod_display) = (Some(jod), Some(name));
+                }
                 Err(error) => return fail(record, error),
             }
         }
@@ -39,6 +40,7 @@ impl<'a> SceneRun<'a> {
             Err(error) => return fail(record, error),
         };
         let (still_camera, pivot, camera_path) = (loaded.camera, loaded.pivot, loaded.camera_path.clone());
+        let timeline = loaded.timeline;
         self.textured = loaded.scene.is_textured();
         match self.upload(loaded).await {
             Ok((budget, exposure)) => {
@@ -74,8 +76,12 @@ impl<'a> SceneRun<'a> {
         if self.plan.quality {
             self.temporal_stills(&mut runs).await;
         }
-        let view = (&still_camera, pivot, camera_path.as_ref());
-        self.sequences(&mut record, &mut runs, view, truth_image.as_ref()).await;
+        let view = scenes::View {
+            camera: &still_camera,
+            camera_path: camera_path.as_ref(),
+            timeline: timeline.as_ref(),
+        };
+        self.sequences(&mut record, &mut runs, (view, pivot), truth_image.as_ref()).await;
         // Free the scene's device memory before the CPU work below.
         self.free_scene().await;
         self.status("writing images and metrics");
@@ -96,31 +102,43 @@ impl<'a> SceneRun<'a> {
         &mut self,
         record: &mut SceneRecord,
         runs: &mut [ModeRun],
-        (still_camera, pivot, camera_path): (&Camera, f64, Option<&CameraPath>),
+        (view, pivot): (scenes::View<'_>, f64),
         still_truth: Option<&DisplayImage>,
     ) {
+        let still_camera = view.camera;
         let Some(motion) = self.manifest.motion.as_ref().filter(|_| self.plan.sequences) else { return };
         let paces = self.plan.tier.paces(self.manifest, still_camera.fov_y);
         let frames = self.plan.tier.sequence_frames(motion);
+        let window_s = f64::from(frames) * motion.time_step_s;
+        if window_s < crate::motion::MIN_WINDOW_S {
+            let warning = format!(
+                "motion.frames.{}: the measured window of {frames} frames lasts {} ms, less than the \
+                 {} ms ColorVideoVDP's temporal filters span: its JOD weighs the window's first frames most",
+                self.plan.tier.name(),
+                crate::motion::short(window_s * 1e3),
+                crate::motion::MIN_WINDOW_S * 1e3
+            );
+            self.warn(&warning);
+            record.warnings.push(warning);
+        }
         let still_key = record.truth.as_ref().map(|truth| truth.key.clone()).unwrap_or_default();
         for (index, pace) in paces.iter().enumerate() {
             if self.cancelled() || self.worker.is_stuck() {
                 return;
             }
             // Checked when the scene loaded.
-            let (cameras, warmup) =
-                match scenes::path_cameras(motion, still_camera, pivot, (frames, pace.rate), camera_path) {
-                    Ok(cameras) => cameras,
-                    Err((field, message)) => return self.warn(&format!("no sequence: {field}: {message}")),
-                };
+            let path = match scenes::path_frames(motion, view, pivot, (frames, pace.rate)) {
+                Ok(path) => path,
+                Err((field, message)) => return self.warn(&format!("no sequence: {field}: {message}")),
+            };
             let modes = sequence::PathMode::of(&self.plan.modes, runs);
             // The first speed's animations in `path/`, the others' in `path-2/`, `path-3/`, ….
             let folder = if index == 0 { "path".into() } else { format!("path-{}", index + 1) };
             let along = sequence::Along {
                 motion,
                 pace: *pace,
-                cameras: &cameras,
-                warmup: &warmup,
+                timeline: view.timeline.expect("a scene with motion has a timeline"),
+                frames: &path,
                 folder: &folder,
                 number: index + 1,
                 still_camera,
@@ -171,8 +189,8 @@ impl<'a> SceneRun<'a> {
         self.status("uploading");
         let memory_limit = plan.memory_limit;
         let metered = manifest.tonemap.exposure.is_none();
-        // A playing animation's still is its pose at its start.
-        let start = manifest.motion.as_ref().and_then(|motion| motion.animation_time(0));
+        // A playing animation's still is its pose at the measured window's start.
+        let start = loaded.timeline.and_then(|timeline| timeline.animation_time(0));
         let uploaded = self
             .worker
             .call(plan.frame_timeout, move |state| {

@@ -13,13 +13,18 @@
 //! a render's time, and the square where the modes flicker most is cut from them as animations
 //! (`flicker.rs`).
 //!
-//! A temporal mode (TAA) starts the path from a still: its warm-up frames at the first camera.
+//! Every mode and the truth first render the warm-up, the frames of the path before its
+//! measured window (`motion::Timeline`): a mode that carries a history (TAA, the `-stable`
+//! modes) starts it from a reset there, so that its first measured frame has a history that has
+//! been moving, as in a game; and ColorVideoVDP, whose temporal filters read the 250 ms before
+//! each frame, sees the path's own frames there rather than the first frame repeated. Only the
+//! window is measured: the warm-up is history, spooled for the metric and kept with
+//! `--keep-frames`.
 
 use std::sync::Arc;
 use std::time::Instant;
 
 use aabench_renderer::scene::Camera;
-use aabench_renderer::taa::WARMUP_FRAMES;
 use aabench_renderer::{DisplayImage, Mode};
 
 use super::context::{ModeRun, SceneRun};
@@ -28,22 +33,21 @@ use super::measures::{
 };
 use crate::flicker::{self, TRUTH_STREAM};
 use crate::metrics::{self, FrameChecks};
-use crate::motion::{MotionSpec, Pace, PathKind};
+use crate::motion::{MotionSpec, Pace, PathFrame, PathKind, Timeline};
 use crate::record::SequenceRecord;
 use crate::spool::Spool;
 use crate::temporal::{Flow, Geometry};
 use crate::truth;
 
-/// What the sequence is measured along and against: the path and its cameras in this tier, and
+/// What the sequence is measured along and against: the path and its frames in this tier, and
 /// the still frame's camera, truth and truth key.
 #[derive(Debug)]
 pub struct Along<'a> {
     pub motion: &'a MotionSpec,
     pub pace: Pace,
-    pub cameras: &'a [Camera],
-    /// The cameras of the frames before the first, oldest first, along which the modes that
-    /// carry a history warm up, unmeasured.
-    pub warmup: &'a [Camera],
+    pub timeline: &'a Timeline,
+    /// Every frame, the warm-up's first: `timeline.warmup` frames, then the measured window's.
+    pub frames: &'a [PathFrame],
     /// The folder under the scene's that holds the sequence's animations, and the sequence's
     /// number in the scene (1 the first).
     pub folder: &'a str,
@@ -51,6 +55,18 @@ pub struct Along<'a> {
     pub still_camera: &'a Camera,
     pub still_truth: Option<&'a DisplayImage>,
     pub still_key: &'a str,
+}
+
+impl Along<'_> {
+    /// The frames of the warm-up.
+    fn warmup(&self) -> usize {
+        self.timeline.warmup as usize
+    }
+
+    /// The frames of the measured window.
+    fn measured(&self) -> usize {
+        self.frames.len() - self.warmup()
+    }
 }
 
 /// A mode as the sequence takes it.
@@ -65,13 +81,16 @@ pub(super) struct PathMode {
 }
 
 impl PathMode {
-    /// The scene's modes, from what their stills gave.
+    /// The scene's modes, from what their stills gave. A stalled mode takes its twin's frames
+    /// where every round of both gave one and the same image: the two may have taken different
+    /// numbers of rounds (rounds by confidence), so their hashes are compared as sets.
     pub fn of(modes: &[Mode], runs: &[ModeRun]) -> Vec<PathMode> {
         let hashed = |i: usize| runs[i].error.is_none() && !runs[i].hashes.is_empty();
+        let image = |i: usize| -> std::collections::BTreeSet<&String> { runs[i].hashes.iter().collect() };
         let twin = |i: usize| {
             let plain = Mode { stalled: false, ..modes[i] };
             let t = modes.iter().position(|other| *other == plain)?;
-            (modes[i].stalled && hashed(i) && hashed(t) && runs[i].hashes == runs[t].hashes).then_some(t)
+            (modes[i].stalled && hashed(i) && hashed(t) && image(i) == image(t)).then_some(t)
         };
         (0..modes.len())
             .map(|i| PathMode { mode: modes[i], ready: runs[i].error.is_none(), frames_of: twin(i) })
@@ -93,12 +112,20 @@ pub(super) async fn run(
 ) -> (SequenceRecord, Vec<ModeOutcome>) {
     let start = Instant::now();
     let mut record = empty_record(&along);
+    if record.warmup_still_frames > 0 && moves(&along, along.warmup()..along.frames.len()) {
+        scene.warn(&format!(
+            "{} of the {} warm-up frames hold still (the path or the animation has not started): the \
+             modes that carry a history start the window from a still scene",
+            record.warmup_still_frames,
+            along.warmup()
+        ));
+    }
     let mut states: Vec<ModeState> = modes.iter().map(|_| ModeState::default()).collect();
     // Every mode's frames are spooled, to stream `index + 1`; the truth's to stream 0.
     let out_dir = scene.dir.join(along.folder);
     let size = scene.resolution;
     let names = std::iter::once(TRUTH_STREAM.to_string()).chain(modes.iter().map(|m| m.mode.to_string()));
-    let mut spool = Spool::create(crate::spool::folder(&out_dir), size, names.collect());
+    let mut spool = Spool::create(crate::spool::folder(&out_dir), size, along.warmup(), names.collect());
     let mut flicker = vec![0.0; size[0] as usize * size[1] as usize];
     let rendered = render_frames(scene, &along, modes, &mut record, &mut states, (&mut spool, &mut flicker));
     if let Err(error) = rendered.await {
@@ -155,7 +182,7 @@ fn empty_record(along: &Along) -> SequenceRecord {
             (Some(name), _) => name.clone(),
             (None, index) => format!("animations[{}]", index.unwrap_or_default()),
         }),
-        frames: along.cameras.len() as u32,
+        frames: along.measured() as u32,
         frames_done: 0,
         time_step_s: along.motion.time_step_s,
         truth_rendered: 0,
@@ -167,6 +194,8 @@ fn empty_record(along: &Along) -> SequenceRecord {
         flip_s: 0.0,
         jod_s: 0.0,
         warmup_frames: 0,
+        lead_s: along.timeline.lead_s,
+        warmup_still_frames: still_warmup_frames(along),
         measured_speed: None,
         region_s: 0.0,
         region: None,
@@ -174,8 +203,24 @@ fn empty_record(along: &Along) -> SequenceRecord {
     }
 }
 
-/// Renders frame after frame: the truth, then every mode. `record.frames_done` counts the
-/// frames that every mode still running rendered.
+/// How many of the warm-up's frames show the same view as the frame before them: neither the
+/// camera nor the animation moved (the first counts as moving). A warm-up that holds still
+/// builds TAA's history on a still scene.
+fn still_warmup_frames(along: &Along) -> u32 {
+    (1..along.warmup()).filter(|&index| !moves(along, index..index + 1)).count() as u32
+}
+
+/// Whether any of the frames `range` shows another view than the frame before it: the camera
+/// or the animation's time moved (an animation may still hold a pose between two times).
+fn moves(along: &Along, range: std::ops::Range<usize>) -> bool {
+    range.filter(|&index| index > 0).any(|index| {
+        let (now, before) = (&along.frames[index], &along.frames[index - 1]);
+        now.camera != before.camera || now.time != before.time
+    })
+}
+
+/// Renders frame after frame, the warm-up's first: the truth, then every mode.
+/// `record.frames_done` counts the measured frames that every mode still running rendered.
 async fn render_frames(
     scene: &mut SceneRun<'_>,
     along: &Along<'_>,
@@ -184,7 +229,6 @@ async fn render_frames(
     states: &mut [ModeState],
     (spool, flicker): (&mut Result<Spool, String>, &mut [f64]),
 ) -> Result<(), String> {
-    let frames = along.cameras.len();
     // A frame that cannot be spooled (a full disk) ends the spooling: the sequence goes on
     // without FLIP and animations, and says why.
     let mut keep = |stream: usize, image: &DisplayImage| {
@@ -196,60 +240,93 @@ async fn render_frames(
     };
     let mut track = TruthTrack::default();
     prepare_geometry(scene).await?;
-    warm_up(scene, along, modes, states).await?;
-    record.warmup_frames = along.warmup.len() as u32;
-    for (frame, &camera) in along.cameras.iter().enumerate() {
+    record.warmup_frames = along.warmup() as u32;
+    for (index, path_frame) in along.frames.iter().enumerate() {
+        let frame = index as i64 - along.warmup() as i64;
+        let name = along.timeline.frame_name(frame);
         if scene.cancelled() {
-            return Err(format!("interrupted after {frame} of {frames} frames"));
+            return Err(match frame {
+                0.. => format!("interrupted after {frame} of {} frames", along.measured()),
+                _ => format!("interrupted at {name}"),
+            });
         }
         if modes.iter().zip(states.iter()).all(|(mode, state)| !mode.renders() || state.error.is_some()) {
             return Err("no mode is left to render".into());
         }
-        let status = |scene: &SceneRun, what: &str| {
-            scene.status(&format!("sequence frame {}/{frames}: {what}", frame + 1))
-        };
-        // The animation's time now and at the frame before (the first frame is a still).
-        let times =
-            along.motion.animation_time(frame).zip(along.motion.animation_time(frame.saturating_sub(1)));
-        set_view(scene, camera, times).await?;
-        // The still is the first frame's pose: a later frame of an animation is not.
-        let still_pose = frame == 0 || times.is_none();
-        let truth = match along.still_truth {
-            Some(still) if camera == *along.still_camera && still_pose => still.clone(),
-            _ => {
-                status(scene, "the truth");
-                let view = FrameView { frame, camera: &camera, time: times.map(|(now, _)| now) };
-                truth_frame(scene, along.still_key, view, record).await?
-            }
-        };
+        // The animation's time now and at the frame before (the first frame's own).
+        let before = &along.frames[index.saturating_sub(1)];
+        set_view(scene, path_frame.camera, path_frame.time.zip(before.time.or(path_frame.time))).await?;
+        let truth = truth_at(scene, along, index, record).await?;
         keep(0, &truth);
-        status(scene, "the geometry");
-        let then = &along.cameras[frame.saturating_sub(1)];
-        let geometry = geometry(scene, [&camera, then], frame == 0).await?;
+        let Ok(frame) = usize::try_from(frame) else {
+            warm_up(scene, modes, states, index, &mut keep).await?;
+            continue;
+        };
+        scene.status(&format!("sequence {name}: the geometry"));
+        let (camera, then) = (&path_frame.camera, &along.frames[index - 1].camera);
+        let geometry = geometry(scene, [camera, then], frame == 0).await?;
         let (truth_then, geometry_then) = track.previous.as_ref().map(|(t, g)| (t, g)).unzip();
         let flow = geometry_then.map(|then| Flow::between(&geometry, then));
         let pair = TruthPair { now: &truth, then: truth_then, flow: flow.as_ref() };
-        for (index, path_mode) in modes.iter().enumerate() {
-            let (mode, state) = (&path_mode.mode, &mut states[index]);
-            if !path_mode.renders() || state.error.is_some() {
-                continue;
-            }
-            status(scene, &mode.to_string());
-            match render(scene, index, mode.m, frame, !mode.carries_history()).await {
-                Ok(Ok(rendered)) => {
-                    keep(index + 1, &rendered.display);
-                    state.add(*mode, rendered, &pair, flicker, scene.textured);
-                }
-                Ok(Err(error)) => state.error = Some(error),
-                // The worker is gone or stuck: no later frame can render.
-                Err(error) => {
-                    state.error = Some(error.clone());
-                    return Err(format!("{mode}: {error}"));
-                }
-            }
-        }
+        measure_modes(scene, (modes, states), frame, (&pair, flicker), &mut keep).await?;
         track.advance(truth, geometry, flow.as_ref(), record);
         record.frames_done = frame as u32 + 1;
+    }
+    Ok(())
+}
+
+/// The truth at frame `index` of the path (the warm-up's first is 0): the still truth where the
+/// frame shows the still's view (its camera, posed as the window's first frame is), else from
+/// the cache or rendered now.
+async fn truth_at(
+    scene: &mut SceneRun<'_>,
+    along: &Along<'_>,
+    index: usize,
+    record: &mut SequenceRecord,
+) -> Result<DisplayImage, String> {
+    let (path_frame, first) = (&along.frames[index], &along.frames[along.warmup()]);
+    let frame = index as i64 - along.warmup() as i64;
+    match along.still_truth {
+        Some(still) if path_frame.camera == *along.still_camera && path_frame.time == first.time => {
+            Ok(still.clone())
+        }
+        _ => {
+            let name = along.timeline.frame_name(frame);
+            scene.status(&format!("sequence {name}: the truth"));
+            let view = FrameView { frame, name: &name, camera: &path_frame.camera, time: path_frame.time };
+            truth_frame(scene, along.still_key, view, record).await
+        }
+    }
+}
+
+/// Renders window frame `frame` with every mode still running, spools it and measures it
+/// against the truth's `pair`, each pixel's flicker added to `flicker`. Errs where the worker
+/// can render nothing more.
+async fn measure_modes(
+    scene: &mut SceneRun<'_>,
+    (modes, states): (&[PathMode], &mut [ModeState]),
+    frame: usize,
+    (pair, flicker): (&TruthPair<'_>, &mut [f64]),
+    keep: &mut impl FnMut(usize, &DisplayImage),
+) -> Result<(), String> {
+    for (index, path_mode) in modes.iter().enumerate() {
+        let (mode, state) = (&path_mode.mode, &mut states[index]);
+        if !path_mode.renders() || state.error.is_some() {
+            continue;
+        }
+        scene.status(&format!("sequence frame {frame}: {mode}"));
+        match render(scene, index, mode.m, frame).await {
+            Ok(Ok(rendered)) => {
+                keep(index + 1, &rendered.display);
+                state.add(*mode, rendered, pair, flicker, scene.textured);
+            }
+            Ok(Err(error)) => state.error = Some(error),
+            // The worker is gone or stuck: no later frame can render.
+            Err(error) => {
+                state.error = Some(error.clone());
+                return Err(format!("{mode}: {error}"));
+            }
+        }
     }
     Ok(())
 }
@@ -301,7 +378,7 @@ impl AfterRender {
         spool.check()?;
         let [run_dir, out_dir] = [self.dirs[0].as_path(), self.dirs[1].as_path()];
         let start = Instant::now();
-        let flips = flip_along(&spool, self.done, &self.cancel)?;
+        let flips = flip_along(&spool, self.done, self.jod.pixels_per_degree(), &self.cancel)?;
         let flip_s = start.elapsed().as_secs_f64();
         let start = Instant::now();
         let jods = jod_along(&spool, self.done, 1.0 / self.delay_s, &self.jod, &self.cancel)?;
@@ -309,11 +386,39 @@ impl AfterRender {
         let jod_s = start.elapsed().as_secs_f64();
         // Frames that cannot be written (a full disk) cost the user their copy, not the
         // measures.
-        let kept = self.frames_dir.as_ref().map(|dir| spool.write_pngs(dir, self.done));
+        let kept = self.frames_dir.as_ref().map(|dir| self.keep_frames(&spool, dir));
         let start = Instant::now();
         let region = flicker::region(&spool, flicker, animated, self.done, self.delay_s, [run_dir, out_dir]);
         let region_s = start.elapsed().as_secs_f64();
         Ok(Measured { flips, flip_s, jods, maps, jod_s, region, region_s, kept })
+    }
+}
+
+/// What `--keep-frames` writes beside a sequence's frames (`sequence.json`), so that anyone can
+/// score them again with ColorVideoVDP's reference implementation as aabench did: every frame
+/// the metric saw, numbered from the warm-up's first, at `fps` on the display model `display`,
+/// with only the frames from `first_measured_frame` on pooled.
+#[derive(Debug, serde::Serialize)]
+struct KeptFrames {
+    fps: f64,
+    first_measured_frame: usize,
+    frames: usize,
+    display: String,
+    pixels_per_degree: f64,
+}
+
+impl AfterRender {
+    fn keep_frames(&self, spool: &Spool, dir: &std::path::Path) -> Result<(), String> {
+        spool.write_pngs(dir, self.done)?;
+        let display = self.jod.display();
+        let kept = KeptFrames {
+            fps: 1.0 / self.delay_s,
+            first_measured_frame: spool.warmup(),
+            frames: spool.warmup() + self.done,
+            display: display.name.clone(),
+            pixels_per_degree: display.pixels_per_degree,
+        };
+        crate::fs::write_json(&dir.join("sequence.json"), &kept)
     }
 }
 
@@ -341,69 +446,59 @@ impl Measured {
     }
 }
 
-/// Renders the modes that carry a history (TAA, the `-stable` modes) along the frames before
-/// the path's first, from a reset and unmeasured: their first measured frame then has a
-/// history that has been moving, as in a game, where a still's 16 frames at one camera would
-/// have converged. A mode whose warm-up fails fails the sequence.
+/// Renders warm-up frame `index` (0 the first) with every mode that renders the path, from a
+/// reset at the first, and spools each frame: unmeasured, seen only by ColorVideoVDP as the
+/// history of the window's frames. A mode whose warm-up fails fails its sequence.
 async fn warm_up(
     scene: &mut SceneRun<'_>,
-    along: &Along<'_>,
     modes: &[PathMode],
     states: &mut [ModeState],
+    index: usize,
+    keep: &mut impl FnMut(usize, &DisplayImage),
 ) -> Result<(), String> {
-    let warming: Vec<usize> = (0..modes.len())
-        .filter(|&i| modes[i].renders() && modes[i].mode.carries_history() && states[i].error.is_none())
-        .collect();
-    let count = along.warmup.len();
-    for (k, &camera) in along.warmup.iter().enumerate().filter(|_| !warming.is_empty()) {
-        if scene.cancelled() {
-            return Err(format!("interrupted after {k} of {count} warm-up frames"));
+    for (stream, path_mode) in modes.iter().enumerate() {
+        if !path_mode.renders() || states[stream].error.is_some() {
+            continue;
         }
-        let back = count - k;
-        let times =
-            along.motion.animation_time_before(back).zip(along.motion.animation_time_before(back + 1));
-        set_view(scene, camera, times).await?;
-        for &index in &warming {
-            scene.status(&format!("sequence warm-up frame {}/{count}: {}", k + 1, modes[index].mode));
-            let rendered = scene
-                .worker
-                .call(scene.plan.frame_timeout, move |state| {
-                    let prepared = state.modes[index].as_ref().expect("prepared mode");
-                    if k == 0 {
-                        prepared.reset_history();
-                    }
-                    prepared.render().map(|_| ())
-                })
-                .await
-                .map_err(|error| error.to_string())?;
-            if let Err(error) = rendered {
-                states[index].error.get_or_insert(format!("warm-up frame {}: {error}", k + 1));
+        scene.status(&format!("sequence warm-up frame {}: {}", index + 1, path_mode.mode));
+        let rendered = scene
+            .worker
+            .call(scene.plan.frame_timeout, move |state| {
+                let prepared = state.modes[stream].as_ref().expect("prepared mode");
+                if index == 0 {
+                    prepared.reset_history();
+                }
+                prepared.render()?;
+                prepared.read_display()
+            })
+            .await
+            .map_err(|error| error.to_string())?;
+        match rendered {
+            Ok(display) => keep(stream + 1, &display),
+            Err(error) => {
+                states[stream].error.get_or_insert(format!("warm-up frame {}: {error}", index + 1));
             }
         }
     }
     Ok(())
 }
 
-/// Renders prepared mode `index` once at the current camera and reads back its frame `frame`;
-/// the path's first from a reset where `still` (a mode without a history), else the next frame
-/// of its warmed-up history. The outer error is the worker's (it can render nothing more), the
-/// inner the mode's: a frame that shows nothing fails the mode, naming the frame, unless the
-/// scene is declared empty.
+/// Renders prepared mode `index` once at the current camera, the next frame after the warm-up's
+/// and the window's before, and reads back its frame `frame` of the window. The outer error is
+/// the worker's (it can render nothing more), the inner the mode's: a frame that shows nothing
+/// fails the mode, naming the frame, unless the scene is declared empty.
 async fn render(
     scene: &mut SceneRun<'_>,
     index: usize,
     m: u32,
     frame: usize,
-    still: bool,
 ) -> Result<Result<ModeFrame, String>, String> {
-    let (first, declared_empty) = (frame == 0 && still, scene.manifest.empty);
-    let frame_timeout = scene.plan.frame_timeout;
-    let timeout = if first { frame_timeout.saturating_mul(WARMUP_FRAMES) } else { frame_timeout };
+    let declared_empty = scene.manifest.empty;
     let rendered = scene
         .worker
-        .call(timeout, move |state| {
+        .call(scene.plan.frame_timeout, move |state| {
             let prepared = state.modes[index].as_ref().expect("prepared mode");
-            let timing = if first { prepared.render_still()? } else { prepared.render()? };
+            let timing = prepared.render()?;
             let display = prepared.read_display()?;
             let counts = prepared.read_sample_counts()?;
             let hdr = prepared.read_hdr()?;
@@ -458,9 +553,11 @@ async fn geometry(scene: &mut SceneRun<'_>, cameras: [&Camera; 2], first: bool) 
         .map_err(|e| format!("the geometry probe: {e}"))
 }
 
-/// A frame of the path: its index, camera and, where an animation plays, its time.
+/// A frame of the path: its index in the window (negative in the warm-up) and how messages name
+/// it, its camera and, where an animation plays, its time.
 struct FrameView<'a> {
-    frame: usize,
+    frame: i64,
+    name: &'a str,
     camera: &'a Camera,
     time: Option<f64>,
 }
@@ -470,7 +567,7 @@ struct FrameView<'a> {
 async fn truth_frame(
     scene: &mut SceneRun<'_>,
     still_key: &str,
-    FrameView { frame, camera, time }: FrameView<'_>,
+    FrameView { frame, name, camera, time }: FrameView<'_>,
     record: &mut SequenceRecord,
 ) -> Result<DisplayImage, String> {
     if still_key.is_empty() {
@@ -478,8 +575,12 @@ async fn truth_frame(
     }
     let (plan, manifest, resolution) = (scene.plan, scene.manifest, scene.resolution);
     let key = truth::frame_key(still_key, camera, time);
-    let name = format!("{}-frame{frame:03}", manifest.name);
-    let cache = truth::cache_file(&plan.truth_cache_dir(manifest), &name, resolution, &key);
+    // The window's frames as `-frame003`, the warm-up's counted back from it as `-before01`.
+    let file = match frame {
+        0.. => format!("{}-frame{frame:03}", manifest.name),
+        _ => format!("{}-before{:02}", manifest.name, -frame),
+    };
+    let cache = truth::cache_file(&plan.truth_cache_dir(manifest), &file, resolution, &key);
     if let Some(display) = truth::load_cached(&cache, resolution, manifest.display_bits()) {
         return Ok(display);
     }
@@ -488,11 +589,11 @@ async fn truth_frame(
     let (rendered, not_cached) =
         truth::render_and_store(scene.worker, timeout, &cache, resolution, Arc::clone(scene.cancel))
             .await
-            .map_err(|e| format!("the truth of frame {frame}: {e}"))?;
+            .map_err(|e| format!("the truth of {name}: {e}"))?;
     record.truth_rendered += 1;
     record.truth_render_s += start.elapsed().as_secs_f64();
     if let Some(error) = not_cached {
-        scene.warn(&format!("the truth of frame {frame} not cached: {error}"));
+        scene.warn(&format!("the truth of {name} not cached: {error}"));
     }
     Ok(rendered.images.display)
 }
@@ -511,10 +612,11 @@ mod tests {
             error: error.map(Into::into),
             ..ModeRun::default()
         };
-        // fxaa's stall changed its image, smaa-stalled has no twin, msaa-4x failed.
+        // taa-stalled took more rounds than taa, of the same image; fxaa's stall changed its
+        // image, smaa-stalled has no twin, msaa-4x failed.
         let runs = [
-            run("a", None),
-            run("a", None),
+            ModeRun { hashes: vec!["a".into(); 5], ..ModeRun::default() },
+            ModeRun { hashes: vec!["a".into(); 12], ..ModeRun::default() },
             run("b", None),
             run("c", None),
             run("d", None),

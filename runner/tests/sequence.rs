@@ -288,7 +288,10 @@ fn taa_flickers_less_than_deferred_on_a_moving_thin_scene_and_reports_what_lag_c
     assert!(row.starts_with("| taa-stalled | taa's frames | "), "{row}");
     let plot = std::fs::read_to_string(ws.dir.join("figures/thin-front-flicker.svg")).unwrap();
     assert!(plot.contains("flicker against run time") && plot.contains("taa"), "{plot}");
-    // Which technique: along the path, and the still without TAA.
+    // Which technique: along the path, and the still without TAA, seen as the caption says:
+    // on the JOD display, at its distance, a frame of this width so many degrees across.
+    let seen = "as seen on standard_fhd at 37.8 pixels a degree (a 128-pixel-wide frame 3.4° across)";
+    assert!(markdown.contains(seen), "{markdown}");
     let along = markdown
         .lines()
         .find(|l| l.starts_with(&format!("| thin | along the path: {label} | ")))

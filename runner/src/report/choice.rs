@@ -193,25 +193,61 @@ fn caption(run: &RunRecord) -> String {
     )
 }
 
-/// The viewing conditions a run's rankings assume: `seen on standard_fhd at 37.8 pixels a
-/// degree (a 256-pixel-wide frame 6.8° across)`, or, where scenes differ, each scene's.
+/// Scenes judged on one display at one distance, and the widths of their frames.
+struct Viewing<'a> {
+    display: &'a str,
+    pixels_per_degree: f64,
+    widths: Vec<u32>,
+    scenes: Vec<&'a str>,
+}
+
+impl Viewing<'_> {
+    /// `on standard_fhd at 37.8 pixels a degree (a 256-pixel-wide frame 6.8° across, a
+    /// 160-pixel-wide one 4.2° across)`.
+    fn describe(&self) -> String {
+        let sizes: Vec<String> = (self.widths.iter().enumerate())
+            .map(|(i, &w)| {
+                let what = if i == 0 { "frame" } else { "one" };
+                format!("a {w}-pixel-wide {what} {:.1}° across", f64::from(w) / self.pixels_per_degree)
+            })
+            .collect();
+        format!("on {} at {:.1} pixels a degree ({})", self.display, self.pixels_per_degree, sizes.join(", "))
+    }
+}
+
+/// The viewing conditions a run's rankings assume: `as seen on standard_fhd at 37.8 pixels a
+/// degree (…)`; where scenes are judged on different displays or distances, each group names
+/// its scenes.
 pub fn viewing_conditions(run: &RunRecord) -> String {
-    let seen = |scene: &SceneRecord| -> Option<String> {
-        let (display, ppd) = (scene.jod_display.as_ref()?, scene.pixels_per_degree?);
-        let width = scene.resolution.map(|[w, _]| f64::from(w))?;
-        Some(format!(
-            "on {display} at {ppd:.1} pixels a degree (a {width}-pixel-wide frame {:.1}° across)",
-            width / ppd
-        ))
-    };
-    let all: Vec<(&str, String)> =
-        run.scenes.iter().filter_map(|scene| Some((scene.name.as_str(), seen(scene)?))).collect();
-    match all.first() {
-        None => "as seen on the scenes' displays".into(),
-        Some((_, first)) if all.iter().all(|(_, seen)| seen == first) => format!("as seen {first}"),
-        Some(_) => {
-            let each: Vec<String> = all.iter().map(|(name, seen)| format!("{name} {seen}")).collect();
-            format!("as seen {}", each.join("; "))
+    let mut groups: Vec<Viewing> = Vec::new();
+    for scene in &run.scenes {
+        let (Some(display), Some(ppd), Some([width, _])) =
+            (scene.jod_display.as_deref(), scene.pixels_per_degree, scene.resolution)
+        else {
+            continue;
+        };
+        match groups.iter_mut().find(|g| (g.display, g.pixels_per_degree) == (display, ppd)) {
+            Some(group) => {
+                if !group.widths.contains(&width) {
+                    group.widths.push(width);
+                }
+                group.scenes.push(&scene.name);
+            }
+            None => groups.push(Viewing {
+                display,
+                pixels_per_degree: ppd,
+                widths: vec![width],
+                scenes: vec![&scene.name],
+            }),
+        }
+    }
+    match groups.as_slice() {
+        [] => "as seen on the scenes' displays".into(),
+        [one] => format!("as seen {}", one.describe()),
+        _ => {
+            let each: Vec<String> =
+                groups.iter().map(|g| format!("{} {}", g.scenes.join(", "), g.describe())).collect();
+            format!("as seen: {}", each.join("; "))
         }
     }
 }

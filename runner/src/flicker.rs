@@ -127,7 +127,7 @@ mod tests {
             rgba: (0..width * height).flat_map(|i| [(i % 256) as u16, u16::from(f), 0, 255]).collect(),
         };
         let names = [TRUTH_STREAM, "a", "b"].map(String::from).to_vec();
-        let mut spool = Spool::create(dir.join("spool"), [width, height], 0, names).unwrap();
+        let mut spool = Spool::create(dir.join("spool"), [width, height], 8, 0, names).unwrap();
         // The largest flicker sits at the bottom right corner.
         let mut map = vec![0.0; (width * height) as usize];
         map[(height * width - 1) as usize] = 5.0;

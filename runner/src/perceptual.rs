@@ -102,13 +102,13 @@ impl Jod {
         self.metric.image(frame(&test, size), frame(&reference, size)).map_or(f64::NAN, |score| score.jod)
     }
 
-    /// The JOD of RGBA8 frames against the truth's, shown at `fps` frames a second, the first
+    /// The JOD of display frames against the truth's, shown at `fps` frames a second, the first
     /// `warmup` of them history for the temporal filters and the rest pooled, and the distortion
     /// map of the measured frame that differs most (counted from the first after the warm-up);
     /// `None` for fewer than two frames, none measured, or a frame of the wrong size.
     pub fn video<'a>(
         &self,
-        frames: impl Iterator<Item = (&'a [u8], &'a [u8])>,
+        frames: impl Iterator<Item = (&'a DisplayImage, &'a DisplayImage)>,
         [width, height]: [u32; 2],
         fps: f64,
         warmup: usize,
@@ -116,7 +116,8 @@ impl Jod {
         let video = self.metric.video(width as usize, height as usize, fps).ok()?;
         let mut video = video.with_worst_map().measured_from(warmup);
         for (image, truth) in frames {
-            let (test, reference) = (code_values(image, 255.0), code_values(truth, 255.0));
+            let max = f32::from(image.max_code());
+            let (test, reference) = (code_values(&image.rgba, max), code_values(&truth.rgba, max));
             video.push(frame(&test, [width, height]), frame(&reference, [width, height])).ok()?;
         }
         let score = video.finish().ok()?;

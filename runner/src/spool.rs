@@ -1,8 +1,8 @@
-//! A sequence's frames on disk: every frame of the truth and of each mode, as the RGBA8 display
-//! image (`images::display_rgba8`), appended to one file per stream as it is rendered, the
-//! warm-up's first. The warm-up's frames are there for ColorVideoVDP, whose temporal filters
-//! read the frames before each measured one ([`Spool::seen_frame`]); everything else reads the
-//! measured window's ([`Spool::frame`], 0 its first).
+//! A sequence's frames on disk: every frame of the truth and of each mode, as the display
+//! image's code values (a byte each on an 8-bit display, two on a 10-bit one), appended to one
+//! file per stream as it is rendered, the warm-up's first. The warm-up's frames are there for ColorVideoVDP, whose temporal filters
+//! read the frames before each measured one, at the display's depth ([`Spool::seen_image`]);
+//! everything else reads the measured window's as RGBA8 ([`Spool::frame`], 0 its first).
 //!
 //! What needs every frame at once waits for the last: FLIP along the path, computed once the
 //! renders are done so that it neither slows nor disturbs them (`run/sequence.rs`), and the
@@ -22,12 +22,14 @@ use aabench_renderer::DisplayImage;
 
 use crate::images;
 
-/// One file of RGBA8 frames per stream, named, with how many frames each holds, of which the
-/// first `warmup` are the warm-up's.
+/// One file of frames per stream, named, with how many frames each holds, of which the first
+/// `warmup` are the warm-up's.
 #[derive(Debug)]
 pub struct Spool {
     dir: PathBuf,
     size: [u32; 2],
+    /// The display's bits per code value: 8, or 10 (stored as two bytes, little-endian).
+    bits: u32,
     warmup: usize,
     streams: Vec<(String, File, usize)>,
 }
@@ -47,9 +49,15 @@ pub fn folder(dir: &Path) -> PathBuf {
 }
 
 impl Spool {
-    /// An empty spool of `size` frames for the named streams, each to take `warmup` frames
-    /// before its measured window's, in `dir` (created).
-    pub fn create(dir: PathBuf, size: [u32; 2], warmup: usize, names: Vec<String>) -> Result<Self, String> {
+    /// An empty spool of `size` frames of `bits`-bit code values for the named streams, each to
+    /// take `warmup` frames before its measured window's, in `dir` (created).
+    pub fn create(
+        dir: PathBuf,
+        size: [u32; 2],
+        bits: u32,
+        warmup: usize,
+        names: Vec<String>,
+    ) -> Result<Self, String> {
         // The folder is this process's own: anything in it is a leftover.
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -66,16 +74,44 @@ impl Spool {
                 .map_err(|e| format!("{}: {e}", path.display()))?;
             streams.push((name, file, 0));
         }
-        Ok(Self { dir, size, warmup, streams })
+        Ok(Self { dir, size, bits, warmup, streams })
     }
 
-    /// Appends a frame to stream `stream`.
+    /// Appends a frame, of the spool's size and bits, to stream `stream`.
     pub fn append(&mut self, stream: usize, image: &DisplayImage) -> Result<(), String> {
+        let [width, height] = self.size;
+        if image.bits != self.bits || image.rgba.len() != width as usize * height as usize * 4 {
+            return Err(format!(
+                "{}: spool: a {}-bit frame of {} values where the spool takes {}-bit {width}×{height} frames",
+                self.dir.display(),
+                image.bits,
+                image.rgba.len(),
+                self.bits
+            ));
+        }
+        let bytes = match self.bits {
+            ..=8 => image.bytes(),
+            _ => image.rgba.iter().flat_map(|v| v.to_le_bytes()).collect(),
+        };
         let (_, file, frames) = &mut self.streams[stream];
         let error = |e: std::io::Error| format!("{}: spool: {e}", self.dir.display());
-        file.write_all(&images::display_rgba8(image)).map_err(error)?;
+        file.write_all(&bytes).map_err(error)?;
         *frames += 1;
         Ok(())
+    }
+
+    /// Bytes a code value takes.
+    fn bytes_per_value(&self) -> usize {
+        if self.bits <= 8 { 1 } else { 2 }
+    }
+
+    /// Code values read back: a byte each, or two little-endian bytes each.
+    fn image_of(&self, raw: &[u8]) -> DisplayImage {
+        let rgba = match self.bytes_per_value() {
+            1 => raw.iter().map(|&v| u16::from(v)).collect(),
+            _ => raw.chunks_exact(2).map(|b| u16::from_le_bytes([b[0], b[1]])).collect(),
+        };
+        DisplayImage { bits: self.bits, rgba }
     }
 
     pub fn size(&self) -> [u32; 2] {
@@ -88,6 +124,11 @@ impl Spool {
 
     pub fn name(&self, stream: usize) -> &str {
         &self.streams[stream].0
+    }
+
+    /// The display's bits per code value.
+    pub fn bits(&self) -> u32 {
+        self.bits
     }
 
     /// The frames before the measured window's first.
@@ -104,7 +145,7 @@ impl Spool {
     /// or written from outside would read back zeros or another's frames, which FLIP would
     /// score without a word; this is an error naming the stream instead.
     pub fn check(&self) -> Result<(), String> {
-        let bytes = u64::from(self.size[0]) * u64::from(self.size[1]) * 4;
+        let bytes = u64::from(self.size[0]) * u64::from(self.size[1]) * 4 * self.bytes_per_value() as u64;
         for (index, (name, file, frames)) in self.streams.iter().enumerate() {
             let length = file.metadata().map_err(|e| format!("{}: spool: {e}", self.dir.display()))?.len();
             let expected = *frames as u64 * bytes;
@@ -119,22 +160,25 @@ impl Spool {
         Ok(())
     }
 
-    /// Frame `frame` of stream `stream`'s measured window, whole.
+    /// Frame `frame` of stream `stream`'s measured window, whole, as RGBA8 (10-bit code values
+    /// rounded to 8 bits).
     pub fn frame(&self, stream: usize, frame: usize) -> Result<Vec<u8>, String> {
-        self.seen_frame(stream, self.warmup + frame)
+        Ok(images::display_rgba8(&self.seen_image(stream, self.warmup + frame)?))
     }
 
-    /// Frame `index` of stream `stream` counted from the warm-up's first, whole.
-    pub fn seen_frame(&self, stream: usize, index: usize) -> Result<Vec<u8>, String> {
+    /// Frame `index` of stream `stream` counted from the warm-up's first, whole, at the
+    /// display's depth.
+    pub fn seen_image(&self, stream: usize, index: usize) -> Result<DisplayImage, String> {
         let [width, height] = self.size;
-        let bytes = width as usize * height as usize * 4;
-        let mut out = vec![0; bytes];
-        self.read(stream, (index * bytes) as u64, &mut out)?;
-        Ok(out)
+        let bytes = width as usize * height as usize * 4 * self.bytes_per_value();
+        let mut raw = vec![0; bytes];
+        self.read(stream, (index * bytes) as u64, &mut raw)?;
+        Ok(self.image_of(&raw))
     }
 
     /// Writes each stream's warm-up and the first `frames` frames of its window as PNGs,
-    /// `<dir>/<stream name>/<NNN>.png` (000 the warm-up's first), each atomically; a stream
+    /// `<dir>/<stream name>/<NNN>.png` (000 the warm-up's first; 16-bit for 10-bit code values,
+    /// as the stills are written), each atomically; a stream
     /// that holds fewer frames (a mode that failed, or one that took its twin's frames) is left
     /// out.
     pub fn write_pngs(&self, dir: &Path, frames: usize) -> Result<(), String> {
@@ -144,23 +188,25 @@ impl Spool {
             std::fs::create_dir_all(&folder).map_err(|e| format!("{}: {e}", folder.display()))?;
             for index in 0..self.warmup + frames {
                 let path = folder.join(format!("{index:03}.png"));
-                images::write_png(&path, width, height, &self.seen_frame(stream, index)?)
+                images::write_display_png(&path, width, height, &self.seen_image(stream, index)?)
                     .map_err(|e| format!("{}: {e}", path.display()))?;
             }
         }
         Ok(())
     }
 
-    /// The `square` of frame `frame` of stream `stream`'s measured window.
+    /// The `square` of frame `frame` of stream `stream`'s measured window, as RGBA8.
     pub fn crop(&self, stream: usize, frame: usize, square: Square) -> Result<Vec<u8>, String> {
         let [width, height] = self.size.map(u64::from);
-        let row = width * 4;
+        let pixel = 4 * self.bytes_per_value() as u64;
+        let row = width * pixel;
         let index = (self.warmup + frame) as u64;
-        let mut out = vec![0; square.side as usize * square.side as usize * 4];
-        for (y, line) in (u64::from(square.y)..).zip(out.chunks_exact_mut(square.side as usize * 4)) {
-            self.read(stream, index * row * height + y * row + u64::from(square.x) * 4, line)?;
+        let line_bytes = square.side as usize * pixel as usize;
+        let mut raw = vec![0; square.side as usize * line_bytes];
+        for (y, line) in (u64::from(square.y)..).zip(raw.chunks_exact_mut(line_bytes)) {
+            self.read(stream, index * row * height + y * row + u64::from(square.x) * pixel, line)?;
         }
-        Ok(out)
+        Ok(images::display_rgba8(&self.image_of(&raw)))
     }
 
     fn read(&self, stream: usize, offset: u64, out: &mut [u8]) -> Result<(), String> {
@@ -187,7 +233,7 @@ mod tests {
         let spool_dir = folder(&dir);
         assert!(spool_dir.to_string_lossy().ends_with(&format!(".spool.tmp-{}", std::process::id())));
         let mut spool =
-            Spool::create(spool_dir.clone(), [2, 2], 0, vec!["truth".into(), "taa".into()]).unwrap();
+            Spool::create(spool_dir.clone(), [2, 2], 8, 0, vec!["truth".into(), "taa".into()]).unwrap();
         let frame = DisplayImage::from_rgba8(&[7; 16]);
         for stream in [0, 1] {
             spool.append(stream, &frame).unwrap();
@@ -203,6 +249,26 @@ mod tests {
         assert!(error.contains("1.rgba (taa) holds 32 bytes") && error.contains("take 48"), "{error}");
         drop(spool);
         assert!(!spool_dir.exists(), "the folder goes with the spool");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn ten_bit_frames_come_back_at_ten_bits_and_as_rgba8_rounded() {
+        let dir = std::env::temp_dir().join(format!("aabench-spool-ten-{}", std::process::id()));
+        let mut spool = Spool::create(folder(&dir), [2, 1], 10, 1, vec!["truth".into()]).unwrap();
+        let codes = vec![0, 1, 2, 1023, 511, 512, 513, 1022];
+        let frame = DisplayImage { bits: 10, rgba: codes.clone() };
+        spool.append(0, &frame).unwrap();
+        spool.append(0, &frame).unwrap();
+        assert_eq!(spool.check(), Ok(()));
+        assert_eq!(spool.seen_image(0, 1).unwrap().rgba, codes, "every code value kept");
+        // Codes between two 8-bit ones are what an 8-bit spool loses.
+        assert_eq!(spool.frame(0, 0).unwrap(), images::display_rgba8(&frame));
+        let square = spool.crop(0, 0, Square { x: 1, y: 0, side: 1 }).unwrap();
+        assert_eq!(square, images::display_rgba8(&frame)[4..]);
+        let error = spool.append(0, &DisplayImage::from_rgba8(&[7; 8])).unwrap_err();
+        assert!(error.contains("8-bit frame") && error.contains("10-bit 2×1"), "{error}");
+        drop(spool);
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

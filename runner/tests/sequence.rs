@@ -212,6 +212,67 @@ fn a_path_frame_that_shows_nothing_fails_naming_the_frame() {
     }
 }
 
+/// A 10-bit display's path is scored from its 10-bit frames: the kept frames are 16-bit PNGs of
+/// 10-bit codes, and ColorVideoVDP of exactly those codes (not of their 8-bit roundings), seen at
+/// the display's own pixels a degree, is the path's JOD.
+#[test]
+fn a_ten_bit_path_is_scored_from_its_ten_bit_frames() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("path-ten-bit");
+    ws.manifest("edge", "edge", |m| {
+        m["display"] = json!({"transfer": "pq", "peak_nits": 600, "bits": 10});
+        m["motion"] = json!({"path": "keyframes", "time_step_s": 0.5, "frames": {"quick": 3, "nightly": 3},
+            "keyframes": [{"time_s": 0, "position": [0, 0, 4], "target": [0, 0, 0]},
+                          {"time_s": 1, "position": [1.0, 0.5, 3.5], "target": [0, 0, 0]}]});
+    });
+    let output = ws.run(&["run", "--modes", "deferred-1x1", "--repetitions", "1", "--keep-frames"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let scene = &ws.record()["scenes"][0];
+    let jod = sequence(scene, "deferred-1x1", 3)["jod"].as_f64().unwrap();
+    let dir = ws.run_dir().join("edge/frames/1");
+    let kept: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("sequence.json")).unwrap()).unwrap();
+    assert_eq!(
+        (kept["bits"].as_u64(), kept["first_measured_frame"].as_u64()),
+        (Some(10), Some(16)),
+        "{kept}"
+    );
+    let frames = kept["frames"].as_u64().unwrap() as usize;
+    // Each stream's frames as code values in [0, 1], at 10 bits and rounded to 8.
+    let clip = |stream: &str, bits: u32| -> Vec<Vec<f32>> {
+        (0..frames)
+            .map(|index| {
+                let png = image::open(dir.join(format!("{stream}/{index:03}.png"))).unwrap();
+                assert_eq!(png.color(), image::ColorType::Rgba16, "{stream} {index}");
+                let codes = png.to_rgba16().into_raw();
+                let rgb = codes.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]);
+                rgb.map(|v| match bits {
+                    10 => f32::from(v >> 6) / 1023.0,
+                    _ => (f32::from(v >> 6) * 255.0 / 1023.0).round() / 255.0,
+                })
+                .collect()
+            })
+            .collect()
+    };
+    // Seen at the display's own pixels a degree, though the quick frame is half the nightly's
+    // width: a pixel is as large to the eye in every tier.
+    let display = aabench_cvvdp::Display::named(kept["display"].as_str().unwrap()).unwrap();
+    assert_eq!(kept["pixels_per_degree"].as_f64(), Some(display.pixels_per_degree), "{kept}");
+    assert_eq!(scene["pixels_per_degree"].as_f64(), Some(display.pixels_per_degree));
+    let metric = aabench_cvvdp::Cvvdp::new(display);
+    let score = |bits: u32| {
+        let (test, truth) = (clip("deferred-1x1", bits), clip("truth", bits));
+        let mut video = metric.video(64, 48, kept["fps"].as_f64().unwrap()).unwrap().measured_from(16);
+        for (t, r) in test.iter().zip(&truth) {
+            let frame = |rgb| aabench_cvvdp::Frame { width: 64, height: 48, rgb };
+            video.push(frame(t), frame(r)).unwrap();
+        }
+        video.finish().unwrap().jod
+    };
+    assert!((score(10) - jod).abs() < 1e-9, "the run's {jod} is the 10-bit frames' {}", score(10));
+    assert_ne!(score(8), jod, "8-bit roundings of the frames score otherwise");
+}
+
 /// A workspace with the `thin` scene at `size`, lit by the suite's sun, on the suite's default
 /// path (an orbit of 2° a second) over eight frames.
 fn moving_thin(name: &str, size: [u32; 2]) -> Workspace {

@@ -314,7 +314,7 @@ pub(super) fn jod_along(
 ) -> Result<Vec<Option<Arc<VideoJod>>>, String> {
     use std::hash::{Hash, Hasher};
     let (warmup, seen) = (spool.warmup(), spool.warmup() + frames);
-    let truth = (0..seen).map(|f| spool.seen_frame(0, f)).collect::<Result<Vec<_>, _>>()?;
+    let truth = (0..seen).map(|f| spool.seen_image(0, f)).collect::<Result<Vec<_>, _>>()?;
     let complete: Vec<usize> =
         (1..spool.streams()).filter(|&s| frames > 0 && seen > 1 && spool.frames(s) >= frames).collect();
     let mut first_of = std::collections::HashMap::new();
@@ -322,7 +322,7 @@ pub(super) fn jod_along(
     for &stream in &complete {
         let mut hasher = std::collections::hash_map::DefaultHasher::new();
         for frame in 0..seen {
-            spool.seen_frame(stream, frame)?.hash(&mut hasher);
+            spool.seen_image(stream, frame)?.rgba.hash(&mut hasher);
         }
         scored_as.push(*first_of.entry(hasher.finish()).or_insert(stream));
     }
@@ -334,8 +334,8 @@ pub(super) fn jod_along(
             if cancel.load(Ordering::SeqCst) {
                 break;
             }
-            let clip = (0..seen).map(|f| spool.seen_frame(stream, f)).collect::<Result<Vec<_>, _>>();
-            let pairs = clip.iter().flatten().map(Vec::as_slice).zip(truth.iter().map(Vec::as_slice));
+            let clip = (0..seen).map(|f| spool.seen_image(stream, f)).collect::<Result<Vec<_>, _>>();
+            let pairs = clip.iter().flatten().zip(&truth);
             let scored = clip.is_ok().then(|| jod.video(pairs, spool.size(), fps, warmup)).flatten();
             done.push((stream, scored.map(Arc::new)));
         }
@@ -396,7 +396,7 @@ mod tests {
     fn flip_along_the_path_stops_at_a_signal() {
         let dir = std::env::temp_dir().join(format!("aabench-flip-stop-{}", std::process::id()));
         let mut spool =
-            Spool::create(dir.join("spool"), [8, 8], 0, vec!["truth".into(), "mode".into()]).unwrap();
+            Spool::create(dir.join("spool"), [8, 8], 8, 0, vec!["truth".into(), "mode".into()]).unwrap();
         for value in [10, 200] {
             for stream in [0, 1] {
                 spool.append(stream, &DisplayImage::from_rgba8(&[value; 256])).unwrap();

@@ -125,7 +125,9 @@ pub(super) async fn run(
     let out_dir = scene.dir.join(along.folder);
     let size = scene.resolution;
     let names = std::iter::once(TRUTH_STREAM.to_string()).chain(modes.iter().map(|m| m.mode.to_string()));
-    let mut spool = Spool::create(crate::spool::folder(&out_dir), size, along.warmup(), names.collect());
+    let bits = scene.manifest.display_bits();
+    let mut spool =
+        Spool::create(crate::spool::folder(&out_dir), size, bits, along.warmup(), names.collect());
     let mut flicker = vec![0.0; size[0] as usize * size[1] as usize];
     let rendered = render_frames(scene, &along, modes, &mut record, &mut states, (&mut spool, &mut flicker));
     if let Err(error) = rendered.await {
@@ -396,8 +398,8 @@ impl AfterRender {
 
 /// What `--keep-frames` writes beside a sequence's frames (`sequence.json`), so that anyone can
 /// score them again with ColorVideoVDP's reference implementation as aabench did: every frame
-/// the metric saw, numbered from the warm-up's first, at `fps` on the display model `display`,
-/// with only the frames from `first_measured_frame` on pooled.
+/// the metric saw, numbered from the warm-up's first, at `fps` on the display model `display`
+/// seen at `pixels_per_degree`, with only the frames from `first_measured_frame` on pooled.
 #[derive(Debug, serde::Serialize)]
 struct KeptFrames {
     fps: f64,
@@ -405,6 +407,9 @@ struct KeptFrames {
     frames: usize,
     display: String,
     pixels_per_degree: f64,
+    /// The display's bits per code value: 10-bit frames are 16-bit PNGs whose top 10 bits are
+    /// the code values.
+    bits: u32,
 }
 
 impl AfterRender {
@@ -417,6 +422,7 @@ impl AfterRender {
             frames: spool.warmup() + self.done,
             display: display.name.clone(),
             pixels_per_degree: display.pixels_per_degree,
+            bits: spool.bits(),
         };
         crate::fs::write_json(&dir.join("sequence.json"), &kept)
     }

@@ -1,8 +1,9 @@
 //! A sequence's frames on disk: every frame of the truth and of each mode, as the display
 //! image's code values (a byte each on an 8-bit display, two on a 10-bit one), appended to one
-//! file per stream as it is rendered, the warm-up's first. The warm-up's frames are there for ColorVideoVDP, whose temporal filters
-//! read the frames before each measured one, at the display's depth ([`Spool::seen_image`]);
-//! everything else reads the measured window's as RGBA8 ([`Spool::frame`], 0 its first).
+//! file per stream as it is rendered, the warm-up's first. The warm-up's frames are there for
+//! ColorVideoVDP, whose temporal filters read the frames before each measured one, at the
+//! display's depth ([`Spool::seen_image`]); everything else reads the measured window's as
+//! RGBA8 ([`Spool::frame`], 0 its first).
 //!
 //! What needs every frame at once waits for the last: FLIP along the path, computed once the
 //! renders are done so that it neither slows nor disturbs them (`run/sequence.rs`), and the
@@ -89,8 +90,8 @@ impl Spool {
                 self.bits
             ));
         }
-        let bytes = match self.bits {
-            ..=8 => image.bytes(),
+        let bytes = match self.bytes_per_value() {
+            1 => image.bytes(),
             _ => image.rgba.iter().flat_map(|v| v.to_le_bytes()).collect(),
         };
         let (_, file, frames) = &mut self.streams[stream];

@@ -2,8 +2,9 @@
 //! record it is read, how the gate decides it and with which tolerance, which way is better,
 //! its column in the report's tables and its error-against-run-time plot. `compare`, the
 //! console, the report (HTML and Markdown), its plots and its rankings loop over [`METRICS`] or
-//! name a row; a new metric is its function, one row here, one record field and its test. The
-//! times, which the gate decides on intervals instead, are [`TimeMetric`].
+//! name a row; a new metric is its function, one row here, one record field and its test (along
+//! a camera path, also its accumulator in `run/path_metrics.rs`). The times, which the gate
+//! decides on intervals instead, are [`TimeMetric`].
 
 use crate::gate::{QualityTolerances, Tolerance};
 use crate::record::{ModeRecord, ModeSequence};
@@ -192,6 +193,9 @@ pub struct Metric {
     pub column: Option<Column>,
     /// Its error-against-run-time plot; `None`: not plotted.
     pub plot: Option<Plot>,
+    /// How a value reads among the details of a ranking's row (`PSNR 36.00 dB`); `None`: not
+    /// among them.
+    pub brief: Option<fn(f64) -> String>,
 }
 
 /// The still's PSNR against the truth: what the still's ranking orders modes by.
@@ -203,6 +207,7 @@ pub const PSNR_VS_TRUTH: Metric = Metric {
     gate: Some(Gate { rule: DECIBELS, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
     column: Some(Column { table: Table::Still, header: "PSNR vs truth", cell: decibels }),
     plot: None,
+    brief: Some(|db| format!("PSNR {} dB", decibels(db))),
 };
 
 /// The still's FLIP against the truth.
@@ -220,6 +225,7 @@ pub const FLIP_VS_TRUTH: Metric = Metric {
         file: "front-flip",
         front: Front::Medians,
     }),
+    brief: Some(|flip| format!("FLIP {flip:.4}")),
 };
 
 /// The still's ColorVideoVDP score against the truth, in JOD: what the still's ranking orders
@@ -238,6 +244,7 @@ pub const JOD_VS_TRUTH: Metric = Metric {
         file: "front-jod",
         front: Front::Medians,
     }),
+    brief: None,
 };
 
 /// ColorVideoVDP along a camera path against the truth's frames: what a path's ranking orders
@@ -256,6 +263,7 @@ pub const SEQUENCE_JOD_VS_TRUTH: Metric = Metric {
         file: "front-jod-path",
         front: Front::Medians,
     }),
+    brief: None,
 };
 
 /// The mean PSNR along a camera path.
@@ -267,11 +275,12 @@ pub const SEQUENCE_PSNR_VS_TRUTH: Metric = Metric {
     gate: Some(Gate { rule: DECIBELS, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
     column: Some(Column { table: Table::Path, header: "PSNR along the path", cell: decibels }),
     plot: None,
+    brief: Some(|db| format!("PSNR {} dB", decibels(db))),
 };
 
 /// Every metric, in the order of the report's columns within each table (the gate checks them
 /// in this order too).
-pub const METRICS: [Metric; 16] = [
+pub const METRICS: [Metric; 17] = [
     Metric {
         id: "shaded_percent",
         label: "samples shaded",
@@ -280,6 +289,7 @@ pub const METRICS: [Metric; 16] = [
         gate: Some(Gate { rule: Rule::Points, tolerance: Tolerance::ShadedPercent, show: percent }),
         column: Some(Column { table: Table::Still, header: "samples %", cell: one_decimal }),
         plot: None,
+        brief: None,
     },
     Metric {
         id: "mse_vs_truth",
@@ -299,6 +309,7 @@ pub const METRICS: [Metric; 16] = [
             file: "front",
             front: Front::Recorded,
         }),
+        brief: None,
     },
     Metric {
         id: "psnr_vs_reference",
@@ -308,6 +319,7 @@ pub const METRICS: [Metric; 16] = [
         gate: Some(Gate { rule: DECIBELS, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
         column: Some(Column { table: Table::Still, header: "PSNR vs ref", cell: decibels }),
         plot: None,
+        brief: None,
     },
     PSNR_VS_TRUTH,
     JOD_VS_TRUTH,
@@ -324,6 +336,7 @@ pub const METRICS: [Metric; 16] = [
         }),
         column: Some(Column { table: Table::Still, header: "SSIM vs truth", cell: four_decimals }),
         plot: None,
+        brief: None,
     },
     Metric {
         id: "mse_vs_reference",
@@ -333,6 +346,7 @@ pub const METRICS: [Metric; 16] = [
         gate: Some(Gate { rule: ERROR, tolerance: Tolerance::MseRelative, show: mse_e5 }),
         column: None,
         plot: None,
+        brief: None,
     },
     Metric {
         id: "sequence_shaded_percent",
@@ -342,6 +356,7 @@ pub const METRICS: [Metric; 16] = [
         gate: Some(Gate { rule: Rule::Points, tolerance: Tolerance::ShadedPercent, show: percent }),
         column: Some(Column { table: Table::Path, header: "samples %", cell: one_decimal }),
         plot: None,
+        brief: None,
     },
     SEQUENCE_JOD_VS_TRUTH,
     SEQUENCE_PSNR_VS_TRUTH,
@@ -353,6 +368,7 @@ pub const METRICS: [Metric; 16] = [
         gate: Some(Gate { rule: ERROR, tolerance: Tolerance::FlipRelative, show: five_decimals }),
         column: Some(Column { table: Table::Path, header: "FLIP along the path", cell: four_decimals }),
         plot: None,
+        brief: Some(|flip| format!("FLIP {flip:.4}")),
     },
     Metric {
         // An error of squared code values, as MSE is: the MSE tolerance.
@@ -374,6 +390,22 @@ pub const METRICS: [Metric; 16] = [
             // A front of flicker against time promotes blur and lag, which flicker little.
             front: Front::None,
         }),
+        brief: Some(|v| format!("flicker {:.2}e-4", v * 1e4)),
+    },
+    Metric {
+        // What lag costs where history cannot help: an error of squared code values, as MSE is.
+        id: "disoccluded_mse",
+        label: "MSE where the frame before had the surface hidden",
+        source: Source::Sequence,
+        read: Read::Along(|sequence| sequence.ghosting.as_ref()?.mse),
+        gate: Some(Gate { rule: ERROR, tolerance: Tolerance::MseRelative, show: |v| format!("{v:.4e}") }),
+        column: Some(Column {
+            table: Table::Path,
+            header: "MSE disoccluded ×1e-3",
+            cell: |v| format!("{:.2}", v * 1e3),
+        }),
+        plot: None,
+        brief: Some(|v| format!("disoccluded MSE {:.2}e-3", v * 1e3)),
     },
     Metric {
         // Without motion compensation it rewards lag and blur: gated, not shown.
@@ -384,6 +416,7 @@ pub const METRICS: [Metric; 16] = [
         gate: Some(Gate { rule: ERROR, tolerance: Tolerance::MseRelative, show: |v| format!("{v:.4e}") }),
         column: None,
         plot: None,
+        brief: None,
     },
     Metric {
         id: "change_ratio",
@@ -393,6 +426,7 @@ pub const METRICS: [Metric; 16] = [
         gate: None,
         column: Some(Column { table: Table::Path, header: "change ratio", cell: two_decimals }),
         plot: None,
+        brief: None,
     },
     Metric {
         id: "count_changes",
@@ -406,6 +440,7 @@ pub const METRICS: [Metric; 16] = [
             cell: |v| format!("{:.2}", v * 100.0),
         }),
         plot: None,
+        brief: None,
     },
 ];
 
@@ -567,6 +602,21 @@ mod tests {
         assert_eq!(ssim.better(0.99, 0.98), Some(true), "nearer 1");
         assert_eq!(metric("shaded_percent").unwrap().better(40.0, 50.0), Some(true));
         assert_eq!(metric("change_ratio").unwrap().better(1.0, 2.0), None, "not gated: no rule");
+    }
+
+    #[test]
+    fn what_lag_costs_is_a_gated_path_row_and_the_rankings_details_are_rows() {
+        let lag = metric("disoccluded_mse").unwrap();
+        assert_eq!(lag.source, Source::Sequence);
+        assert!(lag.gate.is_some() && lag.column.is_some(), "gated and tabled");
+        let briefed = |source| -> Vec<&str> {
+            METRICS.iter().filter(|m| m.source == source && m.brief.is_some()).map(|m| m.id).collect()
+        };
+        let path = ["sequence_psnr_vs_truth", "sequence_flip_vs_truth", "flicker", "disoccluded_mse"];
+        assert_eq!(briefed(Source::Sequence), path);
+        assert_eq!(briefed(Source::Truth), ["psnr_vs_truth", "flip_vs_truth"]);
+        assert_eq!((PSNR_VS_TRUTH.brief.unwrap())(f64::INFINITY), "PSNR ∞ dB");
+        assert_eq!((lag.brief.unwrap())(8.634e-3), "disoccluded MSE 8.63e-3");
     }
 
     #[test]

@@ -9,7 +9,7 @@ use std::fmt::Write;
 
 use super::html::escape;
 use crate::record::{ModeRecord, ModeSequence, RunRecord, SceneRecord};
-use crate::vocabulary::{JOD_VS_TRUTH, Metric, SEQUENCE_JOD_VS_TRUTH};
+use crate::vocabulary::{JOD_VS_TRUTH, METRICS, Metric, SEQUENCE_JOD_VS_TRUTH, Source};
 
 /// What a ranking measures a mode by.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -115,34 +115,20 @@ fn recommendation(level: f64, mode: &ModeRecord, basis: Basis) -> String {
     format!("{} {level:.2} JOD, {ms:.1} ms", mode.mode)
 }
 
-/// `reference-2x2: 9.21 JOD, 40.1 ms, PSNR 36.00 dB, FLIP 0.0196`; along the path with its
-/// flicker and its error where the frame before had the surface hidden.
+/// `reference-2x2: 9.21 JOD, 40.1 ms, PSNR 36.00 dB, FLIP 0.0196`: the row's recommendation,
+/// then each metric of the basis's part of the record that reads among a row's details
+/// (`Metric::brief`): along the path its flicker and its error where the frame before had the
+/// surface hidden too.
 pub fn technique_cell(level: f64, mode: &ModeRecord, basis: Basis) -> String {
-    let mut details = recommendation(level, mode, basis);
-    let psnr = |db: f64| if db.is_finite() { format!("{db:.2} dB") } else { "∞ dB".into() };
-    match (basis, basis.sequence(mode)) {
-        (Basis::Path(_), Some(sequence)) => {
-            let _ = write!(details, ", PSNR {}", psnr(sequence.mean_psnr_db.value()));
-            if let Some(flip) = sequence.mean_flip {
-                let _ = write!(details, ", FLIP {flip:.4}");
-            }
-            if let Some(flicker) = sequence.flicker {
-                let _ = write!(details, ", flicker {:.2}e-4", flicker * 1e4);
-            }
-            if let Some(mse) = sequence.ghosting.as_ref().and_then(|g| g.mse) {
-                let _ = write!(details, ", disoccluded MSE {:.2}e-3", mse * 1e3);
-            }
-        }
-        _ => {
-            if let Some(quality) = mode.vs_ground_truth.as_ref() {
-                let _ = write!(details, ", PSNR {}", psnr(quality.psnr_db.value()));
-                if let Some(flip) = quality.flip {
-                    let _ = write!(details, ", FLIP {flip:.4}");
-                }
-            }
-        }
-    }
-    details
+    let (source, index) = match (basis, basis.sequence(mode)) {
+        (Basis::Path(index), Some(_)) => (Source::Sequence, index),
+        _ => (Source::Truth, 0),
+    };
+    let details = METRICS
+        .iter()
+        .filter(|metric| metric.source == source)
+        .filter_map(|metric| Some((metric.brief?)(metric.value_at(mode, index)?)));
+    std::iter::once(recommendation(level, mode, basis)).chain(details).collect::<Vec<_>>().join(", ")
 }
 
 /// One ranking: a scene's rows on one basis.

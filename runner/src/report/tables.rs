@@ -51,7 +51,7 @@ pub fn sequence_columns() -> Vec<&'static str> {
     ["mode", "ms per frame along the path"]
         .into_iter()
         .chain(metrics)
-        .chain(["disoccluded % · entered % · MSE disoccluded / entered / at moving edges / elsewhere ×1e-3"])
+        .chain(["disoccluded % · entered % · MSE entered / at moving edges / elsewhere ×1e-3"])
         .collect()
 }
 
@@ -61,7 +61,7 @@ pub fn sequence_cells(mode: &ModeRecord, index: usize) -> Option<Vec<String>> {
     let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
     let ghosting = sequence.ghosting.as_ref().map(|g| {
         let mse = |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.2}", v * 1e3));
-        let mses = [g.mse, g.mse_entered, g.mse_edges, g.mse_elsewhere].map(mse).join(" / ");
+        let mses = [g.mse_entered, g.mse_edges, g.mse_elsewhere].map(mse).join(" / ");
         format!("{:.2} · {:.2} · {mses}", g.disoccluded * 100.0, g.entered * 100.0)
     });
     let metrics = vocabulary::columns(Table::Path)

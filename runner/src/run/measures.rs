@@ -23,13 +23,15 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use aabench_renderer::{DisplayImage, Mode};
 
-use crate::metrics::{self, Decibels, FrameChecks};
-use crate::perceptual::VideoJod;
-use crate::record::{GhostFrame, Ghosting, ModeSequence, SequenceRecord, fingerprint};
-use crate::spool::Spool;
-use crate::temporal::{
-    self, Flow, Geometry, PairError, change_of_error, mean_of, per_value, squared_difference,
+use super::path_metrics::{
+    Accumulate, CountChanges, Flicker, FlipAlong, FrameError, Instability, JodAlong, LagError, ModeFrame,
+    OwnChange, PathPsnr, Shading, Step,
 };
+use crate::metrics::FrameChecks;
+use crate::perceptual::VideoJod;
+use crate::record::{ModeSequence, SequenceRecord, fingerprint};
+use crate::spool::Spool;
+use crate::temporal::{self, Flow, Geometry, per_value, squared_difference};
 
 /// What a mode's sequence gave: its record (absent where it failed or was cut short), the checks
 /// of its frames, and its error.
@@ -54,14 +56,6 @@ impl ModeOutcome {
     }
 }
 
-/// A mode's frame: its time, display image, sample counts and checks.
-pub(super) struct ModeFrame {
-    pub seconds: f64,
-    pub display: DisplayImage,
-    pub counts: Option<Vec<u8>>,
-    pub checks: FrameChecks,
-}
-
 /// The truth's frame and the frame before, and how the pixels of one follow back into the
 /// other.
 pub(super) struct TruthPair<'a> {
@@ -70,30 +64,23 @@ pub(super) struct TruthPair<'a> {
     pub flow: Option<&'a Flow>,
 }
 
-/// What the sequence keeps of a mode between frames, and its sums so far.
+/// What the sequence keeps of a mode between frames: its frame before, each path metric's
+/// accumulator (`path_metrics.rs`), and the frames' hashes and times.
 #[derive(Default)]
 pub(super) struct ModeState {
     previous: Option<ModeFrame>,
-    mse: Vec<f64>,
-    /// Per frame, FLIP against the truth's: filled in once the path is rendered.
-    pub flip: Vec<f64>,
-    /// ColorVideoVDP of the frames against the truth's, once the path is rendered, and its
-    /// worst frame with the path of that frame's distortion map.
-    pub jod: Option<f64>,
-    pub jod_worst: Option<(u32, Option<String>)>,
+    frame_error: FrameError,
+    flicker: Flicker,
+    lag: LagError,
+    instability: Instability,
+    own_change: OwnChange,
+    count_changes: CountChanges,
+    shading: Shading,
+    /// FLIP and ColorVideoVDP along the path: filled in once the path is rendered.
+    pub flip: FlipAlong,
+    pub jod: JodAlong,
     hashes: Vec<String>,
-    /// Σ (ΔA − ΔT)² and Σ ΔA², in squared code steps.
-    error_change: u64,
-    own_change: u64,
-    count_changes: Vec<f64>,
-    /// Per frame, the share of samples shaded (modes with a sample-count map), and the frame's
-    /// time.
-    shaded_percent: Vec<f64>,
     frame_seconds: Vec<f64>,
-    /// The error along the truth's motion, summed over the frame pairs; per pair, the share of
-    /// pixels disoccluded and the error there.
-    followed: PairError,
-    ghosting: Vec<GhostFrame>,
     checks: FrameChecks,
     pub error: Option<String>,
 }
@@ -138,9 +125,9 @@ impl TruthTrack {
 }
 
 impl ModeState {
-    /// Adds a frame: its error against the truth's frame and, from the frame before, its error
-    /// along the truth's motion (each pixel's flicker also added to `flicker`), and the change
-    /// of its error, of its image and of its sample counts.
+    /// Adds a frame to every path metric: its error against the truth's frame and, from the
+    /// frame before, its error along the truth's motion (each pixel's flicker also added to
+    /// `flicker`), and the change of its error, of its image and of its sample counts.
     pub fn add(
         &mut self,
         mode: Mode,
@@ -150,38 +137,32 @@ impl ModeState {
         textured: bool,
     ) {
         self.checks.add(frame.checks);
-        // Counts outside the window are reported by the frame's checks.
-        if let Some(stats) =
-            frame.counts.as_deref().and_then(|counts| metrics::sample_stats(counts, mode, textured).ok())
-        {
-            self.shaded_percent.push(stats.shaded_percent);
-        }
         self.frame_seconds.push(frame.seconds);
         self.hashes.push(fingerprint(&frame.display, frame.counts.as_deref()));
-        self.mse.push(metrics::quality(&frame.display, truth.now, "truth").mse);
-        if let (Some(before), Some(truth_before)) = (&self.previous, truth.then) {
-            self.error_change += change_of_error(
-                &frame.display.rgba,
-                &before.display.rgba,
-                &truth.now.rgba,
-                &truth_before.rgba,
-            );
-            self.own_change += squared_difference(&frame.display, &before.display);
-            if let (Some(now), Some(then)) = (&frame.counts, &before.counts) {
-                let changed = now.iter().zip(then).filter(|(a, b)| a != b).count();
-                self.count_changes.push(changed as f64 / now.len().max(1) as f64);
-            }
-            if let Some(flow) = truth.flow {
-                let pair = [&frame.display, truth.now];
-                let error = flow.error(pair, [&before.display, truth_before], flicker);
-                self.ghosting.push(GhostFrame {
-                    disoccluded: flow.disoccluded_share(),
-                    mse: temporal::mean(error.disoccluded),
-                    entered: flow.entered_share(),
-                    mse_entered: temporal::mean(error.entered),
-                });
-                self.followed.add(&error);
-            }
+        let before = self.previous.as_ref().zip(truth.then);
+        let followed = before.zip(truth.flow).map(|((before, truth_before), flow)| {
+            let pair = [&frame.display, truth.now];
+            (flow.error(pair, [&before.display, truth_before], flicker), flow)
+        });
+        let step = Step {
+            mode,
+            textured,
+            now: &frame,
+            truth: truth.now,
+            before,
+            followed: followed.as_ref().map(|(error, flow)| (error, *flow)),
+        };
+        let metrics: [&mut dyn Accumulate; 7] = [
+            &mut self.frame_error,
+            &mut self.flicker,
+            &mut self.lag,
+            &mut self.instability,
+            &mut self.own_change,
+            &mut self.count_changes,
+            &mut self.shading,
+        ];
+        for metric in metrics {
+            metric.add(&step);
         }
         self.previous = Some(frame);
     }
@@ -190,59 +171,34 @@ impl ModeState {
     /// failed, where fewer than two frames were rendered, or where it rendered a frame more
     /// than the others (the sequence stopped in the middle of a frame).
     pub fn conclude(self, frames: usize, truth_change: Option<f64>) -> ModeOutcome {
-        let ModeState {
-            previous,
-            mse,
-            flip,
-            jod,
-            jod_worst,
-            hashes,
-            error_change,
-            own_change,
-            count_changes,
-            shaded_percent,
-            frame_seconds,
-            followed,
-            ghosting,
-            checks,
-            error,
-        } = self;
-        let Some(last) = previous.filter(|_| error.is_none() && mse.len() == frames && frames > 1) else {
-            return ModeOutcome { sequence: None, checks, error };
+        let complete = self.error.is_none() && self.frame_error.frames() == frames && frames > 1;
+        let (Some(last), true) = (self.previous, complete) else {
+            return ModeOutcome { sequence: None, checks: self.checks, error: self.error };
         };
-        let pairs = frames - 1;
-        let mean_mse = mse.iter().sum::<f64>() / frames as f64;
-        let own = per_value(own_change, &last.display, pairs);
+        let (last, pairs) = (&last.display, frames - 1);
+        let PathPsnr { mse, psnr_db, mean_psnr_db } = self.frame_error.conclude();
+        let (flip, mean_flip) = self.flip.conclude(frames);
+        let worst = self.jod.worst;
         let sequence = ModeSequence {
-            psnr_db: mse.iter().map(|&e| Decibels::from_f64(-10.0 * e.log10())).collect(),
-            mean_psnr_db: Decibels::from_f64(-10.0 * mean_mse.log10()),
             mse,
-            mean_flip: (flip.len() == frames).then(|| flip.iter().sum::<f64>() / frames as f64),
+            psnr_db,
+            mean_psnr_db,
             flip,
-            jod,
-            jod_worst_frame: jod_worst.as_ref().map(|(frame, _)| *frame),
-            jod_map: jod_worst.and_then(|(_, map)| map),
-            instability: per_value(error_change, &last.display, pairs),
-            change_ratio: truth_change.filter(|&t| t > 0.0).map(|t| own / t),
-            count_changes: mean_of(&count_changes),
-            shaded_percent: mean_of(&shaded_percent),
-            frame_ms: crate::stats::Summary::new(frame_seconds.iter().map(|s| s * 1e3).collect()),
+            mean_flip,
+            jod: self.jod.jod,
+            jod_worst_frame: worst.as_ref().map(|(frame, _)| *frame),
+            jod_map: worst.and_then(|(_, map)| map),
+            instability: self.instability.conclude(last, pairs),
+            change_ratio: self.own_change.conclude(last, pairs, truth_change),
+            count_changes: self.count_changes.conclude(),
+            shaded_percent: self.shading.conclude(),
+            frame_ms: crate::stats::Summary::new(self.frame_seconds.iter().map(|s| s * 1e3).collect()),
             frames_of: None,
-            flicker: temporal::mean(followed.flicker),
-            ghosting: mean_of(&ghosting.iter().map(|g| g.disoccluded).collect::<Vec<_>>()).map(
-                |disoccluded| Ghosting {
-                    disoccluded,
-                    mse: temporal::mean(followed.disoccluded),
-                    entered: mean_of(&ghosting.iter().map(|g| g.entered).collect::<Vec<_>>()).unwrap_or(0.0),
-                    mse_entered: temporal::mean(followed.entered),
-                    mse_edges: temporal::mean(followed.edges),
-                    mse_elsewhere: temporal::mean(followed.elsewhere),
-                    per_frame: ghosting,
-                },
-            ),
-            hashes,
+            flicker: self.flicker.conclude(),
+            ghosting: self.lag.conclude(),
+            hashes: self.hashes,
         };
-        ModeOutcome { sequence: Some(sequence), checks, error: None }
+        ModeOutcome { sequence: Some(sequence), checks: self.checks, error: None }
     }
 }
 
@@ -391,6 +347,48 @@ pub(super) fn write_jod_maps(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A 4×4 frame of one grey `value`, as the renderer's display image.
+    fn grey(value: u8) -> DisplayImage {
+        DisplayImage::from_rgba8(&[value; 64])
+    }
+
+    /// Three frames of an adaptive mode against a truth that brightens by 10 code steps a
+    /// frame: every path metric's accumulator sees each frame and concludes with its own value.
+    #[test]
+    fn every_path_metric_accumulates_the_frames_it_is_shown() {
+        let mode: Mode = "adaptive-2x2".parse().unwrap();
+        let truth = [grey(10), grey(20), grey(30)];
+        let shown = [(12, [1; 16]), (22, [1; 16]), (30, [[1, 2]; 8].concat().try_into().unwrap())];
+        let mut state = ModeState::default();
+        for (frame, (value, counts)) in shown.into_iter().enumerate() {
+            let pair =
+                TruthPair { now: &truth[frame], then: frame.checked_sub(1).map(|f| &truth[f]), flow: None };
+            let rendered = ModeFrame {
+                seconds: 0.01 * (frame + 1) as f64,
+                display: grey(value),
+                counts: Some(counts.to_vec()),
+                checks: FrameChecks::default(),
+            };
+            state.add(mode, rendered, &pair, &mut [0.0; 16], false);
+        }
+        let step = 1.0 / 255.0_f64.powi(2);
+        let sequence = state.conclude(3, Some(100.0 * step)).sequence.expect("three frames: a sequence");
+        assert_eq!(sequence.mse, [4.0 * step, 4.0 * step, 0.0], "MSE per frame");
+        assert!((sequence.mean_psnr_db.value() - -10.0 * (8.0 * step / 3.0).log10()).abs() < 1e-12);
+        // (ΔA − ΔT)² is 0 over the first pair and 4 over the second, per value of 2 pairs.
+        assert!((sequence.instability - 2.0 * step).abs() < 1e-15, "{}", sequence.instability);
+        // The mode changes by 10 and 8 steps where the truth changes by 10: 82 against 100.
+        assert!((sequence.change_ratio.unwrap() - 0.82).abs() < 1e-12);
+        assert_eq!(sequence.count_changes, Some(0.25), "no count changed, then half");
+        let shaded = sequence.shaded_percent.unwrap();
+        assert!((shaded - (25.0 + 25.0 + 37.5) / 3.0).abs() < 1e-9, "1, 1 and 1.5 of 4 samples: {shaded}");
+        assert_eq!(sequence.frame_ms.map(|t| t.samples.len()), Some(3));
+        assert_eq!((sequence.flicker, sequence.ghosting), (None, None), "no flow: nothing followed");
+        assert_eq!(sequence.hashes.len(), 3);
+        let short = ModeState::default().conclude(3, None);
+        assert!(short.sequence.is_none(), "a mode that rendered fewer frames than the others has none");
+    }
 
     #[test]
     fn flip_along_the_path_stops_at_a_signal() {

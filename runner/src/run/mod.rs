@@ -9,6 +9,7 @@ mod console;
 mod context;
 mod measures;
 mod memory;
+mod path_metrics;
 mod results;
 mod rounds;
 mod scene;

@@ -28,9 +28,8 @@ use aabench_renderer::scene::Camera;
 use aabench_renderer::{DisplayImage, Mode};
 
 use super::context::{ModeRun, SceneRun};
-use super::measures::{
-    ModeFrame, ModeOutcome, ModeState, TruthPair, TruthTrack, flip_along, jod_along, write_jod_maps,
-};
+use super::measures::{ModeOutcome, ModeState, TruthPair, TruthTrack, flip_along, jod_along, write_jod_maps};
+use super::path_metrics::ModeFrame;
 use crate::flicker::{self, TRUTH_STREAM};
 use crate::metrics::{self, FrameChecks};
 use crate::motion::{MotionSpec, Pace, PathFrame, PathKind, Timeline};
@@ -440,9 +439,9 @@ impl Measured {
             if let Some(Err(error)) = &map {
                 scene.warn(&format!("no JOD map: {error}"));
             }
-            state.flip = flip;
-            state.jod = jod.as_ref().map(|j| j.jod);
-            state.jod_worst = jod.map(|j| (j.worst_frame, map.and_then(Result::ok)));
+            state.flip.per_frame = flip;
+            state.jod.jod = jod.as_ref().map(|j| j.jod);
+            state.jod.worst = jod.map(|j| (j.worst_frame, map.and_then(Result::ok)));
         }
         (record.flip_s, record.jod_s, record.region_s) = (self.flip_s, self.jod_s, self.region_s);
         match self.region {

@@ -300,7 +300,10 @@ fn run_command(args: RunArgs) -> u8 {
         });
         match run::execute(&plan, progress, cancel).await {
             Ok(outcome) => {
-                progress.line(&format!("wrote {}", outcome.run_json.display()));
+                // The summary is the run's last word: under CI, the log's last screen.
+                for line in aabench::report::closing(&outcome.record, &outcome.run_json) {
+                    progress.line(&line);
+                }
                 match outcome.record.status {
                     Status::Ok => exit::OK,
                     Status::Interrupted => exit::INTERRUPTED,

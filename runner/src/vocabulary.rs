@@ -109,6 +109,11 @@ const DECIBELS: Rule = Rule::Level { unit: "dB" };
 /// ColorVideoVDP's rule: just-objectionable differences, 10 for no visible difference.
 const JOD: Rule = Rule::Level { unit: "JOD" };
 
+/// The smallest difference of JOD that the report reads as an order: a tenth of the step at
+/// which 75 % of viewers prefer the better of two images (about 53 % prefer it at 0.1), and the
+/// gate's own tolerance for JOD across platforms. Modes closer than this are one answer.
+pub const JOD_MARGIN: f64 = 0.1;
+
 /// How the gate compares a metric with its baseline.
 #[derive(Debug, Clone, Copy)]
 pub struct Gate {

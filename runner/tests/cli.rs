@@ -55,6 +55,7 @@ fn a_run_writes_its_record_and_images_and_exits_zero() {
         exr::prelude::read_first_rgba_layer_from_file(&exr, |_, _| (), |_, _, _: (f32, f32, f32, f32)| ())
             .unwrap();
     }
+    console_says_what_it_found(&stderr(&output));
     let hash = |id: &str| mode(scene, id)["output_hash"].as_str().map(str::to_owned);
     assert_eq!(hash("reference-2x2").map(|h| h.len()), Some(16), "a 64-bit hex fingerprint");
     assert_eq!(hash("reference-2x2"), hash("reference-2x2-stalled"), "the stall must not change the image");
@@ -126,6 +127,28 @@ fn a_run_writes_its_record_and_images_and_exits_zero() {
         mode(scene, "deferred-1x1")["graph"]["passes"],
         json!(["gbuffer", "shade", "tonemap", "display"])
     );
+}
+
+/// The console of the run above: the scene's table names it, fits 120 columns and shows JOD
+/// beside PSNR; the run closes with its summary, the scene's answer and the next commands.
+fn console_says_what_it_found(log: &str) {
+    let lines: Vec<&str> = log.lines().collect();
+    let header =
+        lines.iter().position(|l| l.starts_with("  mode ")).unwrap_or_else(|| panic!("no table: {log}"));
+    assert!(lines[header - 2].starts_with("[edge] 64×48 · no camera path"), "{log}");
+    assert!(lines[header].contains(" PSNR ") && lines[header].contains(" JOD "), "{}", lines[header]);
+    for row in &lines[header..header + 6] {
+        assert!(row.chars().count() <= 120, "{} columns: {row}", row.chars().count());
+    }
+    let summary = lines
+        .iter()
+        .position(|l| l.contains("1 scene(s) ok, 0 failed, 0 interrupted, 0 not run"))
+        .unwrap_or_else(|| panic!("no summary: {log}"));
+    let tail = &lines[summary..];
+    let answer = tail.iter().find(|l| l.starts_with("  edge")).unwrap_or_else(|| panic!("{log}"));
+    assert!(answer.contains("still") && answer.contains(" JOD, "), "{answer}");
+    assert!(tail.iter().any(|l| l.contains("aabench report ")), "{log}");
+    assert!(tail.last().is_some_and(|l| l.contains("aabench compare ")), "the last line: {log}");
 }
 
 #[test]
@@ -214,6 +237,9 @@ fn a_broken_manifest_fails_alone_and_the_run_exits_three() {
     let output = ws.run(&["run", "--modes", "deferred-1x1"]);
     assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
     assert!(stderr(&output).contains("1 scene(s) failed"), "{}", stderr(&output));
+    let summary = stderr(&output);
+    assert!(summary.contains("1 scene(s) ok, 1 failed"), "{summary}");
+    assert!(summary.contains("  b-broken  failed: "), "the failed scene's line: {summary}");
 
     let record = ws.record();
     assert_eq!(record["status"], "failed");

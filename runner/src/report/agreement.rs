@@ -15,10 +15,9 @@ use super::html::escape;
 use super::images::figure;
 use crate::record::{ModeRecord, SceneRecord, SequenceRecord};
 use crate::truth::TRUTH_ID;
+use crate::vocabulary::JOD_MARGIN;
 
-/// The smallest differences that count as an order: a tenth of a JOD (a tenth of the step at
-/// which 75 % of viewers prefer the better image) and a tenth of a decibel.
-const JOD_MARGIN: f64 = 0.1;
+/// The smallest differences that count as an order: [`JOD_MARGIN`] and a tenth of a decibel.
 const PSNR_MARGIN_DB: f64 = 0.1;
 
 /// How much the error animations amplify the difference of code values.

@@ -9,7 +9,7 @@ use std::fmt::Write;
 
 use super::html::escape;
 use crate::record::{ModeRecord, ModeSequence, RunRecord, SceneRecord};
-use crate::vocabulary::{JOD_VS_TRUTH, METRICS, Metric, SEQUENCE_JOD_VS_TRUTH, Source};
+use crate::vocabulary::{JOD_MARGIN, JOD_VS_TRUTH, METRICS, Metric, SEQUENCE_JOD_VS_TRUTH, Source};
 
 /// What a ranking measures a mode by.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -107,6 +107,52 @@ pub fn fastest_by_level(scene: &SceneRecord, basis: Basis) -> Vec<(f64, &ModeRec
         }
     }
     rows
+}
+
+/// A ranking's answer: the cheapest unstalled mode whose level is within [`JOD_MARGIN`] of the
+/// best one's, the best, and what the answer costs against deferred-1x1 on the same basis.
+#[derive(Debug, Clone, Copy)]
+pub struct Answer<'a> {
+    pub mode: &'a ModeRecord,
+    pub level: f64,
+    pub ms: f64,
+    pub best: &'a ModeRecord,
+    pub best_level: f64,
+    /// Its frame time over deferred-1x1's, where deferred-1x1 was measured on the basis.
+    pub vs_deferred: Option<f64>,
+}
+
+impl Answer<'_> {
+    /// `msaa-4x 9.66 JOD, 30.2 ms (2.04× deferred-1x1); the best, reference-4x4, 9.70`.
+    pub fn describe(&self) -> String {
+        let cost = self.vs_deferred.map_or_else(String::new, |r| format!(" ({r:.2}× deferred-1x1)"));
+        let best = if self.best.mode == self.mode.mode {
+            "the best".to_string()
+        } else {
+            format!("the best, {}, {:.2}", self.best.mode, self.best_level)
+        };
+        format!("{} {:.2} JOD, {:.1} ms{cost}; {best}", self.mode.mode, self.level, self.ms)
+    }
+}
+
+/// The answer on `basis`: among the unstalled modes measured on it, the fastest (by median)
+/// whose level is within [`JOD_MARGIN`] of the highest; no answer where none was measured.
+/// Modes a viewer could hardly tell apart are one answer, and the cheapest of them gives it.
+pub fn answer(scene: &SceneRecord, basis: Basis) -> Option<Answer<'_>> {
+    let measured: Vec<(f64, f64, &ModeRecord)> = scene
+        .modes
+        .iter()
+        .filter(|m| !m.stalled)
+        .filter_map(|m| basis.measure(m).map(|(level, ms)| (level, ms, m)))
+        .collect();
+    let &(best_level, _, best) =
+        measured.iter().max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.total_cmp(&a.1)))?;
+    let &(level, ms, mode) = measured
+        .iter()
+        .filter(|&&(level, _, _)| level >= best_level - JOD_MARGIN)
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    let deferred = measured.iter().find(|(_, _, m)| m.mode == "deferred-1x1");
+    Some(Answer { mode, level, ms, best, best_level, vs_deferred: deferred.map(|&(_, d, _)| ms / d) })
 }
 
 /// `reference-2x2 9.21 JOD, 40.1 ms`: a row's recommendation.
@@ -328,5 +374,61 @@ pub(super) fn technique_markdown(out: &mut String, run: &RunRecord, cell: fn(&st
             cell(&ranking.recommended.join(" → ")),
             cell(&ranking.details.join(" · "))
         );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::metrics::{Decibels, Quality};
+
+    /// An unstalled mode timed at `ms` whose still scores `jod` against the truth.
+    fn timed(id: &str, ms: f64, jod: f64) -> ModeRecord {
+        let json = serde_json::json!({ "mode": id, "m": 1, "stalled": false, "status": "ok", "passes": [], "images": {} });
+        let mut mode: ModeRecord = serde_json::from_value(json).unwrap();
+        mode.frame_ms = crate::stats::Summary::new(vec![ms]);
+        mode.vs_ground_truth = Some(Quality {
+            against: "truth-8x8".into(),
+            mse: 1e-4,
+            mse_e5: 10.0,
+            psnr_db: Decibels::from_f64(40.0),
+            psnr_paper_db: Decibels::from_f64(88.1),
+            max_abs_diff: 1,
+            flip: None,
+            ssim: None,
+            jod: Some(jod),
+        });
+        mode
+    }
+
+    fn scene(modes: Vec<ModeRecord>) -> SceneRecord {
+        let json = serde_json::json!({
+            "name": "s", "manifest": "s.json", "status": "ok", "stall_iterations": 16, "gate": {}, "modes": []
+        });
+        SceneRecord { modes, ..serde_json::from_value(json).unwrap() }
+    }
+
+    #[test]
+    fn the_answer_is_the_cheapest_mode_a_viewer_could_hardly_tell_from_the_best() {
+        let modes = vec![
+            timed("deferred-1x1", 10.0, 8.0),
+            timed("msaa-4x", 20.0, 9.62),
+            // 1 % faster and 0.001 JOD worse than reference-2x2: no level of its own.
+            timed("adaptive-2x2", 29.7, 9.649),
+            timed("reference-2x2", 30.0, 9.65),
+            timed("reference-4x4", 90.0, 9.70),
+        ];
+        let ranked = scene(modes);
+        let found = answer(&ranked, Basis::Still).unwrap();
+        assert_eq!((found.mode.mode.as_str(), found.best.mode.as_str()), ("msaa-4x", "reference-4x4"));
+        assert_eq!(found.vs_deferred, Some(2.0));
+        assert_eq!(
+            found.describe(),
+            "msaa-4x 9.62 JOD, 20.0 ms (2.00× deferred-1x1); the best, reference-4x4, 9.70"
+        );
+        // Beyond the margin, the best answers for itself.
+        let far = scene(vec![timed("deferred-1x1", 10.0, 8.0), timed("reference-4x4", 90.0, 9.70)]);
+        assert!(answer(&far, Basis::Still).unwrap().describe().ends_with("; the best"));
+        assert!(answer(&scene(Vec::new()), Basis::Still).is_none(), "no mode, no answer");
     }
 }

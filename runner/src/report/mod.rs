@@ -13,12 +13,14 @@ mod images;
 pub mod markdown;
 pub mod plots;
 mod points;
+mod summary;
 mod tables;
 
-pub use choice::{Basis, fastest_by_level, technique_cell};
+pub use choice::{Answer, Basis, answer, fastest_by_level, technique_cell};
 pub use history::load_history;
 pub use images::{open_rgba, side_by_side, worst_window};
 pub use points::{ErrorPlot, error_points};
+pub use summary::closing;
 pub use tables::{decibels, mode_cells, mode_columns, sequence_cells, sequence_columns, sequence_summary};
 
 use std::fmt::Write;

@@ -1,57 +1,92 @@
-//! The scene's results as the terminal shows them: a small table per scene.
+//! The scene's results as the terminal shows them: a line naming the scene, its resolution and
+//! its camera path, then a table of its modes that fits 120 columns, with JOD (of the still
+//! and along the path) beside PSNR. The run's closing summary is `report::closing`.
 
-use crate::metrics::Quality;
 use crate::progress::Progress;
-use crate::record::SceneRecord;
+use crate::record::{ModeRecord, SceneRecord};
 use crate::truth::TruthRecord;
 
-/// Prints a scene's results as a small table.
+/// The widest line the table is laid out for.
+const WIDTH: usize = 120;
+
+/// Prints a scene's results: its line, then its table.
 pub(super) fn report_scene(progress: &Progress, scene: &SceneRecord) {
+    for line in scene_lines(scene) {
+        progress.line(&line);
+    }
+}
+
+/// The scene's lines and table, as printed.
+fn scene_lines(scene: &SceneRecord) -> Vec<String> {
     let resolution = scene.resolution.map_or(String::new(), |[w, h]| format!(" {w}×{h}"));
-    match &scene.error {
-        Some(error) if scene.modes.is_empty() => {
-            progress.line(&format!("[{}] FAILED: {error}", scene.name));
-            return;
-        }
-        _ => progress.line(&format!(
-            "[{}]{resolution} {} triangles, ground truth {}",
-            scene.name,
-            scene.triangles.unwrap_or(0),
-            scene.truth.as_ref().map_or("none".into(), truth_summary)
-        )),
+    if let (Some(error), true) = (&scene.error, scene.modes.is_empty()) {
+        return vec![format!("[{}]{resolution} FAILED: {error}", scene.name)];
     }
-    progress.line(&format!(
-        "  {:<28} {:>10} {:>21} {:>8} {:>9} {:>9} {:>10} {:>10}  {}",
-        "mode",
-        "median ms",
-        "interval ms",
-        "×1x1",
-        "samples%",
-        "PSNR ref",
-        "PSNR truth",
-        "FLIP truth",
-        "front"
-    ));
-    let db = |q: &Option<Quality>| q.as_ref().map_or("-".into(), |q| format!("{:.2}", q.psnr_db.value()));
-    for mode in &scene.modes {
-        let Some(frame) = &mode.frame_ms else {
-            progress.line(&format!("  {:<28} {}", mode.mode, mode.error.as_deref().unwrap_or("no frames")));
-            continue;
-        };
-        progress.line(&format!(
-            "  {:<28} {:>10.1} {:>21} {:>8} {:>9} {:>9} {:>10} {:>10}  {}{}",
-            mode.mode,
-            frame.median,
-            format!("[{:.1}, {:.1}]", frame.ci_low, frame.ci_high),
-            mode.ratio_to_deferred.map_or("-".into(), |r| format!("{r:.2}")),
-            mode.samples.as_ref().map_or("-".into(), |s| format!("{:.1}", s.shaded_percent)),
-            db(&mode.vs_reference),
-            db(&mode.vs_ground_truth),
-            mode.vs_ground_truth.as_ref().and_then(|q| q.flip).map_or("-".into(), |f| format!("{f:.4}")),
-            mode.front.as_ref().map_or("-".into(), |place| place.describe()),
-            mode.error.as_ref().map_or(String::new(), |e| format!("  ({e})")),
-        ));
+    let path = match scene.sequences.len() {
+        0 => "no camera path".to_string(),
+        1 => format!("path: {}", scene.sequences[0].speed()),
+        n => format!("path: {} (the first of {n} speeds: the table's)", scene.sequences[0].speed()),
+    };
+    let truth = scene.truth.as_ref().map_or("none".into(), truth_summary);
+    let mut lines = vec![
+        format!("[{}]{resolution} · {path}", scene.name),
+        format!("  {} triangles · ground truth {truth}", scene.triangles.unwrap_or(0)),
+    ];
+    if let Some(error) = &scene.error {
+        lines.push(clip(format!("  FAILED: {error}")));
     }
+    lines.extend([format!(
+        "  {:<25} {:>7} {:>5} {:>5} {:>5} {:>6} {:>6} {:>5} {:>5} {:>6}  {}",
+        "mode", "ms", "±", "×1x1", "smp%", "PSNR", "FLIP", "JOD", "pJOD", "pPSNR", "front"
+    )]);
+    lines.extend(scene.modes.iter().map(mode_line));
+    lines.push(
+        "  ± half the interval · smp% samples shaded · still PSNR, FLIP, JOD against the truth · pJOD, \
+         pPSNR along the path"
+            .into(),
+    );
+    lines
+}
+
+/// A mode's row, or its error where it has no frames.
+fn mode_line(mode: &ModeRecord) -> String {
+    let Some(frame) = &mode.frame_ms else {
+        let error = mode.error.as_deref().and_then(|e| e.lines().next()).unwrap_or("no frames");
+        return clip(format!("  {:<25} {error}", mode.mode));
+    };
+    let or_dash = |value: Option<String>| value.unwrap_or_else(|| "-".into());
+    let decibels = |db: f64| if db.is_finite() { format!("{db:.2}") } else { "∞".into() };
+    let truth = mode.vs_ground_truth.as_ref();
+    let path = mode.sequence();
+    let spread = (frame.ci_high - frame.ci_low) / 2.0 / frame.median.max(f64::MIN_POSITIVE);
+    let front = mode.front.as_ref().map(|place| match place.dominated_by.first() {
+        None => "front".to_string(),
+        Some(dominator) => format!("behind {}", dominator.mode),
+    });
+    let row = format!(
+        "  {:<25} {:>7.1} {:>4.0}% {:>5} {:>5} {:>6} {:>6} {:>5} {:>5} {:>6}  {}{}",
+        mode.mode,
+        frame.median,
+        spread * 100.0,
+        or_dash(mode.ratio_to_deferred.map(|r| format!("{r:.2}"))),
+        or_dash(mode.samples.as_ref().map(|s| format!("{:.1}", s.shaded_percent))),
+        or_dash(truth.map(|q| decibels(q.psnr_db.value()))),
+        or_dash(truth.and_then(|q| q.flip).map(|f| format!("{f:.4}"))),
+        or_dash(truth.and_then(|q| q.jod).map(|j| format!("{j:.2}"))),
+        or_dash(path.and_then(|s| s.jod).map(|j| format!("{j:.2}"))),
+        or_dash(path.map(|s| decibels(s.mean_psnr_db.value()))),
+        or_dash(front),
+        mode.error.as_ref().map_or(String::new(), |e| format!("  ({e})")),
+    );
+    clip(row)
+}
+
+/// A row cut to [`WIDTH`] characters, with `…` where it was cut (run.json holds it whole).
+fn clip(row: String) -> String {
+    if row.chars().count() <= WIDTH {
+        return row;
+    }
+    row.chars().take(WIDTH - 1).chain(['…']).collect()
 }
 
 /// How the truth was obtained, for the printed summary.

@@ -300,18 +300,12 @@ fn run_command(args: RunArgs) -> u8 {
         });
         match run::execute(&plan, progress, cancel).await {
             Ok(outcome) => {
-                // The summary is the run's last word: under CI, the log's last screen.
-                for line in aabench::report::closing(&outcome.record, &outcome.run_json) {
-                    progress.line(&line);
-                }
+                // The summary (with the scenes that failed, and why) is the run's last word.
+                aabench::report::closing(&outcome.record, &outcome.run_json).iter().for_each(|l| progress.line(l));
                 match outcome.record.status {
                     Status::Ok => exit::OK,
                     Status::Interrupted => exit::INTERRUPTED,
-                    _ => {
-                        let failed = outcome.record.scenes.iter().filter(|s| s.status != Status::Ok).count();
-                        tell!("aabench: {failed} scene(s) failed; see {}", outcome.run_json.display());
-                        exit::SCENE_FAILED
-                    }
+                    _ => exit::SCENE_FAILED,
                 }
             }
             // Errors print whole; `no Vulkan adapter` prints as its one-line install hint.

@@ -68,32 +68,29 @@ fn the_texture_scene_places_every_mode_on_or_behind_the_front_and_cells_recover_
     assert!(cells >= paper + 3.0, "cells {cells:.2} dB against the paper's {paper:.2} dB");
     assert!(cells > area, "cells {cells:.2} dB against the area weights' {area:.2} dB");
 
-    // Which technique for this scene, by JOD: levels rise, each row's mode reaches its level
-    // and no ranked mode that reaches it is faster; the last row is the mode with the highest
-    // JOD.
+    // Which technique for this scene, by JOD: from row to row the level and the time rise;
+    // each row's level is its own mode's; the last row is the cheapest mode within the margin
+    // of the best.
     let parsed: aabench::record::RunRecord = serde_json::from_value(record.clone()).unwrap();
-    let rows = aabench::report::fastest_by_level(&parsed.scenes[0], aabench::report::Basis::Still);
+    let rows = aabench::report::ranking(&parsed.scenes[0], aabench::report::Basis::Still);
     assert!(rows.len() >= 2, "{} levels", rows.len());
     let median = |m: &Value| m["frame_ms"]["median"].as_f64().unwrap();
     let jod = |m: &Value| m["vs_ground_truth"]["jod"].as_f64().unwrap();
+    let margin = aabench::vocabulary::JOD_MARGIN;
     for pair in rows.windows(2) {
-        assert!(pair[0].0 < pair[1].0, "levels {} and {}", pair[0].0, pair[1].0);
+        assert!(pair[1].level > pair[0].level, "levels {} and {}", pair[0].level, pair[1].level);
+        assert!(pair[1].ms > pair[0].ms, "times {} and {}", pair[0].ms, pair[1].ms);
+    }
+    for row in &rows {
+        assert_eq!(jod(support::mode(scene, &row.mode.mode)), row.level, "a row's level is its own mode's");
     }
     let ranked: Vec<&Value> = modes.iter().filter(|m| m["stalled"] == false && m["mode"] != "taa").collect();
-    for (level, chosen) in &rows {
-        let chosen = support::mode(scene, &chosen.mode);
-        assert_eq!(jod(chosen), *level, "a row's level is its own mode's");
-        for other in ranked.iter().filter(|m| jod(m) >= *level) {
-            assert!(
-                median(other) >= median(chosen),
-                "{} is faster than {} at {level}",
-                other["mode"],
-                chosen["mode"]
-            );
-        }
-    }
-    let best = ranked.iter().max_by(|a, b| jod(a).total_cmp(&jod(b))).unwrap();
-    assert_eq!(rows.last().unwrap().1.mode, best["mode"].as_str().unwrap());
+    let best = ranked.iter().map(|m| jod(m)).fold(f64::MIN, f64::max);
+    let answer = (ranked.iter())
+        .filter(|m| jod(m) >= best - margin)
+        .min_by(|a, b| median(a).total_cmp(&median(b)))
+        .unwrap();
+    assert_eq!(rows.last().unwrap().mode.mode, answer["mode"].as_str().unwrap());
 }
 
 /// The texture stress scene at the quick tier (the gate's): the best adaptive variant at 4×4,

@@ -1,14 +1,17 @@
 //! Which technique for this scene, by what people see: ColorVideoVDP's JOD against the truth.
-//! For each JOD level that a mode on the scene's front reaches, the fastest mode that reaches
-//! it, with the mode's own level. Where the scene has a camera path, the rankings are the
-//! path's, one per speed (JOD of the frames as a video), with PSNR, FLIP, flicker and ghosting
-//! one click away; the still's is labelled as the still's. A temporal mode (TAA) is never
-//! ranked by its still: that is 16 frames accumulated at one camera, its best case.
+//! Modes within [`JOD_MARGIN`] of the best are one quality: the answer is its cheapest mode,
+//! and the ranking under it names the cheapest mode of each quality below, among the modes
+//! cheaper than the row above. Where the scene has a camera path,
+//! the rankings are the path's, one per speed (JOD of the frames as a video), with PSNR, FLIP,
+//! flicker and ghosting one click away; the still's is labelled as the still's. A temporal mode
+//! (TAA) is never ranked by its still: that is 16 frames accumulated at one camera, its best
+//! case.
 
 use std::fmt::Write;
 
 use super::html::escape;
 use crate::record::{ModeRecord, ModeSequence, RunRecord, SceneRecord};
+use crate::stats::Summary;
 use crate::vocabulary::{JOD_MARGIN, JOD_VS_TRUTH, METRICS, Metric, SEQUENCE_JOD_VS_TRUTH, Source};
 
 /// What a ranking measures a mode by.
@@ -48,26 +51,22 @@ impl Basis {
         }
     }
 
-    /// Whether the level `a` is better than `b` on this basis.
-    fn better(self, a: f64, b: f64) -> bool {
-        self.metric().better(a, b).expect("a ranking metric is gated: it has a direction")
-    }
-
-    /// A mode's level and frame time (median, ms) on this basis, where it has both and may be
-    /// ranked on it.
-    fn measure(self, mode: &ModeRecord) -> Option<(f64, f64)> {
-        match self {
+    /// A mode's level and frame time on this basis, where it has both (a finite level) and may
+    /// be ranked on it.
+    fn measure(self, mode: &ModeRecord) -> Option<(f64, &Summary)> {
+        let measured = match self {
             Basis::Still => {
                 let temporal = mode.parsed().is_some_and(|m| m.is_jittered());
                 let level = self.metric().value(mode)?;
-                (!temporal).then_some((level, mode.frame_ms.as_ref()?.median))
+                (!temporal).then_some((level, mode.frame_ms.as_ref()?))
             }
             Basis::Path(index) => {
                 let sequence = mode.sequence_at(index)?;
                 let frame = sequence.frame_ms.as_ref().or(mode.frame_ms.as_ref())?;
-                Some((self.metric().value_at(mode, index)?, frame.median))
+                Some((self.metric().value_at(mode, index)?, frame))
             }
-        }
+        };
+        measured.filter(|(level, _)| level.is_finite())
     }
 
     /// The mode's sequence this basis ranks it by.
@@ -79,34 +78,52 @@ impl Basis {
     }
 }
 
-/// For each JOD that an unstalled mode on the basis's front reaches (no faster mode scores
-/// higher), lowest first, the fastest unstalled mode (by median) that reaches it, with its own
-/// level: levels rise, each row's mode reaches its level, and no mode that reaches it is faster.
-pub fn fastest_by_level(scene: &SceneRecord, basis: Basis) -> Vec<(f64, &ModeRecord)> {
-    let measured: Vec<(f64, f64, &ModeRecord)> = scene
+/// A row of a ranking: the cheapest mode of a class of modes that a viewer could hardly tell
+/// apart, with its own level and median frame time, and the modes of the class that are as
+/// fast (their medians inside its interval).
+#[derive(Debug, Clone)]
+pub struct Row<'a> {
+    pub level: f64,
+    pub mode: &'a ModeRecord,
+    pub ms: f64,
+    pub as_fast: Vec<&'a ModeRecord>,
+}
+
+/// The ranking on `basis`, cheapest first, built from the top: every unstalled mode within
+/// [`JOD_MARGIN`] of the best is one quality, named by its cheapest mode (the answer); then the
+/// same among the modes that are cheaper than that one and below that quality; and so on. From
+/// row to row the level and the time rise, and a mode 1 % faster and 0.001 JOD worse than
+/// another makes no row of its own; the last row is the answer.
+pub fn ranking(scene: &SceneRecord, basis: Basis) -> Vec<Row<'_>> {
+    let mut left: Vec<(f64, &Summary, &ModeRecord)> = scene
         .modes
         .iter()
         .filter(|m| !m.stalled)
-        .filter_map(|m| basis.measure(m).map(|(level, ms)| (level, ms, m)))
+        .filter_map(|m| basis.measure(m).map(|(level, time)| (level, time, m)))
         .collect();
-    let on_front = |&(level, ms, _): &(f64, f64, &ModeRecord)| {
-        !measured.iter().any(|&(other, t, _)| t < ms && basis.better(other, level))
-    };
-    let mut levels: Vec<f64> = measured.iter().filter(|p| on_front(p)).map(|&(level, _, _)| level).collect();
-    levels.sort_by(f64::total_cmp);
-    let mut rows: Vec<(f64, &ModeRecord)> = Vec::new();
-    for level in levels {
-        let fastest = measured
-            .iter()
-            .filter(|&&(own, _, _)| !basis.better(level, own))
-            .min_by(|a, b| a.1.total_cmp(&b.1));
-        if let Some(&(own, _, mode)) = fastest
-            && rows.last().is_none_or(|(_, last)| last.mode != mode.mode)
-        {
-            rows.push((own, mode));
-        }
+    let mut rows = Vec::new();
+    while let Some(top) = left.iter().map(|c| c.0).max_by(f64::total_cmp) {
+        let class: Vec<&(f64, &Summary, &ModeRecord)> =
+            left.iter().filter(|c| within_margin(c.0, top)).collect();
+        let Some(&&(level, time, mode)) = class.iter().min_by(|a, b| a.1.median.total_cmp(&b.1.median))
+        else {
+            break;
+        };
+        let as_fast = (class.iter())
+            .filter(|c| c.2.mode != mode.mode && (time.ci_low..=time.ci_high).contains(&c.1.median))
+            .map(|c| c.2)
+            .collect();
+        rows.push(Row { level, mode, ms: time.median, as_fast });
+        left.retain(|c| c.1.median < time.median && !within_margin(c.0, top));
     }
+    rows.reverse();
     rows
+}
+
+/// Whether `level` is within [`JOD_MARGIN`] below `top` (a margin of exactly 0.1 JOD between
+/// two-decimal scores counts as within, whatever their last bits).
+fn within_margin(level: f64, top: f64) -> bool {
+    top - level <= JOD_MARGIN + 1e-9
 }
 
 /// A ranking's answer: the cheapest unstalled mode whose level is within [`JOD_MARGIN`] of the
@@ -126,7 +143,7 @@ impl Answer<'_> {
     /// `msaa-4x 9.66 JOD, 30.2 ms (2.04× deferred-1x1); the best, reference-4x4, 9.70`.
     pub fn describe(&self) -> String {
         let cost = self.vs_deferred.map_or_else(String::new, |r| format!(" ({r:.2}× deferred-1x1)"));
-        let best = if self.best.mode == self.mode.mode {
+        let best = if self.best_level <= self.level {
             "the best".to_string()
         } else {
             format!("the best, {}, {:.2}", self.best.mode, self.best_level)
@@ -135,37 +152,47 @@ impl Answer<'_> {
     }
 }
 
-/// The answer on `basis`: among the unstalled modes measured on it, the fastest (by median)
-/// whose level is within [`JOD_MARGIN`] of the highest; no answer where none was measured.
-/// Modes a viewer could hardly tell apart are one answer, and the cheapest of them gives it.
+/// The answer on `basis`: the top row of its [`ranking`], the cheapest unstalled mode within
+/// [`JOD_MARGIN`] of the best; no answer where no mode was measured on it.
 pub fn answer(scene: &SceneRecord, basis: Basis) -> Option<Answer<'_>> {
-    let measured: Vec<(f64, f64, &ModeRecord)> = scene
-        .modes
-        .iter()
-        .filter(|m| !m.stalled)
-        .filter_map(|m| basis.measure(m).map(|(level, ms)| (level, ms, m)))
-        .collect();
-    let &(best_level, _, best) =
-        measured.iter().max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.total_cmp(&a.1)))?;
-    let &(level, ms, mode) = measured
-        .iter()
-        .filter(|&&(level, _, _)| level >= best_level - JOD_MARGIN)
-        .min_by(|a, b| a.1.total_cmp(&b.1))?;
-    let deferred = measured.iter().find(|(_, _, m)| m.mode == "deferred-1x1");
-    Some(Answer { mode, level, ms, best, best_level, vs_deferred: deferred.map(|&(_, d, _)| ms / d) })
+    Answer::of(scene, basis, &ranking(scene, basis).pop()?)
 }
 
-/// `reference-2x2 9.21 JOD, 40.1 ms`: a row's recommendation.
-fn recommendation(level: f64, mode: &ModeRecord, basis: Basis) -> String {
-    let ms = basis.measure(mode).map_or(0.0, |(_, ms)| ms);
-    format!("{} {level:.2} JOD, {ms:.1} ms", mode.mode)
+impl<'a> Answer<'a> {
+    /// The answer that `top`, the top row of the scene's ranking on `basis`, gives.
+    fn of(scene: &'a SceneRecord, basis: Basis, top: &Row<'a>) -> Option<Answer<'a>> {
+        let measured: Vec<(f64, f64, &ModeRecord)> = (scene.modes.iter())
+            .filter(|m| !m.stalled)
+            .filter_map(|m| basis.measure(m).map(|(level, time)| (level, time.median, m)))
+            .collect();
+        let &(best_level, _, best) =
+            measured.iter().max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.total_cmp(&a.1)))?;
+        let deferred = measured.iter().find(|(_, _, m)| m.mode == "deferred-1x1").map(|&(_, ms, _)| ms);
+        Some(Answer {
+            mode: top.mode,
+            level: top.level,
+            ms: top.ms,
+            best,
+            best_level,
+            vs_deferred: deferred.map(|d| top.ms / d),
+        })
+    }
+}
+
+/// `reference-2x2 9.21 JOD, 40.1 ms`: a row's recommendation, with the modes as fast as it
+/// (`msaa-4x (≈ adaptive-2x2) 9.62 JOD, 20.0 ms`).
+fn recommendation(row: &Row) -> String {
+    let names: Vec<&str> = row.as_fast.iter().map(|m| m.mode.as_str()).collect();
+    let ties = if names.is_empty() { String::new() } else { format!(" (≈ {})", names.join(", ")) };
+    format!("{}{ties} {:.2} JOD, {:.1} ms", row.mode.mode, row.level, row.ms)
 }
 
 /// `reference-2x2: 9.21 JOD, 40.1 ms, PSNR 36.00 dB, FLIP 0.0196`: the row's recommendation,
 /// then each metric of the basis's part of the record that reads among a row's details
 /// (`Metric::brief`): along the path its flicker and its error where the frame before had the
 /// surface hidden too.
-pub fn technique_cell(level: f64, mode: &ModeRecord, basis: Basis) -> String {
+pub fn technique_cell(row: &Row, basis: Basis) -> String {
+    let mode = row.mode;
     let (source, index) = match (basis, basis.sequence(mode)) {
         (Basis::Path(index), Some(_)) => (Source::Sequence, index),
         _ => (Source::Truth, 0),
@@ -174,36 +201,33 @@ pub fn technique_cell(level: f64, mode: &ModeRecord, basis: Basis) -> String {
         .iter()
         .filter(|metric| metric.source == source)
         .filter_map(|metric| Some((metric.brief?)(metric.value_at(mode, index)?)));
-    std::iter::once(recommendation(level, mode, basis)).chain(details).collect::<Vec<_>>().join(", ")
+    std::iter::once(recommendation(row)).chain(details).collect::<Vec<_>>().join(", ")
 }
 
-/// One ranking: a scene's rows on one basis.
+/// One ranking: a scene's rows on one basis, and its answer.
 struct Ranking<'a> {
     scene: &'a str,
     basis: String,
-    rows: Vec<(f64, &'a ModeRecord, f64)>,
+    rows: Vec<Row<'a>>,
+    answer: String,
     details: Vec<String>,
     recommended: Vec<String>,
 }
 
-/// The rankings of every scene: per scene and basis, its rows (level, mode, ms).
+/// The rankings of every scene, per scene and basis.
 fn rankings(run: &RunRecord) -> Vec<Ranking<'_>> {
     let mut out = Vec::new();
     for scene in &run.scenes {
         for basis in Basis::of_scene(scene) {
-            let chosen = fastest_by_level(scene, basis);
-            if chosen.is_empty() {
-                continue;
-            }
+            let rows = ranking(scene, basis);
+            let Some(found) = rows.last().and_then(|top| Answer::of(scene, basis, top)) else { continue };
             out.push(Ranking {
                 scene: &scene.name,
                 basis: basis.label(scene),
-                rows: chosen
-                    .iter()
-                    .map(|&(level, mode)| (level, mode, basis.measure(mode).map_or(0.0, |m| m.1)))
-                    .collect(),
-                details: chosen.iter().map(|&(level, mode)| technique_cell(level, mode, basis)).collect(),
-                recommended: chosen.iter().map(|&(level, mode)| recommendation(level, mode, basis)).collect(),
+                answer: found.describe(),
+                details: rows.iter().map(|row| technique_cell(row, basis)).collect(),
+                recommended: rows.iter().map(recommendation).collect(),
+                rows,
             });
         }
     }
@@ -215,9 +239,12 @@ fn caption(run: &RunRecord) -> String {
     format!(
         "Ranked by ColorVideoVDP's JOD against the truth (10: no visible difference; of two modes 1 JOD \
          apart, 75 % of viewers prefer the better), {}, along the camera path at each speed where \
-         the scene has one, at steady state (after 16 warm-up frames): each line names, from the \
-         cheapest up, the fastest unstalled mode for each quality that a mode on the front reaches, \
-         with its own JOD and frame time; the chart draws them, JOD across and time up. The details \
+         the scene has one, at steady state (after 16 warm-up frames). Modes within {JOD_MARGIN} JOD of the \
+         best are one quality (of two modes {JOD_MARGIN} JOD apart, about 53 % of viewers prefer the \
+         better). The answer is its cheapest unstalled mode, with its time against deferred-1x1; each \
+         line names, from the cheapest up, the cheapest mode of each quality below, among the modes \
+         cheaper than the one above, with its own JOD and frame time (≈: modes whose median lies \
+         inside its interval); the chart draws them, JOD across and time up. The details \
          add PSNR, mean FLIP, flicker (the change of the error along the truth's motion) and the MSE \
          where the frame before had the surface hidden. The still's ranking leaves TAA out: its still \
          is 16 frames accumulated at one camera.",
@@ -286,10 +313,10 @@ pub fn viewing_conditions(run: &RunRecord) -> String {
 
 /// A small step chart of a ranking: JOD across (from the lowest level to 10), frame time up
 /// (log), a dot per row with its mode in a tooltip.
-fn step_chart(rows: &[(f64, &ModeRecord, f64)]) -> String {
+fn step_chart(rows: &[Row]) -> String {
     let (width, height, pad) = (180.0, 48.0, 4.0);
-    let low = rows.iter().map(|r| r.0).fold(10.0f64, f64::min).min(9.5) - 0.1;
-    let times: Vec<f64> = rows.iter().map(|r| r.2.max(1e-3).ln()).collect();
+    let low = rows.iter().map(|r| r.level).fold(10.0f64, f64::min).min(9.5) - 0.1;
+    let times: Vec<f64> = rows.iter().map(|r| r.ms.max(1e-3).ln()).collect();
     let (t_low, t_high) =
         times.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &t| (a.min(t), b.max(t)));
     let x = |jod: f64| pad + (jod - low) / (10.0 - low) * (width - 2.0 * pad);
@@ -299,10 +326,10 @@ fn step_chart(rows: &[(f64, &ModeRecord, f64)]) -> String {
             - if t_high > t_low { (t - t_low) / (t_high - t_low) } else { 0.5 } * (height - 2.0 * pad)
     };
     let mut path = String::new();
-    for (i, ((level, _, _), &t)) in rows.iter().zip(&times).enumerate() {
-        let next = rows.get(i + 1).map_or(10.0, |r| r.0);
+    for (i, (row, &t)) in rows.iter().zip(&times).enumerate() {
+        let next = rows.get(i + 1).map_or(10.0, |r| r.level);
         let _ = if i == 0 {
-            write!(path, "M{:.1} {:.1}", x(*level), y(t))
+            write!(path, "M{:.1} {:.1}", x(row.level), y(t))
         } else {
             write!(path, " V{:.1}", y(t))
         };
@@ -312,13 +339,13 @@ fn step_chart(rows: &[(f64, &ModeRecord, f64)]) -> String {
         "<svg class=\"steps\" width=\"{width}\" height=\"{height}\" viewBox=\"0 0 {width} {height}\"><path d=\"{path}"
     );
     svg.push_str("\" fill=\"none\" stroke=\"#1f77b4\"/>");
-    for ((level, mode, ms), &t) in rows.iter().zip(&times) {
+    for (row, &t) in rows.iter().zip(&times) {
         let _ = write!(
             svg,
-            "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"2.5\"><title>{} {level:.2} JOD, {ms:.1} ms</title></circle>",
-            x(*level),
+            "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"2.5\"><title>{}</title></circle>",
+            x(row.level),
             y(t),
-            escape(&mode.mode)
+            escape(&recommendation(row))
         );
     }
     svg.push_str("</svg>");
@@ -335,16 +362,18 @@ pub(super) fn technique_table(page: &mut String, run: &RunRecord) {
     let _ = writeln!(
         page,
         "<h2>Which technique for this scene</h2>\n<p>{}</p>\n<table><thead><tr><th>scene</th>\
-         <th>ranked</th><th>the fastest mode for each JOD, cheapest first</th><th>time against JOD</th></tr>\
+         <th>ranked</th><th>answer</th><th>the cheapest mode of each quality, cheapest first</th>\
+         <th>time against JOD</th></tr>\
          </thead><tbody>",
         escape(&caption(run))
     );
     for ranking in rankings {
         let _ = writeln!(
             page,
-            "<tr><td>{}</td><td>{}</td><td>{}<details><summary>details</summary>{}</details></td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}<details><summary>details</summary>{}</details></td><td>{}</td></tr>",
             escape(ranking.scene),
             escape(&ranking.basis),
+            escape(&ranking.answer),
             escape(&ranking.recommended.join(" → ")),
             ranking.details.iter().map(|d| format!("<div>{}</div>", escape(d))).collect::<String>(),
             step_chart(&ranking.rows)
@@ -361,16 +390,17 @@ pub(super) fn technique_markdown(out: &mut String, run: &RunRecord, cell: fn(&st
     }
     let _ = write!(
         out,
-        "\n### Which technique for this scene\n\n{}\n\n| scene | ranked | the fastest mode for each \
-         JOD, cheapest first | details |\n|---|---|---|---|\n",
+        "\n### Which technique for this scene\n\n{}\n\n| scene | ranked | answer | the cheapest mode of \
+         each quality, cheapest first | details |\n|---|---|---|---|---|\n",
         caption(run)
     );
     for ranking in rankings {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} |",
             cell(ranking.scene),
             ranking.basis,
+            cell(&ranking.answer),
             cell(&ranking.recommended.join(" → ")),
             cell(&ranking.details.join(" · "))
         );
@@ -386,7 +416,17 @@ mod tests {
     fn timed(id: &str, ms: f64, jod: f64) -> ModeRecord {
         let json = serde_json::json!({ "mode": id, "m": 1, "stalled": false, "status": "ok", "passes": [], "images": {} });
         let mut mode: ModeRecord = serde_json::from_value(json).unwrap();
-        mode.frame_ms = crate::stats::Summary::new(vec![ms]);
+        // Its interval ±5 % of its median.
+        let (ci_low, ci_high) = (ms * 0.95, ms * 1.05);
+        mode.frame_ms = Some(Summary {
+            samples: vec![ms],
+            median: ms,
+            min: ms,
+            max: ms,
+            ci_low,
+            ci_high,
+            ci_level: 0.95,
+        });
         mode.vs_ground_truth = Some(Quality {
             against: "truth-8x8".into(),
             mse: 1e-4,
@@ -409,10 +449,12 @@ mod tests {
     }
 
     #[test]
-    fn the_answer_is_the_cheapest_mode_a_viewer_could_hardly_tell_from_the_best() {
+    fn the_answer_is_the_cheapest_mode_a_viewer_could_hardly_tell_from_the_best_and_tops_the_ranking() {
         let modes = vec![
             timed("deferred-1x1", 10.0, 8.0),
             timed("msaa-4x", 20.0, 9.62),
+            // Inside msaa-4x's interval and 0.01 JOD below it: as fast, one quality.
+            timed("smaa", 20.5, 9.61),
             // 1 % faster and 0.001 JOD worse than reference-2x2: no level of its own.
             timed("adaptive-2x2", 29.7, 9.649),
             timed("reference-2x2", 30.0, 9.65),
@@ -422,6 +464,27 @@ mod tests {
         let found = answer(&ranked, Basis::Still).unwrap();
         assert_eq!((found.mode.mode.as_str(), found.best.mode.as_str()), ("msaa-4x", "reference-4x4"));
         assert_eq!(found.vs_deferred, Some(2.0));
+        let rows = ranking(&ranked, Basis::Still);
+        let named: Vec<(&str, f64)> = rows.iter().map(|row| (row.mode.mode.as_str(), row.level)).collect();
+        assert_eq!(named, [("deferred-1x1", 8.0), ("msaa-4x", 9.62)], "the answer tops the ranking");
+        assert_eq!(recommendation(&rows[1]), "msaa-4x (≈ smaa) 9.62 JOD, 20.0 ms");
+        // A mode 4 times cheaper than the answer and 0.09 JOD below it is not hidden: it is the
+        // next quality down.
+        let cheap = scene(vec![
+            timed("reference-4x4", 90.0, 9.70),
+            timed("msaa-4x", 20.0, 9.61),
+            timed("fxaa", 5.0, 9.52),
+            timed("deferred-1x1", 4.0, 8.0),
+        ]);
+        let named: Vec<&str> =
+            ranking(&cheap, Basis::Still).iter().map(|row| row.mode.mode.as_str()).collect();
+        assert_eq!(named, ["deferred-1x1", "fxaa", "msaa-4x"]);
+        let with_nan = scene(vec![timed("smaa", 1.0, f64::NAN), timed("deferred-1x1", 4.0, 8.0)]);
+        assert_eq!(
+            answer(&with_nan, Basis::Still).map(|a| a.mode.mode.as_str()),
+            Some("deferred-1x1"),
+            "no level, no rank"
+        );
         assert_eq!(
             found.describe(),
             "msaa-4x 9.62 JOD, 20.0 ms (2.00× deferred-1x1); the best, reference-4x4, 9.70"

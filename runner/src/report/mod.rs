@@ -16,7 +16,7 @@ mod points;
 mod summary;
 mod tables;
 
-pub use choice::{Answer, Basis, answer, fastest_by_level, technique_cell};
+pub use choice::{Answer, Basis, Row, answer, ranking, technique_cell};
 pub use history::load_history;
 pub use images::{open_rgba, side_by_side, worst_window};
 pub use points::{ErrorPlot, error_points};

@@ -47,7 +47,11 @@ fn scene_answer(scene: &SceneRecord) -> String {
     }
     match Basis::of_scene(scene).into_iter().find_map(|basis| Some((basis, answer(scene, basis)?))) {
         Some((basis, found)) => {
-            let on = if basis == Basis::Still { "still" } else { "path" };
+            let on = match basis {
+                Basis::Still => "still".to_string(),
+                Basis::Path(0) => "path".to_string(),
+                Basis::Path(index) => format!("path {}", index + 1),
+            };
             format!("{on:<5}  {}", found.describe())
         }
         None => "no mode has a JOD".into(),

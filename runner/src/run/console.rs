@@ -33,13 +33,15 @@ fn scene_lines(scene: &SceneRecord) -> Vec<String> {
         format!("  {} triangles · ground truth {truth}", scene.triangles.unwrap_or(0)),
     ];
     if let Some(error) = &scene.error {
-        lines.push(clip(format!("  FAILED: {error}")));
+        lines.push(format!("  FAILED: {error}"));
     }
-    lines.extend([format!(
-        "  {:<25} {:>7} {:>5} {:>5} {:>5} {:>6} {:>6} {:>5} {:>5} {:>6}  {}",
+    // The mode column is as wide as the scene's longest id.
+    let width = scene.modes.iter().map(|m| m.mode.chars().count()).max().unwrap_or(0).max(4);
+    lines.push(format!(
+        "  {:<width$} {:>7} {:>5} {:>5} {:>5} {:>6} {:>6} {:>5} {:>5} {:>6}  {}",
         "mode", "ms", "±", "×1x1", "smp%", "PSNR", "FLIP", "JOD", "pJOD", "pPSNR", "front"
-    )]);
-    lines.extend(scene.modes.iter().map(mode_line));
+    ));
+    lines.extend(scene.modes.iter().flat_map(|mode| mode_lines(mode, width)));
     lines.push(
         "  ± half the interval · smp% samples shaded · still PSNR, FLIP, JOD against the truth · pJOD, \
          pPSNR along the path"
@@ -48,11 +50,12 @@ fn scene_lines(scene: &SceneRecord) -> Vec<String> {
     lines
 }
 
-/// A mode's row, or its error where it has no frames.
-fn mode_line(mode: &ModeRecord) -> String {
+/// A mode's row, its id padded to `width` and the row cut to [`WIDTH`], and its error on a line
+/// of its own, whole.
+fn mode_lines(mode: &ModeRecord, width: usize) -> Vec<String> {
+    let error = mode.error.as_ref().map(|e| format!("    {}: {e}", mode.mode));
     let Some(frame) = &mode.frame_ms else {
-        let error = mode.error.as_deref().and_then(|e| e.lines().next()).unwrap_or("no frames");
-        return clip(format!("  {:<25} {error}", mode.mode));
+        return vec![error.unwrap_or_else(|| format!("    {}: no frames", mode.mode))];
     };
     let or_dash = |value: Option<String>| value.unwrap_or_else(|| "-".into());
     let decibels = |db: f64| if db.is_finite() { format!("{db:.2}") } else { "∞".into() };
@@ -64,7 +67,7 @@ fn mode_line(mode: &ModeRecord) -> String {
         Some(dominator) => format!("behind {}", dominator.mode),
     });
     let row = format!(
-        "  {:<25} {:>7.1} {:>4.0}% {:>5} {:>5} {:>6} {:>6} {:>5} {:>5} {:>6}  {}{}",
+        "  {:<width$} {:>7.1} {:>4.0}% {:>5} {:>5} {:>6} {:>6} {:>5} {:>5} {:>6}  {}",
         mode.mode,
         frame.median,
         spread * 100.0,
@@ -76,12 +79,11 @@ fn mode_line(mode: &ModeRecord) -> String {
         or_dash(path.and_then(|s| s.jod).map(|j| format!("{j:.2}"))),
         or_dash(path.map(|s| decibels(s.mean_psnr_db.value()))),
         or_dash(front),
-        mode.error.as_ref().map_or(String::new(), |e| format!("  ({e})")),
     );
-    clip(row)
+    std::iter::once(clip(row)).chain(error).collect()
 }
 
-/// A row cut to [`WIDTH`] characters, with `…` where it was cut (run.json holds it whole).
+/// A row cut to [`WIDTH`] characters, with `…` where it was cut.
 fn clip(row: String) -> String {
     if row.chars().count() <= WIDTH {
         return row;

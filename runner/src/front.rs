@@ -1,95 +1,162 @@
-//! The error-against-run-time front of a scene: the modes that no other mode beats both in
-//! frame time and in nearness to the truth, and for every other mode, the modes that beat it
-//! and by how much. This is the answer an engineer reads a run for: which technique is worth
-//! its time on this scene.
+//! The error-against-run-time fronts of a scene: for each metric of the vocabulary with a front
+//! margin (PSNR against the truth, the paper's; JOD of the still and along each path, the
+//! rankings'), which modes no other mode beats both in frame time and in quality, decided with
+//! confidence. This is the answer an engineer reads a run for: which technique is worth its
+//! time on this scene.
 //!
-//! Noise must not decide membership, so frame times are compared by their intervals, not
-//! their medians: a mode is faster than another only where its whole interval lies below the
-//! other's, and two modes are as fast as each other where each one's median lies inside the
-//! other's interval. Intervals that overlap with medians apart decide nothing. Stalled modes
-//! simulate another shader's cost, so they are measured among the stalled modes only, and
-//! plain modes among the plain ones.
+//! A verdict must repeat on a second run, so neither noise in time nor the last digits of a
+//! metric decide it. A rival is a mode of the same stall as good as the mode: its value less
+//! the mode's is at least minus the metric's margin. Times are compared round by round: every
+//! round renders each mode once, so the ratio of two modes' times in one round is free of the
+//! machine's drift between rounds, and the median of those ratios comes with the sign test's
+//! interval. A rival puts the mode *behind* it when it is faster with confidence (the whole
+//! interval below 1); the mode is *on the front* when every rival is slower with confidence;
+//! otherwise it is *undecided* against the rivals whose time the rounds do not tell from its
+//! own. Along a camera path the frames are the rounds, where both modes timed their path.
+
+use std::collections::BTreeMap;
 
 use crate::metrics::Decibels;
-use crate::record::{Dominator, FrontPlace, ModeRecord, Status};
+use crate::record::{FrontPlace, FrontVerdict, ModeRecord, Rival, Status};
+use crate::stats::Summary;
+use crate::vocabulary::{METRICS, Metric, Source};
 
-/// PSNRs against the truth closer than this are a tie: the images are as near the truth as
-/// each other, whatever the last digits say.
-pub const PSNR_TIE_DB: f64 = 0.05;
+/// The least coverage of a time ratio's interval that decides an order: five rounds' worth
+/// (93.75 %). Fewer rounds decide nothing.
+pub const TIME_CONFIDENCE: f64 = 0.9;
 
-/// What the front reads of a mode: its frame-time median and interval (ms) and its PSNR
-/// against the truth (dB, +∞ for an image equal to the truth).
+/// What a front reads of a mode: its value of the front's metric (higher better) and its
+/// frame times.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FrontPoint {
-    pub median: f64,
-    pub low: f64,
-    pub high: f64,
-    pub psnr: f64,
+pub struct FrontPoint<'a> {
+    pub mode: &'a str,
+    pub stalled: bool,
+    /// In the metric's unit; +∞ for PSNR of an image equal to the truth.
+    pub level: f64,
+    /// Frame times in ms, one a round of the still.
+    pub rounds: Option<&'a [f64]>,
+    /// Frame times in ms, one a frame of the path, for a path's metric.
+    pub path: Option<&'a [f64]>,
 }
 
-impl FrontPoint {
-    fn of(mode: &ModeRecord) -> Option<FrontPoint> {
+/// How a rival's time compares with a mode's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Pace {
+    Faster,
+    Slower,
+    Untold,
+}
+
+impl<'a> FrontPoint<'a> {
+    /// The point of `mode` on the front of `metric` (along the sequence `index` for a path's),
+    /// where it finished with a value of the metric.
+    pub fn of(mode: &'a ModeRecord, metric: &Metric, index: usize) -> Option<FrontPoint<'a>> {
         if mode.status != Status::Ok {
             return None;
         }
-        let frame = mode.frame_ms.as_ref()?;
-        let psnr = mode.vs_ground_truth.as_ref()?.psnr_db.value();
-        (!psnr.is_nan()).then_some(FrontPoint {
-            median: frame.median,
-            low: frame.ci_low,
-            high: frame.ci_high,
-            psnr,
+        let level = metric.value_at(mode, index).filter(|level| !level.is_nan())?;
+        let samples = |summary: Option<&'a Summary>| summary.map(|s| s.samples.as_slice());
+        let path = match metric.source {
+            Source::Sequence => samples(mode.sequence_at(index)?.frame_ms.as_ref()),
+            _ => None,
+        };
+        Some(FrontPoint {
+            mode: &mode.mode,
+            stalled: mode.stalled,
+            level,
+            rounds: samples(mode.frame_ms.as_ref()),
+            path,
         })
     }
 
-    /// Whether `self` dominates `other`: at least as near the truth and faster beyond the
-    /// intervals, or nearer the truth by more than a tie and as fast.
-    pub fn dominates(&self, other: &FrontPoint) -> bool {
-        let gain = psnr_gain(self.psnr, other.psnr);
-        let faster = self.high < other.low;
-        let inside = |median: f64, of: &FrontPoint| of.low <= median && median <= of.high;
-        let as_fast = inside(self.median, other) && inside(other.median, self);
-        gain >= -PSNR_TIE_DB && (faster || (as_fast && gain > PSNR_TIE_DB))
+    /// The log ratios of `self`'s frame times to `other`'s, pair by pair: along the path where
+    /// both have one, else round by round.
+    fn log_ratios(&self, other: &FrontPoint) -> Vec<f64> {
+        let (own, theirs) = match (self.path.zip(other.path), self.rounds.zip(other.rounds)) {
+            (Some(path), _) => path,
+            (None, Some(rounds)) => rounds,
+            (None, None) => return Vec::new(),
+        };
+        own.iter().zip(theirs).map(|(a, b)| (a / b).ln()).collect()
+    }
+
+    /// Whether `self` is faster than `other` with confidence, pair by pair (see
+    /// [`Self::log_ratios`]).
+    pub fn faster_than(&self, other: &FrontPoint) -> bool {
+        self.pace(other).0 == Pace::Faster
+    }
+
+    /// Whether `self` is faster or slower than `other` with confidence, and the median of the
+    /// ratios of their times.
+    fn pace(&self, other: &FrontPoint) -> (Pace, f64) {
+        let Some(ratios) = Summary::new(self.log_ratios(other)) else {
+            return (Pace::Untold, f64::NAN);
+        };
+        let sure = ratios.ci_level >= TIME_CONFIDENCE;
+        let pace = match () {
+            _ if sure && ratios.ci_high < 0.0 => Pace::Faster,
+            _ if sure && ratios.ci_low > 0.0 => Pace::Slower,
+            _ => Pace::Untold,
+        };
+        (pace, ratios.median.exp())
     }
 }
 
-/// `a − b` in dB, with equal infinities (two images equal to the truth) a tie.
-fn psnr_gain(a: f64, b: f64) -> f64 {
+/// `a − b`, with equal infinities (two images equal to the truth) a tie.
+fn gain(a: f64, b: f64) -> f64 {
     if a == b { 0.0 } else { a - b }
 }
 
-/// Sets each mode's `front` among the modes of its scene with the same stall. A mode without
-/// a frame time or a PSNR against the truth (failed, or no truth) has no place and takes no
-/// part.
+/// The verdict of every point on the front of a metric with margin `margin`, among the points
+/// of the same stall; `None` where there is no point.
+pub fn decide(points: &[Option<FrontPoint>], margin: f64) -> Vec<Option<FrontPlace>> {
+    points.iter().map(|own| own.map(|own| verdict(&own, points, margin))).collect()
+}
+
+fn verdict(own: &FrontPoint, points: &[Option<FrontPoint>], margin: f64) -> FrontPlace {
+    let (mut ahead, mut untold) = (Vec::new(), Vec::new());
+    for rival in points.iter().flatten() {
+        let gain = gain(rival.level, own.level);
+        if rival.mode == own.mode || rival.stalled != own.stalled || gain < -margin {
+            continue;
+        }
+        let (pace, time_ratio) = rival.pace(own);
+        let entry = Rival { mode: rival.mode.to_string(), time_ratio, gain: Decibels::from_f64(gain) };
+        match pace {
+            Pace::Faster => ahead.push(entry),
+            Pace::Untold => untold.push(entry),
+            Pace::Slower => {}
+        }
+    }
+    let (verdict, mut against) = match (ahead.is_empty(), untold.is_empty()) {
+        (false, _) => (FrontVerdict::Behind, ahead),
+        (true, false) => (FrontVerdict::Undecided, untold),
+        (true, true) => (FrontVerdict::Front, Vec::new()),
+    };
+    against.sort_by(|a, b| {
+        b.gain.value().total_cmp(&a.gain.value()).then(a.time_ratio.total_cmp(&b.time_ratio))
+    });
+    FrontPlace { verdict, against }
+}
+
+/// Sets each mode's places on its scene's fronts: one per metric with a front margin, along
+/// each of the scene's sequences for a path's metric. A mode without frame times or a value of
+/// a front's metric (failed, no truth, no path) has no place on it and takes no part.
 pub fn place(modes: &mut [ModeRecord]) {
-    let points: Vec<Option<FrontPoint>> = modes.iter().map(FrontPoint::of).collect();
-    let places: Vec<Option<FrontPlace>> = (0..modes.len())
-        .map(|i| {
-            let own = points[i]?;
-            let mut dominated_by: Vec<(Dominator, f64)> = (0..modes.len())
-                .filter(|&j| j != i && modes[j].stalled == modes[i].stalled)
-                .filter_map(|j| {
-                    let other = points[j]?;
-                    other.dominates(&own).then(|| {
-                        let dominator = Dominator {
-                            mode: modes[j].mode.clone(),
-                            time_ratio: other.median / own.median,
-                            psnr_gain_db: Decibels::from_f64(psnr_gain(other.psnr, own.psnr)),
-                        };
-                        (dominator, other.median)
-                    })
-                })
-                .collect();
-            dominated_by.sort_by(|(a, a_time), (b, b_time)| {
-                let gain = |d: &Dominator| d.psnr_gain_db.value();
-                gain(b).total_cmp(&gain(a)).then(a_time.total_cmp(b_time))
-            });
-            let dominated_by: Vec<Dominator> = dominated_by.into_iter().map(|(d, _)| d).collect();
-            Some(FrontPlace { on_front: dominated_by.is_empty(), dominated_by })
-        })
-        .collect();
-    for (mode, place) in modes.iter_mut().zip(places) {
-        mode.front = place;
+    let sequences = modes.iter().map(|mode| mode.sequences.len()).max().unwrap_or(0);
+    let mut places: Vec<BTreeMap<String, FrontPlace>> = vec![BTreeMap::new(); modes.len()];
+    for metric in METRICS.iter() {
+        let Some(margin) = metric.front_margin else { continue };
+        for index in 0..metric.values_in(sequences) {
+            let points: Vec<Option<FrontPoint>> =
+                modes.iter().map(|mode| FrontPoint::of(mode, metric, index)).collect();
+            for (own, place) in places.iter_mut().zip(decide(&points, margin)) {
+                own.extend(place.map(|place| (metric.key(index), place)));
+            }
+        }
+    }
+    for (mode, fronts) in modes.iter_mut().zip(places) {
+        mode.fronts = fronts;
     }
 }
 
@@ -97,52 +164,94 @@ pub fn place(modes: &mut [ModeRecord]) {
 mod tests {
     use super::*;
 
-    fn point(median: f64, spread: f64, psnr: f64) -> FrontPoint {
-        FrontPoint { median, low: median - spread, high: median + spread, psnr }
+    /// A point with frame times `rounds` (ms).
+    fn point<'a>(mode: &'a str, level: f64, rounds: &'a [f64]) -> Option<FrontPoint<'a>> {
+        Some(FrontPoint { mode, stalled: false, level, rounds: Some(rounds), path: None })
+    }
+
+    fn verdicts(points: &[Option<FrontPoint>], margin: f64) -> Vec<FrontVerdict> {
+        decide(points, margin).into_iter().map(|place| place.unwrap().verdict).collect()
+    }
+
+    /// Five rounds whose times drift together between rounds by ±20 %, as a busy machine's do.
+    fn drifting(ms: f64) -> Vec<f64> {
+        [1.0, 1.2, 0.8, 1.1, 0.9].iter().map(|drift| ms * drift).collect()
     }
 
     #[test]
-    fn faster_and_as_near_dominates_but_overlapping_times_need_a_real_gain() {
-        let slow = point(20.0, 1.0, 40.0);
-        // Faster beyond the intervals, PSNR tied: dominates.
-        assert!(point(10.0, 1.0, 39.97).dominates(&slow));
-        // Faster but further from the truth: does not.
-        assert!(!point(10.0, 1.0, 39.0).dominates(&slow));
-        // As fast (each median inside the other's interval): only a gain beyond the tie
-        // dominates, whichever median is lower.
-        assert!(!point(19.5, 1.0, 40.04).dominates(&slow));
-        assert!(point(20.5, 1.0, 41.0).dominates(&slow));
-        // Overlapping intervals with medians apart decide nothing, either way round.
-        let wide = point(26.0, 6.0, 41.0);
-        assert!(!wide.dominates(&slow) && !slow.dominates(&wide));
-        // Nearer the truth but slower beyond the intervals: does not.
-        assert!(!point(30.0, 1.0, 50.0).dominates(&slow));
-        // Equal to the truth twice over is a tie, not a gain.
-        assert!(!point(19.0, 2.0, f64::INFINITY).dominates(&point(20.0, 2.0, f64::INFINITY)));
-        assert!(point(10.0, 1.0, f64::INFINITY).dominates(&point(20.0, 1.0, f64::INFINITY)));
+    fn a_mode_one_percent_faster_and_a_thousandth_worse_makes_no_level_of_its_own() {
+        // Faster in every round by 1 %: the slower one, no better beyond the margin, is behind.
+        let (slow, fast) = (drifting(50.0), drifting(49.5));
+        let places = decide(&[point("slow", 9.001, &slow), point("fast", 9.0, &fast)], 0.1);
+        assert_eq!(places[0].as_ref().unwrap().describe("JOD"), "behind fast (-0.00 JOD, 0.99× time)");
+        assert_eq!(places[1].as_ref().unwrap().verdict, FrontVerdict::Front);
+        // The same 1 % within noise that swaps their order between rounds: neither decided, and
+        // neither is a level the other is not.
+        let noisy = [50.0, 59.0, 41.0, 56.0, 44.0];
+        let places = decide(&[point("slow", 9.001, &slow), point("fast", 9.0, &noisy)], 0.1);
+        let undecided = places[0].as_ref().unwrap();
+        assert_eq!(undecided.verdict, FrontVerdict::Undecided);
+        assert_eq!(undecided.against[0].mode, "fast");
+        assert_eq!(places[1].as_ref().unwrap().verdict, FrontVerdict::Undecided);
     }
 
-    /// An exact image (the `empty` scene's deferred-1x1) dominating an inexact one is an
-    /// infinite gain, which JSON writes as "inf" and reads back.
     #[test]
-    fn an_infinite_gain_survives_the_record() {
-        let place = FrontPlace {
-            on_front: false,
-            dominated_by: vec![Dominator {
-                mode: "deferred-1x1".into(),
-                time_ratio: 0.4,
-                psnr_gain_db: Decibels::from_f64(psnr_gain(f64::INFINITY, 63.3)),
-            }],
+    fn a_better_mode_beyond_the_margin_is_no_rival_of_a_faster_one() {
+        let (cheap, dear) = (drifting(20.0), drifting(60.0));
+        // 0.3 JOD better and slower in every round: both on the front.
+        let points = [point("cheap", 8.0, &cheap), point("dear", 8.3, &dear)];
+        assert_eq!(verdicts(&points, 0.1), [FrontVerdict::Front, FrontVerdict::Front]);
+        // Within the margin, the dear one is behind the cheap one.
+        let points = [point("cheap", 8.25, &cheap), point("dear", 8.3, &dear)];
+        assert_eq!(verdicts(&points, 0.1), [FrontVerdict::Front, FrontVerdict::Behind]);
+    }
+
+    #[test]
+    fn the_drift_between_rounds_does_not_hide_a_faster_mode() {
+        // Intervals of the medians overlap ([40, 60] against [36, 54]), yet the second is 10 %
+        // faster in every round.
+        let (a, b) = (drifting(50.0), drifting(45.0));
+        assert_eq!(
+            verdicts(&[point("a", 40.0, &a), point("b", 40.0, &b)], 0.25),
+            [FrontVerdict::Behind, FrontVerdict::Front]
+        );
+    }
+
+    #[test]
+    fn fewer_than_five_rounds_decide_nothing_and_a_point_is_not_its_own_rival() {
+        let (a, b) = ([50.0, 51.0, 52.0, 50.5], [30.0, 31.0, 30.5, 30.2]);
+        assert_eq!(
+            verdicts(&[point("a", 40.0, &a), point("b", 40.0, &b)], 0.25),
+            [FrontVerdict::Undecided; 2]
+        );
+        assert_eq!(verdicts(&[point("a", 40.0, &drifting(50.0))], 0.25), [FrontVerdict::Front]);
+    }
+
+    #[test]
+    fn stalls_are_apart_and_exact_images_tie() {
+        let (a, b) = (drifting(50.0), drifting(20.0));
+        let mut stalled = point("b-stalled", 40.0, &b).unwrap();
+        stalled.stalled = true;
+        assert_eq!(verdicts(&[point("a", 40.0, &a), Some(stalled)], 0.25), [FrontVerdict::Front; 2]);
+        // Two images equal to the truth are one quality; the faster puts the slower behind.
+        let exact = [point("a", f64::INFINITY, &a), point("b", f64::INFINITY, &b)];
+        let places = decide(&exact, 0.25);
+        assert_eq!(places[0].as_ref().unwrap().describe("dB"), "behind b (+0.00 dB, 0.40× time)");
+        // An exact image against an inexact one is an infinite gain.
+        let places = decide(&[point("a", 30.0, &a), point("b", f64::INFINITY, &b)], 0.25);
+        assert_eq!(places[0].as_ref().unwrap().describe("dB"), "behind b (+inf dB, 0.40× time)");
+    }
+
+    #[test]
+    fn along_a_path_the_frames_pair_where_both_timed_the_path() {
+        let (still_a, still_b) = (drifting(50.0), drifting(55.0));
+        let (path_a, path_b) = (drifting(50.0), drifting(40.0));
+        let along = |mode, rounds, path| {
+            Some(FrontPoint { mode, stalled: false, level: 9.0, rounds: Some(rounds), path })
         };
-        let json = serde_json::to_string(&place).unwrap();
-        assert!(json.contains(r#""psnr_gain_db":"inf""#), "{json}");
-        assert_eq!(serde_json::from_str::<FrontPlace>(&json).unwrap(), place);
-        assert_eq!(place.describe(), "behind deferred-1x1 (+inf dB, 0.40× time)");
-    }
-
-    #[test]
-    fn a_point_never_dominates_itself() {
-        let p = point(10.0, 1.0, 40.0);
-        assert!(!p.dominates(&p));
+        let points = [along("a", &still_a, Some(&path_a[..])), along("b", &still_b, Some(&path_b[..]))];
+        assert_eq!(verdicts(&points, 0.1), [FrontVerdict::Behind, FrontVerdict::Front], "the path's times");
+        let points = [along("a", &still_a, Some(&path_a[..])), along("b", &still_b, None)];
+        assert_eq!(verdicts(&points, 0.1), [FrontVerdict::Front, FrontVerdict::Behind], "the still's");
     }
 }

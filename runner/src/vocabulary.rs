@@ -114,6 +114,11 @@ const JOD: Rule = Rule::Level { unit: "JOD" };
 /// gate's own tolerance for JOD across platforms. Modes closer than this are one answer.
 pub const JOD_MARGIN: f64 = 0.1;
 
+/// The smallest difference of PSNR against the truth that the front reads as an order: the
+/// gate's PSNR tolerance across platforms, the change a second machine may show on the same
+/// frames (6 % of the MSE). Modes closer than this are one quality, as [`JOD_MARGIN`] argues.
+pub const PSNR_MARGIN_DB: f64 = 0.25;
+
 /// How the gate compares a metric with its baseline.
 #[derive(Debug, Clone, Copy)]
 pub struct Gate {
@@ -150,8 +155,9 @@ pub struct Plot {
 /// Which modes a plot draws on its front.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Front {
-    /// The front run.json records (by PSNR against the truth, with intervals).
-    Recorded,
+    /// The modes that run.json records on the front of the metric of this id (decided with
+    /// confidence, see `front.rs`); along the plot's sequence for a sequence's metric.
+    Recorded(&'static str),
     /// The modes that no faster mode of the same stall beats, by medians.
     Medians,
     /// None: the metric alone does not say which mode is better.
@@ -201,6 +207,9 @@ pub struct Metric {
     /// How a value reads among the details of a ranking's row (`PSNR 36.00 dB`); `None`: not
     /// among them.
     pub brief: Option<fn(f64) -> String>,
+    /// Where run.json records the metric's error-against-run-time front (`front.rs`): the
+    /// margin, in its unit, within which two of its values are one quality. A level's only.
+    pub front_margin: Option<f64>,
 }
 
 /// The still's PSNR against the truth: what the still's ranking orders modes by.
@@ -213,6 +222,7 @@ pub const PSNR_VS_TRUTH: Metric = Metric {
     column: Some(Column { table: Table::Still, header: "PSNR vs truth", cell: decibels }),
     plot: None,
     brief: Some(|db| format!("PSNR {} dB", decibels(db))),
+    front_margin: Some(PSNR_MARGIN_DB),
 };
 
 /// The still's FLIP against the truth.
@@ -231,6 +241,7 @@ pub const FLIP_VS_TRUTH: Metric = Metric {
         front: Front::Medians,
     }),
     brief: Some(|flip| format!("FLIP {flip:.4}")),
+    front_margin: None,
 };
 
 /// The still's ColorVideoVDP score against the truth, in JOD: what the still's ranking orders
@@ -247,9 +258,10 @@ pub const JOD_VS_TRUTH: Metric = Metric {
         axis: "JOD below 10 against the truth (log)",
         axis_value: jod_loss,
         file: "front-jod",
-        front: Front::Medians,
+        front: Front::Recorded("jod_vs_truth"),
     }),
     brief: None,
+    front_margin: Some(JOD_MARGIN),
 };
 
 /// ColorVideoVDP along a camera path against the truth's frames: what a path's ranking orders
@@ -266,9 +278,10 @@ pub const SEQUENCE_JOD_VS_TRUTH: Metric = Metric {
         axis: "JOD below 10 along the camera path (log)",
         axis_value: jod_loss,
         file: "front-jod-path",
-        front: Front::Medians,
+        front: Front::Recorded("sequence_jod_vs_truth"),
     }),
     brief: None,
+    front_margin: Some(JOD_MARGIN),
 };
 
 /// The mean PSNR along a camera path.
@@ -281,6 +294,7 @@ pub const SEQUENCE_PSNR_VS_TRUTH: Metric = Metric {
     column: Some(Column { table: Table::Path, header: "PSNR along the path", cell: decibels }),
     plot: None,
     brief: Some(|db| format!("PSNR {} dB", decibels(db))),
+    front_margin: None,
 };
 
 /// Every metric, in the order of the report's columns within each table (the gate checks them
@@ -295,6 +309,7 @@ pub const METRICS: [Metric; 17] = [
         column: Some(Column { table: Table::Still, header: "samples %", cell: one_decimal }),
         plot: None,
         brief: None,
+        front_margin: None,
     },
     Metric {
         id: "mse_vs_truth",
@@ -312,9 +327,11 @@ pub const METRICS: [Metric; 17] = [
             axis: "MSE against the truth ×1e-5 (log)",
             axis_value: |v| v * 1e5,
             file: "front",
-            front: Front::Recorded,
+            // PSNR is MSE's on a log scale: one order, one front.
+            front: Front::Recorded("psnr_vs_truth"),
         }),
         brief: None,
+        front_margin: None,
     },
     Metric {
         id: "psnr_vs_reference",
@@ -325,6 +342,7 @@ pub const METRICS: [Metric; 17] = [
         column: Some(Column { table: Table::Still, header: "PSNR vs ref", cell: decibels }),
         plot: None,
         brief: None,
+        front_margin: None,
     },
     PSNR_VS_TRUTH,
     JOD_VS_TRUTH,
@@ -342,6 +360,7 @@ pub const METRICS: [Metric; 17] = [
         column: Some(Column { table: Table::Still, header: "SSIM vs truth", cell: four_decimals }),
         plot: None,
         brief: None,
+        front_margin: None,
     },
     Metric {
         id: "mse_vs_reference",
@@ -352,6 +371,7 @@ pub const METRICS: [Metric; 17] = [
         column: None,
         plot: None,
         brief: None,
+        front_margin: None,
     },
     Metric {
         id: "sequence_shaded_percent",
@@ -362,6 +382,7 @@ pub const METRICS: [Metric; 17] = [
         column: Some(Column { table: Table::Path, header: "samples %", cell: one_decimal }),
         plot: None,
         brief: None,
+        front_margin: None,
     },
     SEQUENCE_JOD_VS_TRUTH,
     SEQUENCE_PSNR_VS_TRUTH,
@@ -374,6 +395,7 @@ pub const METRICS: [Metric; 17] = [
         column: Some(Column { table: Table::Path, header: "FLIP along the path", cell: four_decimals }),
         plot: None,
         brief: Some(|flip| format!("FLIP {flip:.4}")),
+        front_margin: None,
     },
     Metric {
         // An error of squared code values, as MSE is: the MSE tolerance.
@@ -396,6 +418,7 @@ pub const METRICS: [Metric; 17] = [
             front: Front::None,
         }),
         brief: Some(|v| format!("flicker {:.2}e-4", v * 1e4)),
+        front_margin: None,
     },
     Metric {
         // What lag costs where history cannot help: an error of squared code values, as MSE is.
@@ -411,6 +434,7 @@ pub const METRICS: [Metric; 17] = [
         }),
         plot: None,
         brief: Some(|v| format!("disoccluded MSE {:.2}e-3", v * 1e3)),
+        front_margin: None,
     },
     Metric {
         // Without motion compensation it rewards lag and blur: gated, not shown.
@@ -422,6 +446,7 @@ pub const METRICS: [Metric; 17] = [
         column: None,
         plot: None,
         brief: None,
+        front_margin: None,
     },
     Metric {
         id: "change_ratio",
@@ -432,6 +457,7 @@ pub const METRICS: [Metric; 17] = [
         column: Some(Column { table: Table::Path, header: "change ratio", cell: two_decimals }),
         plot: None,
         brief: None,
+        front_margin: None,
     },
     Metric {
         id: "count_changes",
@@ -446,6 +472,7 @@ pub const METRICS: [Metric; 17] = [
         }),
         plot: None,
         brief: None,
+        front_margin: None,
     },
 ];
 
@@ -454,6 +481,17 @@ impl Metric {
     /// scene's first sequence (the gate's).
     pub fn value(&self, mode: &ModeRecord) -> Option<f64> {
         self.value_at(mode, 0)
+    }
+
+    /// The unit its values are in (`dB`, `JOD`, `relative` for an error), as its gate's rule
+    /// names it.
+    pub fn unit(&self) -> &'static str {
+        self.gate.map_or("", |gate| gate.rule.unit())
+    }
+
+    /// The header of its front's column in a table: `PSNR front`.
+    pub fn front_header(&self) -> String {
+        format!("{} front", self.label.split(' ').next().unwrap_or(self.label))
     }
 
     /// Whether `a` is a better value of this metric than `b`, where the gate has a rule for it.
@@ -525,9 +563,29 @@ pub fn metric(id: &str) -> Option<&'static Metric> {
     METRICS.iter().find(|metric| metric.id == id)
 }
 
+/// The metric and sequence index a key names (`flicker@2`: flicker along the second sequence),
+/// the inverse of [`Metric::key`].
+pub fn keyed(key: &str) -> Option<(&'static Metric, usize)> {
+    let (id, index) = match key.split_once('@') {
+        Some((id, number)) => (id, number.parse::<usize>().ok()?.checked_sub(1)?),
+        None => (key, 0),
+    };
+    Some((metric(id)?, index))
+}
+
 /// The metrics with a column in `table`, in column order.
 pub fn columns(table: Table) -> impl Iterator<Item = (&'static Metric, Column)> {
     METRICS.iter().filter_map(move |m| m.column.filter(|c| c.table == table).map(|c| (m, c)))
+}
+
+/// The metrics whose fronts run.json records and `table` shows: the still's against the truth,
+/// the path's along it.
+pub fn fronts(table: Table) -> impl Iterator<Item = &'static Metric> {
+    let source = match table {
+        Table::Still => Source::Truth,
+        Table::Path => Source::Sequence,
+    };
+    METRICS.iter().filter(move |m| m.front_margin.is_some() && m.source == source)
 }
 
 /// A metric's cell for `mode` (a sequence's metric along the scene's sequence `index`): its
@@ -628,10 +686,44 @@ mod tests {
     fn the_first_plot_is_the_stills_error_and_every_plot_has_a_direction() {
         let plotted: Vec<&Metric> = METRICS.iter().filter(|m| m.plot.is_some()).collect();
         assert_eq!(plotted[0].id, "mse_vs_truth", "the report's first plot, whose absence it reports");
-        assert_eq!(plotted[0].plot.unwrap().front, Front::Recorded, "run.json's front is by the still");
+        let recorded = Front::Recorded("psnr_vs_truth");
+        assert_eq!(plotted[0].plot.unwrap().front, recorded, "run.json's front is by the still");
         for metric in plotted {
             assert!(metric.better(1.0, 2.0).is_some(), "{}: a front needs a direction", metric.id);
+            if let Front::Recorded(id) = metric.plot.unwrap().front {
+                let of = self::metric(id).unwrap();
+                assert!(of.front_margin.is_some(), "{}: {id} records no front", metric.id);
+                assert_eq!(of.source, metric.source, "{}: a front of the same sequence", metric.id);
+            }
         }
+    }
+
+    #[test]
+    fn the_fronts_are_of_levels_psnr_the_papers_and_jod_the_rankings() {
+        let fronts: Vec<&str> = METRICS.iter().filter(|m| m.front_margin.is_some()).map(|m| m.id).collect();
+        assert_eq!(fronts, ["psnr_vs_truth", "jod_vs_truth", "sequence_jod_vs_truth"]);
+        for metric in METRICS.iter().filter(|m| m.front_margin.is_some()) {
+            assert!(
+                matches!(metric.gate.unwrap().rule, Rule::Level { .. }),
+                "{}: a margin of a level",
+                metric.id
+            );
+        }
+    }
+
+    #[test]
+    fn a_key_names_its_metric_and_sequence() {
+        let flicker = metric("flicker").unwrap();
+        assert_eq!(flicker.key(1), "flicker@2");
+        assert_eq!(keyed("flicker@2").map(|(m, i)| (m.id, i)), Some(("flicker", 1)));
+        assert_eq!(keyed("psnr_vs_truth").map(|(m, i)| (m.id, i)), Some(("psnr_vs_truth", 0)));
+        assert!(keyed("flicker@0").is_none() && keyed("flicker@x").is_none() && keyed("nothing").is_none());
+    }
+
+    #[test]
+    fn the_psnr_margin_is_the_gates_tolerance_across_platforms() {
+        let across = crate::gate::Tolerances::default().quality(false).get(Tolerance::PsnrDb);
+        assert_eq!(PSNR_MARGIN_DB, across);
     }
 
     #[test]

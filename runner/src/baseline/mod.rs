@@ -29,9 +29,9 @@ use crate::gate::Tolerances;
 use crate::inputs::SceneInputs;
 use crate::metrics::SampleStats;
 use crate::plan::Tier;
-use crate::record::{ModeRecord, Platform, RunRecord, RunSettings, SceneRecord};
+use crate::record::{FrontVerdict, ModeRecord, Platform, RunRecord, RunSettings, SceneRecord};
 use crate::stats::Rounds;
-use crate::vocabulary::{METRICS, Metric, Source};
+use crate::vocabulary::{METRICS, Metric, PSNR_VS_TRUTH, Source};
 use crate::{fs, json};
 
 pub const BASELINE_SCHEMA: &str = "aabench.baseline/2";
@@ -119,14 +119,40 @@ pub struct BlessedMode {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BlessedTimes {
-    /// Whether it was on the scene's error-against-run-time front (which its time decides as
-    /// much as its error).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub on_front: Option<bool>,
+    /// What each of the scene's error-against-run-time fronts decided of it, by the key of the
+    /// front's metric (its time decides that as much as its error). Baselines from before hold
+    /// whether it was on the PSNR front, as `on_front`.
+    #[serde(
+        default,
+        alias = "on_front",
+        deserialize_with = "verdicts_or_flag",
+        skip_serializing_if = "BTreeMap::is_empty"
+    )]
+    pub fronts: BTreeMap<String, FrontVerdict>,
     /// Each blessed process's frame times in milliseconds, round by round, to the nanosecond
     /// the clock resolves: what the time rules pool and pair. Absent where a process has none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub frame_ms: Option<Vec<Vec<f64>>>,
+}
+
+/// The verdicts by key, or (in baselines from before) whether the mode was on the PSNR front.
+fn verdicts_or_flag<'de, D: Deserializer<'de>>(
+    deserializer: D,
+) -> Result<BTreeMap<String, FrontVerdict>, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Stored {
+        Keyed(BTreeMap<String, FrontVerdict>),
+        Flag(bool),
+    }
+    Ok(match Option::<Stored>::deserialize(deserializer)? {
+        Some(Stored::Keyed(verdicts)) => verdicts,
+        Some(Stored::Flag(on)) => {
+            let verdict = if on { FrontVerdict::Front } else { FrontVerdict::Behind };
+            BTreeMap::from([(PSNR_VS_TRUTH.id.to_string(), verdict)])
+        }
+        None => BTreeMap::new(),
+    })
 }
 
 /// The sample statistics of an adaptive mode beside `shaded_percent` (see [`SampleStats`]).
@@ -248,8 +274,8 @@ impl Baseline {
                         Some(record.frames(&mode.mode)?.iter().copied().map(to_the_nanosecond).collect())
                     })
                     .collect();
-                let on_front = mode.front.as_ref().map(|front| front.on_front);
-                (mode.mode.clone(), BlessedTimes { on_front, frame_ms })
+                let fronts = mode.fronts.iter().map(|(key, place)| (key.clone(), place.verdict)).collect();
+                (mode.mode.clone(), BlessedTimes { fronts, frame_ms })
             })
             .collect();
         Baseline {

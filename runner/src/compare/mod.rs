@@ -34,7 +34,8 @@ pub use verdict::{
 };
 
 use crate::baseline::{Baseline, BaselineSet};
-use crate::record::{ModeRecord, RunRecord, SceneRecord, Status};
+use crate::record::{FrontVerdict, ModeRecord, RunRecord, SceneRecord, Status};
+use crate::vocabulary::{self, Source};
 use mode::ModeContext;
 use verdict::is_time_metric;
 
@@ -408,24 +409,52 @@ fn input_notes(scene: &SceneRecord, baseline: &Baseline) -> Vec<String> {
     notes
 }
 
-/// Notes on modes that left or joined the scene's error-against-run-time front since the
-/// baseline: informational, since the front moves with any mode's time or error.
+/// Notes on modes whose place on one of the scene's error-against-run-time fronts was decided
+/// both in the baseline and now, and differently: informational, since a front moves with any
+/// mode's time or error. A place undecided in either says nothing.
 fn front_notes(scene: &SceneRecord, baseline: &Baseline) -> Vec<String> {
-    scene
-        .modes
-        .iter()
-        .filter_map(|mode| {
-            let now = mode.front.as_ref()?;
-            let then = baseline.times.get(&mode.mode)?.on_front?;
-            match (then, now.on_front) {
-                (true, false) => {
-                    Some(format!("{}: {} left the front: {}", scene.name, mode.mode, now.describe()))
+    let mut notes = Vec::new();
+    for mode in &scene.modes {
+        let Some(then) = baseline.times.get(&mode.mode) else { continue };
+        for (key, now) in &mode.fronts {
+            let Some((metric, index)) = vocabulary::keyed(key) else { continue };
+            let along = match scene.sequences.get(index).filter(|_| metric.source == Source::Sequence) {
+                Some(sequence) => format!(" at {}", sequence.speed()),
+                None => String::new(),
+            };
+            let front = format!("the front of {}{along}", metric.label);
+            match front_change(then.fronts.get(key).copied(), now.verdict) {
+                Some(FrontChange::Left) => notes.push(format!(
+                    "{}: {} left {front}: {}",
+                    scene.name,
+                    mode.mode,
+                    now.describe(metric.unit())
+                )),
+                Some(FrontChange::Joined) => {
+                    notes.push(format!("{}: {} joined {front}", scene.name, mode.mode))
                 }
-                (false, true) => Some(format!("{}: {} joined the front", scene.name, mode.mode)),
-                _ => None,
+                None => {}
             }
-        })
-        .collect()
+        }
+    }
+    notes
+}
+
+/// A place on a front that both a baseline and a run decided, and differently.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum FrontChange {
+    Left,
+    Joined,
+}
+
+/// What a note says of a place that was `then` and is `now`: nothing where either is undecided
+/// (the rounds did not settle it, so its change is no news) or where the baseline had none.
+fn front_change(then: Option<FrontVerdict>, now: FrontVerdict) -> Option<FrontChange> {
+    match (then?, now) {
+        (FrontVerdict::Front, FrontVerdict::Behind) => Some(FrontChange::Left),
+        (FrontVerdict::Behind, FrontVerdict::Front) => Some(FrontChange::Joined),
+        _ => None,
+    }
 }
 
 fn status_check(scene: &str, mode: &str, outcome: Outcome, detail: &str) -> Check {
@@ -533,6 +562,19 @@ fn sequence_lengths(scene: &SceneRecord, then: &Baseline) -> Vec<Check> {
 #[cfg(test)]
 mod tests {
     use super::time::process_spread;
+    use super::{FrontChange, FrontVerdict, front_change};
+
+    #[test]
+    fn only_a_place_decided_twice_and_differently_is_a_note() {
+        use FrontVerdict::{Behind, Front, Undecided};
+        assert_eq!(front_change(Some(Front), Behind), Some(FrontChange::Left));
+        assert_eq!(front_change(Some(Behind), Front), Some(FrontChange::Joined));
+        for (then, now) in
+            [(Some(Front), Undecided), (Some(Undecided), Front), (Some(Behind), Behind), (None, Front)]
+        {
+            assert_eq!(front_change(then, now), None, "{then:?} then, {now:?} now");
+        }
+    }
 
     #[test]
     fn the_process_spread_is_the_farthest_process_median_from_the_pooled_one() {

@@ -2,19 +2,23 @@
 //! It is rewritten atomically after every scene, so a killed run leaves what finished.
 
 use aabench_renderer::{DisplayImage, PlatformInfo};
+use std::collections::BTreeMap;
+
 use serde::{Deserialize, Serialize};
 
 use crate::gate::Tolerances;
 use crate::inputs::SceneInputs;
 use crate::machine::Machine;
-use crate::metrics::{Decibels, FrameChecks, Quality, SampleStats};
+use crate::metrics::{FrameChecks, Quality, SampleStats};
 pub use crate::plan::Shard;
 use crate::plan::Tier;
 use crate::repetitions::{Confidence, Stop};
 use crate::stats::{Rounds, Summary};
 use crate::truth::TruthRecord;
 
+mod front;
 mod sequence;
+pub use front::{FrontPlace, FrontVerdict, Rival};
 pub use sequence::{FlickerRegion, GhostFrame, Ghosting, ModeSequence, SequenceRecord};
 
 /// Version 2: the ground truth is an 8×8 render of its own (`truth`), scenes record their
@@ -256,10 +260,16 @@ pub struct ModeRecord {
     /// Against the ground truth (`truth-8x8`).
     pub vs_ground_truth: Option<Quality>,
     pub adaptive: Option<AdaptiveCost>,
-    /// Its place against the scene's error-against-run-time front, among the modes with the
-    /// same stall (absent where it has no frame time or no PSNR against the truth).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub front: Option<FrontPlace>,
+    /// Its places on the scene's error-against-run-time fronts, among the modes with the same
+    /// stall, by the key of the front's metric (none where it has no frame time or no value of
+    /// the metric). Runs from before hold one, on the PSNR front, as `front`.
+    #[serde(
+        default,
+        alias = "front",
+        deserialize_with = "front::keyed_or_legacy",
+        skip_serializing_if = "BTreeMap::is_empty"
+    )]
+    pub fronts: BTreeMap<String, FrontPlace>,
     /// The mode's compiled pass graph: passes run and the allocations they share.
     #[serde(default)]
     pub graph: Option<GraphRecord>,
@@ -284,6 +294,16 @@ impl ModeRecord {
     /// the gate holds to its baseline.
     pub fn is_paper(&self) -> bool {
         is_paper(&self.mode)
+    }
+
+    /// Its place on the front of the metric of key `key` (`psnr_vs_truth`), where it has one.
+    pub fn front(&self, key: &str) -> Option<&FrontPlace> {
+        self.fronts.get(key)
+    }
+
+    /// Whether the front of key `key` decided it is on the front.
+    pub fn on_front(&self, key: &str) -> bool {
+        self.front(key).is_some_and(|place| place.verdict == FrontVerdict::Front)
     }
 
     /// Its sequence along the scene's first (the gate's) sequence, where it has one.
@@ -479,46 +499,6 @@ pub fn fnv1a(parts: &[&[u8]]) -> String {
         hash = hash.wrapping_mul(0x0100_0000_01b3);
     }
     format!("{hash:016x}")
-}
-
-/// A mode's place against its scene's front.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FrontPlace {
-    /// No mode of the scene with the same stall dominates it.
-    pub on_front: bool,
-    /// The modes that dominate it, the most dominating (largest PSNR gain, then fastest) first.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub dominated_by: Vec<Dominator>,
-}
-
-/// A mode that is faster and at least as near the truth, or as fast and nearer (see
-/// `front::FrontPoint::dominates`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Dominator {
-    pub mode: String,
-    /// Its median frame time over the dominated mode's: below 1 where it is faster.
-    pub time_ratio: f64,
-    /// Its PSNR against the truth less the dominated mode's, in dB (at least minus the front
-    /// module's PSNR tie): infinite where the dominator is exact and the mode is not.
-    pub psnr_gain_db: Decibels,
-}
-
-impl FrontPlace {
-    /// One phrase: `on the front`, or the first dominator with its margins.
-    pub fn describe(&self) -> String {
-        match self.dominated_by.first() {
-            None => "on the front".into(),
-            Some(d) => {
-                let others = match self.dominated_by.len() - 1 {
-                    0 => String::new(),
-                    1 => " and 1 more".into(),
-                    n => format!(" and {n} more"),
-                };
-                let gain = d.psnr_gain_db.value();
-                format!("behind {} ({gain:+.2} dB, {:.2}× time){others}", d.mode, d.time_ratio)
-            }
-        }
-    }
 }
 
 /// A list, or (in runs from before) one value or nothing in its place.

@@ -10,6 +10,7 @@
 use std::fmt::Write;
 
 use super::html::escape;
+use crate::front::FrontPoint;
 use crate::record::{ModeRecord, ModeSequence, RunRecord, SceneRecord};
 use crate::stats::Summary;
 use crate::vocabulary::{JOD_MARGIN, JOD_VS_TRUTH, METRICS, Metric, SEQUENCE_JOD_VS_TRUTH, Source};
@@ -69,6 +70,14 @@ impl Basis {
         measured.filter(|(level, _)| level.is_finite())
     }
 
+    /// The sequence this basis ranks modes along (0 for the still).
+    fn index(self) -> usize {
+        match self {
+            Basis::Still => 0,
+            Basis::Path(index) => index,
+        }
+    }
+
     /// The mode's sequence this basis ranks it by.
     fn sequence(self, mode: &ModeRecord) -> Option<&ModeSequence> {
         match self {
@@ -80,7 +89,7 @@ impl Basis {
 
 /// A row of a ranking: the cheapest mode of a class of modes that a viewer could hardly tell
 /// apart, with its own level and median frame time, and the modes of the class that are as
-/// fast (their medians inside its interval).
+/// cheap (no mode of the class is faster than them with confidence).
 #[derive(Debug, Clone)]
 pub struct Row<'a> {
     pub level: f64,
@@ -89,32 +98,50 @@ pub struct Row<'a> {
     pub as_fast: Vec<&'a ModeRecord>,
 }
 
+/// A mode a ranking may list: its level and time on the basis, and its point for comparing
+/// times round by round.
+#[derive(Debug, Clone, Copy)]
+struct Candidate<'a> {
+    level: f64,
+    ms: f64,
+    mode: &'a ModeRecord,
+    point: FrontPoint<'a>,
+}
+
+/// The unstalled modes measured on `basis`, in the plan's order.
+fn candidates(scene: &SceneRecord, basis: Basis) -> Vec<Candidate<'_>> {
+    (scene.modes.iter())
+        .filter(|mode| !mode.stalled)
+        .filter_map(|mode| {
+            let (level, time) = basis.measure(mode)?;
+            let point = FrontPoint::of(mode, basis.metric(), basis.index())?;
+            Some(Candidate { level, ms: time.median, mode, point })
+        })
+        .collect()
+}
+
 /// The ranking on `basis`, cheapest first, built from the top: every unstalled mode within
 /// [`JOD_MARGIN`] of the best is one quality, named by its cheapest mode (the answer); then the
-/// same among the modes that are cheaper than that one and below that quality; and so on. From
-/// row to row the level and the time rise, and a mode 1 % faster and 0.001 JOD worse than
-/// another makes no row of its own; the last row is the answer.
+/// same among the modes that are faster than that one with confidence and below that quality;
+/// and so on. Times are compared round by round, as the fronts compare them (`front.rs`): the
+/// cheapest of a quality are the modes none of it is faster than, and where the rounds cannot
+/// tell several apart, the first in the plan's order (the simpler technique: a reference
+/// before adaptive, the paper's adaptive before its variants) names the row and the others
+/// stand beside it as `≈`. From row to row the level and the time rise, and a mode 1 % faster
+/// and 0.001 JOD worse than another makes no row of its own; the last row is the answer.
 pub fn ranking(scene: &SceneRecord, basis: Basis) -> Vec<Row<'_>> {
-    let mut left: Vec<(f64, &Summary, &ModeRecord)> = scene
-        .modes
-        .iter()
-        .filter(|m| !m.stalled)
-        .filter_map(|m| basis.measure(m).map(|(level, time)| (level, time, m)))
-        .collect();
+    let mut left = candidates(scene, basis);
     let mut rows = Vec::new();
-    while let Some(top) = left.iter().map(|c| c.0).max_by(f64::total_cmp) {
-        let class: Vec<&(f64, &Summary, &ModeRecord)> =
-            left.iter().filter(|c| within_margin(c.0, top)).collect();
-        let Some(&&(level, time, mode)) = class.iter().min_by(|a, b| a.1.median.total_cmp(&b.1.median))
-        else {
-            break;
-        };
-        let as_fast = (class.iter())
-            .filter(|c| c.2.mode != mode.mode && (time.ci_low..=time.ci_high).contains(&c.1.median))
-            .map(|c| c.2)
-            .collect();
-        rows.push(Row { level, mode, ms: time.median, as_fast });
-        left.retain(|c| c.1.median < time.median && !within_margin(c.0, top));
+    while let Some(top) = left.iter().map(|c| c.level).max_by(f64::total_cmp) {
+        let class: Vec<Candidate> = left.iter().filter(|c| within_margin(c.level, top)).copied().collect();
+        let beaten = |c: &Candidate| class.iter().any(|other| other.point.faster_than(&c.point));
+        let cheapest: Vec<Candidate> = class.iter().filter(|c| !beaten(c)).copied().collect();
+        // Paired comparisons need not be transitive: should every mode of the class be beaten
+        // (a cycle), its first names the row.
+        let Some(named) = cheapest.first().or(class.first()).copied() else { break };
+        let as_fast = cheapest.iter().skip(1).map(|c| c.mode).collect();
+        rows.push(Row { level: named.level, mode: named.mode, ms: named.ms, as_fast });
+        left.retain(|c| !within_margin(c.level, top) && c.point.faster_than(&named.point));
     }
     rows.reverse();
     rows
@@ -243,8 +270,9 @@ fn caption(run: &RunRecord) -> String {
          best are one quality (of two modes {JOD_MARGIN} JOD apart, about 53 % of viewers prefer the \
          better). The answer is its cheapest unstalled mode, with its time against deferred-1x1; each \
          line names, from the cheapest up, the cheapest mode of each quality below, among the modes \
-         cheaper than the one above, with its own JOD and frame time (≈: modes whose median lies \
-         inside its interval); the chart draws them, JOD across and time up. The details \
+         faster than the one above with confidence (round by round), with its own JOD and frame time \
+         (≈: modes whose time its rounds cannot tell from its own; the first in the plan's order \
+         names the step); the chart draws them, JOD across and time up. The details \
          add PSNR, mean FLIP, flicker (the change of the error along the truth's motion) and the MSE \
          where the frame before had the surface hidden. The still's ranking leaves TAA out: its still \
          is 16 frames accumulated at one camera.",
@@ -412,21 +440,20 @@ mod tests {
     use super::*;
     use crate::metrics::{Decibels, Quality};
 
-    /// An unstalled mode timed at `ms` whose still scores `jod` against the truth.
+    /// The five rounds' drift of the machine's speed, which every mode of a round shares.
+    const DRIFT: [f64; 5] = [1.0, 1.2, 0.8, 1.1, 0.9];
+
+    /// An unstalled mode timed at `ms` in every round (times the round's drift) whose still
+    /// scores `jod` against the truth.
     fn timed(id: &str, ms: f64, jod: f64) -> ModeRecord {
+        rounds(id, DRIFT.map(|drift| ms * drift), jod)
+    }
+
+    /// An unstalled mode timed `samples`, one a round, whose still scores `jod`.
+    fn rounds(id: &str, samples: [f64; 5], jod: f64) -> ModeRecord {
         let json = serde_json::json!({ "mode": id, "m": 1, "stalled": false, "status": "ok", "passes": [], "images": {} });
         let mut mode: ModeRecord = serde_json::from_value(json).unwrap();
-        // Its interval ±5 % of its median.
-        let (ci_low, ci_high) = (ms * 0.95, ms * 1.05);
-        mode.frame_ms = Some(Summary {
-            samples: vec![ms],
-            median: ms,
-            min: ms,
-            max: ms,
-            ci_low,
-            ci_high,
-            ci_level: 0.95,
-        });
+        mode.frame_ms = Summary::new(samples.to_vec());
         mode.vs_ground_truth = Some(Quality {
             against: "truth-8x8".into(),
             mse: 1e-4,
@@ -453,8 +480,9 @@ mod tests {
         let modes = vec![
             timed("deferred-1x1", 10.0, 8.0),
             timed("msaa-4x", 20.0, 9.62),
-            // Inside msaa-4x's interval and 0.01 JOD below it: as fast, one quality.
-            timed("smaa", 20.5, 9.61),
+            // Faster than msaa-4x in two rounds and slower in three, 0.01 JOD below it: as fast,
+            // one quality.
+            rounds("smaa", [19.5, 25.0, 16.5, 21.5, 18.5], 9.61),
             // 1 % faster and 0.001 JOD worse than reference-2x2: no level of its own.
             timed("adaptive-2x2", 29.7, 9.649),
             timed("reference-2x2", 30.0, 9.65),
@@ -493,5 +521,30 @@ mod tests {
         let far = scene(vec![timed("deferred-1x1", 10.0, 8.0), timed("reference-4x4", 90.0, 9.70)]);
         assert!(answer(&far, Basis::Still).unwrap().describe().ends_with("; the best"));
         assert!(answer(&scene(Vec::new()), Basis::Still).is_none(), "no mode, no answer");
+    }
+
+    #[test]
+    fn a_row_needs_a_mode_faster_in_its_rounds_and_ties_go_to_the_plans_first() {
+        // reference-2x2 is cheaper than msaa-4x by its median, but slower in two of five rounds:
+        // no cheaper choice the rounds can show, so no row; deferred-1x1 is one.
+        let modes = vec![
+            timed("deferred-1x1", 10.0, 8.0),
+            timed("msaa-4x", 20.0, 9.86),
+            rounds("reference-2x2", [19.0, 25.0, 15.0, 23.0, 17.5], 9.64),
+            timed("reference-3x3", 45.0, 9.93),
+        ];
+        let cornell = scene(modes);
+        let named: Vec<&str> =
+            (ranking(&cornell, Basis::Still).iter()).map(|row| row.mode.mode.as_str()).collect();
+        assert_eq!(named, ["deferred-1x1", "msaa-4x"]);
+        // adaptive-4x4 and its variant cost the same within the rounds' noise, one quality: the
+        // first in the plan's order names the row whichever median is lower.
+        let modes = vec![
+            rounds("adaptive-4x4", [40.0, 49.0, 31.0, 45.0, 35.5], 9.30),
+            timed("adaptive-4x4-area", 39.5, 9.31),
+        ];
+        let atrium = scene(modes);
+        let rows = ranking(&atrium, Basis::Still);
+        assert_eq!(recommendation(&rows[0]), "adaptive-4x4 (≈ adaptive-4x4-area) 9.30 JOD, 40.0 ms");
     }
 }

@@ -18,6 +18,7 @@ use super::{
 };
 use crate::record::{ModeRecord, RunRecord, SceneRecord};
 use crate::truth::TRUTH_ID;
+use crate::vocabulary::PSNR_VS_TRUTH;
 
 /// The modes of the overview table, where the run has them: the competitors, then M = 2 and
 /// M = 4 of the reference and the paper's adaptive mode, and the variant nearest the truth.
@@ -79,8 +80,9 @@ fn provenance(out: &mut String, run: &RunRecord) {
          Run `{}`: {} tier, {} after {} warm-up {}, {}; {} · {} · {} ({} cores), {} build; \
          aabench {}. Frame times are medians in ms with their order-statistic intervals; PSNR is in dB \
          against `{TRUTH_ID}` on the display's code values (peak 1; add 48.13 dB for peak 255). \
-         *front*: on the scene's error-against-run-time front (among modes of the same stall), or \
-         behind the faster mode that is nearer the truth.",
+         *PSNR front*, *JOD front*: on the scene's error-against-run-time front by that metric \
+         (among modes of the same stall), behind a mode as good (within the metric's margin) and \
+         faster with confidence, or undecided against one whose time the rounds cannot tell apart.",
         run.run_id,
         run.tier.name(),
         run.run_id,
@@ -118,7 +120,7 @@ pub fn overview(out: &mut String, run: &RunRecord) {
     }
     out.push_str(
         "\nEach cell: frame ms / PSNR against the truth in dB; **bold** where the mode is on the \
-         scene's error-against-run-time front.\n",
+         scene's error-against-run-time front by PSNR, decided with confidence.\n",
     );
 }
 
@@ -148,7 +150,8 @@ fn variants(out: &mut String, run: &RunRecord) {
                     continue;
                 }
                 let place = |mode: Option<&ModeRecord>| {
-                    mode.and_then(|c| c.front.as_ref()).map_or("–".into(), |place| place.describe())
+                    let place = mode.and_then(|c| c.front(PSNR_VS_TRUTH.id));
+                    place.map_or("–".into(), |place| place.describe(PSNR_VS_TRUTH.unit()))
                 };
                 let _ = writeln!(
                     out,
@@ -227,7 +230,7 @@ fn overview_cell(mode: Option<&ModeRecord>) -> String {
         return mode.error.as_ref().map_or("–".into(), |_| "failed".into());
     };
     let cell = format!("{:.1} / {}", frame.median, decibels(mode.vs_ground_truth.as_ref()));
-    if mode.front.as_ref().is_some_and(|place| place.on_front) { format!("**{cell}**") } else { cell }
+    if mode.on_front(PSNR_VS_TRUTH.id) { format!("**{cell}**") } else { cell }
 }
 
 fn scene_table(out: &mut String, scene: &SceneRecord) {

@@ -4,7 +4,7 @@
 use super::plots::Point;
 use crate::record::{ModeRecord, SceneRecord};
 use crate::stats::Summary;
-use crate::vocabulary::{Front, METRICS, Metric, Plot, Source};
+use crate::vocabulary::{self, Front, METRICS, Metric, Plot, Source};
 
 /// One error-against-run-time plot of a scene: a metric of the vocabulary that has a
 /// [`Plot`], along the scene's sequence `sequence` where it is a sequence's.
@@ -79,6 +79,12 @@ impl ErrorPlot {
     }
 }
 
+/// The key of the front of the metric of id `id` along the plot's sequence `index` (0 for a
+/// still's plot, whose recorded front is a still's).
+fn metric_key(id: &str, index: usize) -> String {
+    vocabulary::metric(id).map_or_else(|| id.to_string(), |metric| metric.key(index))
+}
+
 /// The modes with a value of the plot's metric and a frame time.
 pub fn error_points(scene: &SceneRecord, plot: ErrorPlot) -> Vec<Point> {
     let mut points: Vec<Point> = scene
@@ -96,13 +102,15 @@ pub fn error_points(scene: &SceneRecord, plot: ErrorPlot) -> Vec<Point> {
                 time_low: frame.ci_low,
                 time_high: frame.ci_high,
                 error,
-                on_front: mode.front.as_ref().is_some_and(|place| place.on_front),
+                on_front: match plot.plot.front {
+                    Front::Recorded(id) => mode.on_front(&metric_key(id, plot.sequence)),
+                    Front::Medians | Front::None => false,
+                },
             })
         })
         .collect();
     match plot.plot.front {
-        Front::Recorded => {}
-        Front::None => points.iter_mut().for_each(|point| point.on_front = false),
+        Front::Recorded(_) | Front::None => {}
         Front::Medians => {
             // Every axis is an error, lower better (a JOD is drawn as its distance below 10).
             let dominated: Vec<bool> = points

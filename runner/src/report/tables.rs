@@ -7,18 +7,27 @@ use std::fmt::Write;
 use super::html::escape;
 use crate::compare::{Check, Outcome};
 use crate::record::{ModeRecord, RunRecord, SceneRecord, SequenceRecord};
-use crate::vocabulary::{self, Table};
+use crate::vocabulary::{self, Metric, Table};
 
 /// The columns of a scene's mode table, in the HTML report and in Markdown alike: the mode and
-/// its time, then the metrics with a column in the still's table, then its place on the front
-/// and, for adaptive modes, its cost against the reference.
-pub fn mode_columns() -> Vec<&'static str> {
-    let metrics = vocabulary::columns(Table::Still).map(|(_, column)| column.header);
+/// its time, then the metrics with a column in the still's table, then its place on each front
+/// of the still and, for adaptive modes, its cost against the reference.
+pub fn mode_columns() -> Vec<String> {
+    let metrics = vocabulary::columns(Table::Still).map(|(_, column)| column.header.to_string());
+    let fronts = vocabulary::fronts(Table::Still).map(Metric::front_header);
     ["mode", "frame ms", "interval ms", "×1x1"]
+        .map(String::from)
         .into_iter()
         .chain(metrics)
-        .chain(["front", "speed-up vs ref", "efficiency"])
+        .chain(fronts)
+        .chain(["speed-up vs ref", "efficiency"].map(String::from))
         .collect()
+}
+
+/// A mode's place on the front of `metric` (along the sequence `index` for a path's) in one
+/// phrase, `–` where it has none.
+fn front_cell(mode: &ModeRecord, metric: &Metric, index: usize) -> String {
+    mode.front(&metric.key(index)).map_or_else(|| "–".into(), |place| place.describe(metric.unit()))
 }
 
 /// One row of the mode table, unescaped, in the order of [`mode_columns`]; `–` where the mode
@@ -36,8 +45,8 @@ pub fn mode_cells(mode: &ModeRecord) -> Vec<String> {
     ]
     .into_iter()
     .chain(metrics)
+    .chain(vocabulary::fronts(Table::Still).map(|metric| front_cell(mode, metric, 0)))
     .chain([
-        cell(mode.front.as_ref().map(|place| place.describe())),
         cell(mode.adaptive.as_ref().map(|a| format!("{:.2}×", a.speedup))),
         cell(mode.adaptive.as_ref().map(|a| format!("{:.2}", a.efficiency))),
     ])
@@ -45,13 +54,17 @@ pub fn mode_cells(mode: &ModeRecord) -> Vec<String> {
 }
 
 /// The columns of a scene's table along its camera path ([`sequence_cells`]): the mode and its
-/// time per frame, the metrics with a column in the path's table, and what lag costs.
-pub fn sequence_columns() -> Vec<&'static str> {
-    let metrics = vocabulary::columns(Table::Path).map(|(_, column)| column.header);
+/// time per frame, the metrics with a column in the path's table, what lag costs, and its place
+/// on each front of the path.
+pub fn sequence_columns() -> Vec<String> {
+    let metrics = vocabulary::columns(Table::Path).map(|(_, column)| column.header.to_string());
+    let lag = "disoccluded % · entered % · MSE entered / at moving edges / elsewhere ×1e-3";
     ["mode", "ms per frame along the path"]
+        .map(String::from)
         .into_iter()
         .chain(metrics)
-        .chain(["disoccluded % · entered % · MSE entered / at moving edges / elsewhere ×1e-3"])
+        .chain([lag.to_string()])
+        .chain(vocabulary::fronts(Table::Path).map(Metric::front_header))
         .collect()
 }
 
@@ -71,7 +84,15 @@ pub fn sequence_cells(mode: &ModeRecord, index: usize) -> Option<Vec<String>> {
         (Some(frame), _) => Some(format!("{:.1}", frame.median)),
         (None, twin) => twin.as_ref().map(|twin| format!("{twin}'s frames")),
     };
-    Some([mode.mode.clone(), cell(frame)].into_iter().chain(metrics).chain([cell(ghosting)]).collect())
+    let fronts = vocabulary::fronts(Table::Path).map(|metric| front_cell(mode, metric, index));
+    Some(
+        [mode.mode.clone(), cell(frame)]
+            .into_iter()
+            .chain(metrics)
+            .chain([cell(ghosting)])
+            .chain(fronts)
+            .collect(),
+    )
 }
 
 /// The scene's modes along its sequence `index`.
@@ -86,7 +107,7 @@ pub(super) fn sequence_table(page: &mut String, scene: &SceneRecord, index: usiz
     }
     page.push_str("<table><thead><tr>");
     for column in sequence_columns() {
-        let _ = write!(page, "<th>{}</th>", escape(column));
+        let _ = write!(page, "<th>{}</th>", escape(&column));
     }
     page.push_str("</tr></thead><tbody>\n");
     for row in rows {
@@ -147,7 +168,7 @@ pub fn decibels(quality: Option<&crate::metrics::Quality>) -> String {
 pub(super) fn mode_table(page: &mut String, scene: &SceneRecord, checks: &[&Check]) {
     page.push_str("<table><thead><tr>");
     for column in mode_columns() {
-        let _ = write!(page, "<th>{}</th>", escape(column));
+        let _ = write!(page, "<th>{}</th>", escape(&column));
     }
     if !checks.is_empty() {
         page.push_str("<th>gate</th>");

@@ -3,8 +3,9 @@
 //! and along the path) beside PSNR. The run's closing summary is `report::closing`.
 
 use crate::progress::Progress;
-use crate::record::{ModeRecord, SceneRecord};
+use crate::record::{FrontPlace, ModeRecord, SceneRecord};
 use crate::truth::TruthRecord;
+use crate::vocabulary::{JOD_VS_TRUTH, SEQUENCE_JOD_VS_TRUTH};
 
 /// The widest line the table is laid out for.
 const WIDTH: usize = 120;
@@ -41,18 +42,22 @@ fn scene_lines(scene: &SceneRecord) -> Vec<String> {
         "  {:<width$} {:>7} {:>5} {:>5} {:>5} {:>6} {:>6} {:>5} {:>5} {:>6}  {}",
         "mode", "ms", "±", "×1x1", "smp%", "PSNR", "FLIP", "JOD", "pJOD", "pPSNR", "front"
     ));
-    lines.extend(scene.modes.iter().flat_map(|mode| mode_lines(mode, width)));
+    // The front the rankings read: JOD's, along the path where the scene has one.
+    let front = if scene.sequences.is_empty() { JOD_VS_TRUTH.key(0) } else { SEQUENCE_JOD_VS_TRUTH.key(0) };
+    lines.extend(scene.modes.iter().flat_map(|mode| mode_lines(mode, width, &front)));
     lines.push(
         "  ± half the interval · smp% samples shaded · still PSNR, FLIP, JOD against the truth · pJOD, \
          pPSNR along the path"
             .into(),
     );
+    let along = if scene.sequences.is_empty() { "" } else { " along the path" };
+    lines.push(format!("  front: on the JOD front{along}, behind a mode, or ~ undecided against one"));
     lines
 }
 
 /// A mode's row, its id padded to `width` and the row cut to [`WIDTH`], and its error on a line
 /// of its own, whole.
-fn mode_lines(mode: &ModeRecord, width: usize) -> Vec<String> {
+fn mode_lines(mode: &ModeRecord, width: usize, front: &str) -> Vec<String> {
     let error = mode.error.as_ref().map(|e| format!("    {}: {e}", mode.mode));
     let Some(frame) = &mode.frame_ms else {
         return vec![error.unwrap_or_else(|| format!("    {}: no frames", mode.mode))];
@@ -62,10 +67,7 @@ fn mode_lines(mode: &ModeRecord, width: usize) -> Vec<String> {
     let truth = mode.vs_ground_truth.as_ref();
     let path = mode.sequence();
     let spread = (frame.ci_high - frame.ci_low) / 2.0 / frame.median.max(f64::MIN_POSITIVE);
-    let front = mode.front.as_ref().map(|place| match place.dominated_by.first() {
-        None => "front".to_string(),
-        Some(dominator) => format!("behind {}", dominator.mode),
-    });
+    let front = mode.front(front).map(FrontPlace::brief);
     let row = format!(
         "  {:<width$} {:>7.1} {:>4.0}% {:>5} {:>5} {:>6} {:>6} {:>5} {:>5} {:>6}  {}",
         mode.mode,

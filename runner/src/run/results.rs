@@ -259,7 +259,7 @@ fn timing_record(
         vs_reference: None,
         vs_ground_truth: None,
         adaptive: None,
-        front: None,
+        fronts: Default::default(),
         graph: run.graph.clone(),
         checks: (run.checks.frames > 0).then_some(run.checks),
         sequences: run.sequences.clone(),

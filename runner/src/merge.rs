@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use crate::record::{Platform, RUN_SCHEMA, RunRecord, SceneRecord, Status};
 
-/// Merges `shards` (each a record and its folder) into `out`, a new or empty folder: images
-/// copied, run.json written last, so a merge that fails midway leaves no run. The shards must
+/// Merges `shards` (each a record and its folder) into `out`, a new or empty folder: the
+/// scenes' folders copied whole, run.json written last, so a merge that fails midway leaves no run. The shards must
 /// be the N slices of one run: same tier, settings, platform and aabench version, every index
 /// from 1 to N once, no scene twice. Nothing is written when they are not.
 pub fn merge(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecord, String> {
@@ -128,18 +128,51 @@ fn merged_record(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecor
     })
 }
 
-/// Copies the files of one folder (a scene's images) into another.
+/// Copies a shard's scene folder into the merged run, file for file and folder by folder: its
+/// images, and below them what the sequences wrote (`path/`: the animations and distortion
+/// maps) and the frames `--keep-frames` kept (`frames/`). aabench writes nothing else there;
+/// a link or a device in it is refused by name rather than followed or skipped.
 fn copy_folder(from: &Path, to: &Path) -> Result<(), String> {
     let entries =
         std::fs::read_dir(from).map_err(|e| format!("{}: {e} (the shard's images)", from.display()))?;
     std::fs::create_dir_all(to).map_err(|e| format!("{}: {e}", to.display()))?;
-    for entry in entries.filter_map(Result::ok) {
-        let path = entry.path();
-        if path.is_file() {
-            let target = to.join(entry.file_name());
+    for entry in entries {
+        let entry = entry.map_err(|e| format!("{}: {e} (the shard's images)", from.display()))?;
+        let (path, target) = (entry.path(), to.join(entry.file_name()));
+        let kind = entry.file_type().map_err(|e| format!("{}: {e}", path.display()))?;
+        if kind.is_dir() {
+            copy_folder(&path, &target)?;
+        } else if kind.is_file() {
             std::fs::copy(&path, &target)
                 .map_err(|e| format!("{} → {}: {e}", path.display(), target.display()))?;
+        } else {
+            return Err(format!(
+                "{}: neither a file nor a folder (a link?); a shard's folder holds only what aabench wrote",
+                path.display()
+            ));
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_scene_folder_is_copied_whole_and_a_link_in_it_is_refused_by_name() {
+        let dir = std::env::temp_dir().join(format!("aabench-merge-{}", std::process::id()));
+        let shard = dir.join("shard/thin");
+        std::fs::create_dir_all(shard.join("frames/1/taa")).unwrap();
+        std::fs::write(shard.join("taa.png"), b"still").unwrap();
+        std::fs::write(shard.join("frames/1/taa/000.png"), b"frame").unwrap();
+        copy_folder(&shard, &dir.join("merged/thin")).unwrap();
+        assert_eq!(std::fs::read(dir.join("merged/thin/frames/1/taa/000.png")).unwrap(), b"frame");
+        assert_eq!(std::fs::read(dir.join("merged/thin/taa.png")).unwrap(), b"still");
+
+        std::os::unix::fs::symlink("/etc/passwd", shard.join("frames/1/link.png")).unwrap();
+        let refused = copy_folder(&shard, &dir.join("again/thin")).unwrap_err();
+        assert!(refused.contains("frames/1/link.png: neither a file nor a folder"), "{refused}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -4,7 +4,9 @@
 //! flickers less than deferred-1x1 on the moving `thin` scene, every mode reports what lag
 //! costs, its stalled twin takes its frames, and the report shows every mode along the path, where it flickers most and which
 //! technique to choose along it; stable counts flicker less than the paper's there, for the
-//! samples they add.
+//! samples they add; shards merged keep every path image and kept frame.
+
+use std::path::{Path, PathBuf};
 
 use serde_json::{Value, json};
 
@@ -285,6 +287,83 @@ fn moving_thin(name: &str, size: [u32; 2]) -> Workspace {
         m["motion"] = json!({"frames": {"quick": 8, "nightly": 8}});
     });
     ws
+}
+
+/// Every file below a folder, by its path inside it, with its bytes.
+fn files_below(root: &Path) -> std::collections::BTreeMap<PathBuf, Vec<u8>> {
+    let mut files = std::collections::BTreeMap::new();
+    let mut folders = vec![root.to_path_buf()];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap().map(Result::unwrap) {
+            let path = entry.path();
+            if path.is_dir() {
+                folders.push(path);
+            } else {
+                files.insert(path.strip_prefix(root).unwrap().to_path_buf(), std::fs::read(&path).unwrap());
+            }
+        }
+    }
+    files
+}
+
+/// Two shards of a suite with a camera path, run with `--keep-frames`, merge into a run that
+/// holds every file each shard wrote for its scenes, byte for byte (the path's animations and
+/// distortion maps, the kept frames), and that `report` reads without a file missing.
+#[test]
+fn merged_shards_keep_every_path_image_and_kept_frame() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = moving_thin("merge-path", [64, 48]);
+    ws.manifest("plane", "plane", |_| {});
+    let args = ["run", "--modes", "deferred-1x1,taa", "--repetitions", "1", "--keep-frames"];
+    for (shard, folder) in [("1/2", "shard1"), ("2/2", "shard2")] {
+        let output = ws.run(&[&args[..], &["--shard", shard, "--out", folder]].concat());
+        assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    }
+    let shard_runs: Vec<PathBuf> = ["shard1", "shard2"]
+        .iter()
+        .map(|folder| std::fs::read_dir(ws.dir.join(folder)).unwrap().next().unwrap().unwrap().path())
+        .collect();
+    let mut arguments = vec!["merge".to_string()];
+    arguments.extend(shard_runs.iter().map(|run| run.display().to_string()));
+    arguments.extend(["--out".into(), "merged".into()]);
+    let output = ws.run(&arguments.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let merged = ws.dir.join("merged");
+
+    let mut scenes = 0;
+    for run in &shard_runs {
+        for scene in std::fs::read_dir(run).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_dir()) {
+            scenes += 1;
+            let name = scene.file_name().unwrap();
+            let (theirs, ours) = (files_below(&scene), files_below(&merged.join(name)));
+            assert_eq!(theirs.keys().collect::<Vec<_>>(), ours.keys().collect::<Vec<_>>(), "{name:?}");
+            assert!(theirs == ours, "{name:?}: a merged file's bytes differ from the shard's");
+        }
+    }
+    assert_eq!(scenes, 2);
+    let thin = files_below(&merged.join("thin"));
+    let below = |folder: &str| thin.keys().filter(|path| path.starts_with(folder)).count();
+    assert!(below("path") >= 2, "the path's images: {:?}", thin.keys().collect::<Vec<_>>());
+    assert_eq!(
+        below("frames"),
+        3 * (16 + 8) + 1,
+        "the kept frames of the truth and two modes, and sequence.json"
+    );
+
+    let report = ws.run(&["report", "merged"]);
+    assert_eq!(report.status.code(), Some(0), "{}", stderr(&report));
+    assert!(!stderr(&report).contains("missing"), "{}", stderr(&report));
+
+    // A link in a shard's scene folder is no file aabench wrote: the merge is refused, by name,
+    // and writes nothing.
+    let scene =
+        std::fs::read_dir(&shard_runs[0]).unwrap().map(|e| e.unwrap().path()).find(|p| p.is_dir()).unwrap();
+    std::os::unix::fs::symlink("/etc/hostname", scene.join("link.png")).unwrap();
+    arguments.last_mut().unwrap().replace_range(.., "linked");
+    let refused = ws.run(&arguments.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(refused.status.code(), Some(2), "{}", stderr(&refused));
+    assert!(stderr(&refused).contains("link.png: neither a file nor a folder"), "{}", stderr(&refused));
+    assert!(!ws.dir.join("linked").exists());
 }
 
 #[test]

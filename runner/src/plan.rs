@@ -147,6 +147,12 @@ impl RunArgs {
                 format!("--jod-display: {error}; one of: {}", aabench_cvvdp::Display::names().join(", "))
             })?;
         }
+        if args.keep_frames && (args.sequences == Switch::Off || args.quality == Switch::Off) {
+            let off = if args.quality == Switch::Off { "--quality off" } else { "--sequences off" };
+            return Err(format!(
+                "--keep-frames keeps the frames of the camera paths' sequences, which {off} leaves out: drop one of the two"
+            ));
+        }
         let manifests = find_manifests(&args.paths)?;
         // Temporaries of killed runs (run folder, scene folders, sequence spools) go before this
         // run adds its own.

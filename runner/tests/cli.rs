@@ -337,6 +337,8 @@ fn bad_arguments_exit_two_before_any_work() {
         (vec!["run", "--repetitions", "-1"], "-1 is not in 1..=10000"),
         (vec!["run", "--out", "/dev/full"], "--out /dev/full: exists and is not a folder"),
         (vec!["run", "--jod-display", "crt"], "--jod-display: unknown display model `crt`"),
+        (vec!["run", "--keep-frames", "--sequences", "off"], "which --sequences off leaves out"),
+        (vec!["run", "--keep-frames", "--quality", "off"], "which --quality off leaves out"),
     ] {
         let output = ws.run(&args);
         assert_eq!(output.status.code(), Some(2), "{args:?}");

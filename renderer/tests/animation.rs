@@ -133,6 +133,14 @@ fn every_pose_an_animation_takes_is_held_to_the_bounds_of_a_scene_at_rest() {
     let cubic = Channel { interpolation: "CUBICSPLINE", ..slide(&[0.0, 1.0], &values) };
     let error = pose_error(&cubic.write(&folder, "tangent.gltf", |_| {})).expect("a tangent of 3·10³⁸");
     assert!(error.contains("halfway between keyframes 0 and 1 (t = 0.5 s)"), "{error}");
+    // Equal tangents, 3·10¹⁶ each, at keys on the origin: halfway the spline is back at the
+    // origin, but a fifth of the way and four fifths (u = (3 ∓ √3)/6) it is 2.9·10¹⁵ away.
+    let tangent = [3e16f32, 0.0, 0.0];
+    let values: Vec<f32> = [flat, flat, tangent, tangent, flat, flat].concat();
+    let cubic = Channel { interpolation: "CUBICSPLINE", ..slide(&[0.0, 1.0], &values) };
+    let error =
+        pose_error(&cubic.write(&folder, "equal-tangents.gltf", |_| {})).expect("an overshoot of 2.9·10¹⁵");
+    assert!(error.contains("where the spline between keyframes 0 and 1 turns (t = 0.211"), "{error}");
     // Within the bounds, every pose passes.
     let near = slide(&[0.0, 1.0], &[0.0, 0.0, 0.0, 1e11, 0.0, 0.0]).write(&folder, "near.gltf", |_| {});
     assert_eq!(pose_error(&near), None);

@@ -134,18 +134,44 @@ impl Track {
     }
 
     /// The times at which a pose of this track is checked, each with its name: every keyframe,
-    /// and for a cubic spline the middle between two keys too, where its tangents can carry
-    /// the value far past both.
+    /// and for a cubic spline the middle between two keys too, and every time between two keys
+    /// where a coordinate of a translation or a scale turns (its tangents can carry it far past
+    /// both keys, and with equal tangents it is back at them halfway).
     pub fn checked_times(&self) -> Vec<(String, f64)> {
         let keys = self.times.iter().enumerate().map(|(i, &t)| (format!("keyframe {i}"), f64::from(t)));
-        let middles = self.times.windows(2).enumerate().map(|(i, pair)| {
-            (
-                format!("halfway between keyframes {i} and {}", i + 1),
-                (f64::from(pair[0]) + f64::from(pair[1])) / 2.0,
-            )
-        });
-        let cubic = self.interpolation == Interpolation::CubicSpline;
-        keys.chain(middles.filter(|_| cubic)).collect()
+        let mut checked: Vec<(String, f64)> = keys.collect();
+        if self.interpolation != Interpolation::CubicSpline {
+            return checked;
+        }
+        for (i, pair) in self.times.windows(2).enumerate() {
+            let (t0, t1) = (f64::from(pair[0]), f64::from(pair[1]));
+            checked.push((format!("halfway between keyframes {i} and {}", i + 1), (t0 + t1) / 2.0));
+            if self.property != Property::Rotation {
+                let turns = self.turns_between(i);
+                let name = format!("where the spline between keyframes {i} and {} turns", i + 1);
+                checked.extend(turns.into_iter().map(|s| (name.clone(), t0 + s * (t1 - t0))));
+            }
+        }
+        checked
+    }
+
+    /// The fractions `s` in (0, 1) of the cubic segment from keyframe `k` at which a coordinate
+    /// of its value is at a maximum or a minimum: the roots of the derivative of the Hermite
+    /// polynomial, `a s² + b s + c`.
+    fn turns_between(&self, k: usize) -> Vec<f64> {
+        let value = |i: usize| self.values[i].map(f64::from);
+        let (p0, m0, m1, p1) =
+            (value(3 * k + 1), value(3 * k + 2), value(3 * (k + 1)), value(3 * (k + 1) + 1));
+        let span = f64::from(self.times[k + 1] - self.times[k]);
+        let mut turns = Vec::new();
+        for i in 0..3 {
+            let (m0, m1) = (span * m0[i], span * m1[i]);
+            let a = 6.0 * (p0[i] - p1[i]) + 3.0 * (m0 + m1);
+            let b = 6.0 * (p1[i] - p0[i]) - 4.0 * m0 - 2.0 * m1;
+            let c = m0;
+            turns.extend(quadratic_roots(a, b, c).into_iter().filter(|s| *s > 0.0 && *s < 1.0));
+        }
+        turns
     }
 
     /// The track's value at `time` seconds: xyz, or a unit quaternion xyzw.
@@ -204,6 +230,20 @@ fn hermite(p0: [f64; 4], m0: [f64; 4], p1: [f64; 4], m1: [f64; 4], s: f64, span:
     let (s2, s3) = (s * s, s * s * s);
     let (h00, h10, h01, h11) = (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, -2.0 * s3 + 3.0 * s2, s3 - s2);
     std::array::from_fn(|i| h00 * p0[i] + h10 * span * m0[i] + h01 * p1[i] + h11 * span * m1[i])
+}
+
+/// The real roots of `a x² + b x + c` (of `b x + c` where `a` is 0); none where every
+/// coefficient is 0, since then no point is a turn.
+fn quadratic_roots(a: f64, b: f64, c: f64) -> Vec<f64> {
+    if a == 0.0 {
+        return if b == 0.0 { Vec::new() } else { vec![-c / b] };
+    }
+    let discriminant = b * b - 4.0 * a * c;
+    if discriminant < 0.0 {
+        return Vec::new();
+    }
+    let root = discriminant.sqrt();
+    vec![(-b - root) / (2.0 * a), (-b + root) / (2.0 * a)]
 }
 
 fn normalized(q: [f64; 4]) -> [f64; 4] {

@@ -141,6 +141,23 @@ fn every_pose_an_animation_takes_is_held_to_the_bounds_of_a_scene_at_rest() {
     let error =
         pose_error(&cubic.write(&folder, "equal-tangents.gltf", |_| {})).expect("an overshoot of 2.9·10¹⁵");
     assert!(error.contains("where the spline between keyframes 0 and 1 turns (t = 0.211"), "{error}");
+    // Two channels, keyed at the same times: the first slides the parent a little, the second
+    // carries the triangle's own node 10³⁰ away. Checked at the first's keyframe 1, the pose is
+    // out, and the error names the second, which puts it out alone.
+    let values = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1e30, 0.0, 0.0];
+    let two = slide(&[0.0, 1.0], &values).write(&folder, "two.gltf", |d| {
+        d["accessors"][2]["count"] = json!(2);
+        let far =
+            json!({ "bufferView": 2, "byteOffset": 24, "componentType": 5126, "count": 2, "type": "VEC3" });
+        d["accessors"].as_array_mut().unwrap().push(far);
+        let accessor = d["accessors"].as_array().unwrap().len() - 1;
+        let animation = &mut d["animations"][0];
+        animation["samplers"].as_array_mut().unwrap().push(json!({ "input": 1, "output": accessor }));
+        let channel = json!({ "sampler": 1, "target": { "node": 0, "path": "translation" } });
+        animation["channels"].as_array_mut().unwrap().push(channel);
+    });
+    let error = pose_error(&two).expect("a node 10³⁰ away");
+    assert!(error.starts_with("channels[1] (translation of nodes[0]), keyframe 1 (t = 1 s)"), "{error}");
     // Within the bounds, every pose passes.
     let near = slide(&[0.0, 1.0], &[0.0, 0.0, 0.0, 1e11, 0.0, 0.0]).write(&folder, "near.gltf", |_| {});
     assert_eq!(pose_error(&near), None);

@@ -155,6 +155,20 @@ impl Track {
         checked
     }
 
+    /// What this track calls `time` among the times it is checked at (`keyframe 4`), or where
+    /// it lies against its keyframes.
+    pub fn name_of(&self, time: f64) -> String {
+        if let Some((name, _)) = self.checked_times().into_iter().find(|(_, t)| *t == time) {
+            return name;
+        }
+        let after = self.times.partition_point(|&t| f64::from(t) <= time);
+        match after {
+            0 => "before keyframe 0".into(),
+            k if k == self.times.len() => format!("after keyframe {}", k - 1),
+            k => format!("between keyframes {} and {k}", k - 1),
+        }
+    }
+
     /// The fractions `s` in (0, 1) of the cubic segment from keyframe `k` at which a coordinate
     /// of its value is at a maximum or a minimum: the roots of the derivative of the Hermite
     /// polynomial, `a s² + b s + c`.

@@ -128,28 +128,46 @@ impl Poser {
         for (channel, track) in self.tracks.iter().enumerate() {
             for (key, time) in track.checked_times().into_iter().filter(|(_, t)| checked.insert(t.to_bits()))
             {
-                let beyond = self.node_beyond(&boxes, time).or_else(|| self.skin_beyond(time));
-                if let Some(what) = beyond {
-                    return Err(format!(
-                        "channels[{channel}] ({} of nodes[{}]), {key} (t = {time} s), carries {what}, beyond \
-                         ±{MAX_COORDINATE:e} (the bounds of a scene at rest)",
-                        track.property.name(),
-                        track.node,
-                    ));
-                }
+                let Some(what) = self.beyond(&self.tracks, &boxes, time) else { continue };
+                // The pose is every channel's: name the one that puts it out by itself, with its
+                // own name for the time, where one does.
+                let alone = |c: &usize| self.beyond(&self.tracks[*c..=*c], &boxes, time).is_some();
+                let (channel, key) = match (0..self.tracks.len()).find(alone) {
+                    Some(c) if c != channel => (c, self.tracks[c].name_of(time)),
+                    _ => (channel, key),
+                };
+                let track = &self.tracks[channel];
+                return Err(format!(
+                    "channels[{channel}] ({} of nodes[{}]), {key} (t = {time} s), carries {what}, beyond \
+                     ±{MAX_COORDINATE:e} (the bounds of a scene at rest)",
+                    track.property.name(),
+                    track.node,
+                ));
             }
         }
         Ok(())
+    }
+
+    /// What of the scene the pose of `tracks` at `time` carries beyond the bounds, if anything:
+    /// a moved node's vertices, or a skin's vertex.
+    fn beyond(
+        &self,
+        tracks: &[Track],
+        boxes: &std::collections::HashMap<Range<usize>, [DVec3; 2]>,
+        time: f64,
+    ) -> Option<String> {
+        self.node_beyond(tracks, boxes, time).or_else(|| self.skin_beyond(tracks, time))
     }
 
     /// The first moved node whose vertices (`boxes`: each range's box) lie beyond the bounds at
     /// `time`: `the vertices of nodes[2] to (…)`.
     fn node_beyond(
         &self,
+        tracks: &[Track],
         boxes: &std::collections::HashMap<Range<usize>, [DVec3; 2]>,
         time: f64,
     ) -> Option<String> {
-        self.rig.node_changes(&self.tracks, time).into_iter().find_map(|(rest, change)| {
+        self.rig.node_changes(tracks, time).into_iter().find_map(|(rest, change)| {
             let out = |r: &Range<usize>| beyond(boxes.get(r)?, change);
             let place = rest.vertices.iter().find_map(out)?;
             Some(format!("the vertices of nodes[{}] to {place}", rest.node))
@@ -158,8 +176,11 @@ impl Poser {
 
     /// The first moved skin with a vertex beyond the bounds at `time`: `vertex 12 of skins[0]
     /// (of nodes[4]) to (…)`.
-    fn skin_beyond(&self, time: f64) -> Option<String> {
-        let worlds = self.worlds(time);
+    fn skin_beyond(&self, tracks: &[Track], time: f64) -> Option<String> {
+        if self.skins.is_empty() {
+            return None;
+        }
+        let worlds = self.rig.worlds(tracks, time);
         self.skins.iter().find_map(|skin| {
             let positions = skin.positions(&worlds, self.origin);
             let mut placed = positions

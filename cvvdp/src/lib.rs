@@ -54,6 +54,9 @@ pub struct Frame<'a> {
     pub rgb: &'a [f32],
 }
 
+/// The fewest pixels a side of a frame the metric scores.
+pub const MIN_SIDE: usize = 4;
+
 /// ColorVideoVDP with a display model.
 #[derive(Debug, Clone)]
 pub struct Cvvdp {
@@ -134,7 +137,7 @@ impl Cvvdp {
         if !(fps.is_finite() && fps > 0.0) {
             return Err(Error::FrameRate(fps));
         }
-        if width < 4 || height < 4 {
+        if width < MIN_SIDE || height < MIN_SIDE {
             return Err(Error::TooSmall { width, height });
         }
         let filters = Filters::new(&self.parameters, fps);
@@ -250,7 +253,7 @@ fn check_frame(frame: &Frame, width: usize, height: usize) -> Result<(), Error> 
     if frame.width != width || frame.height != height || frame.rgb.len() != expected {
         return Err(Error::FrameSize { width, height, expected, got: frame.rgb.len() });
     }
-    if width < 4 || height < 4 {
+    if width < MIN_SIDE || height < MIN_SIDE {
         return Err(Error::TooSmall { width, height });
     }
     Ok(())

@@ -5,7 +5,8 @@
 //! Vulkan adapter exits 2 with one line naming `mesa-vulkan-drivers`; bad arguments exit 2
 //! before any work; `gen-scenes` regenerates only stale files; Ctrl-C (a real SIGINT) keeps
 //! what was measured (a signal while a path's FLIP and JOD are measured leaves its scene
-//! `interrupted`, not `ok`) and `kill -9` leaves the scenes that finished.
+//! `interrupted`, not `ok`) and `kill -9` leaves the scenes that finished. A frame too small for
+//! JOD says so in the record and the gate.
 
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -345,6 +346,35 @@ fn bad_arguments_exit_two_before_any_work() {
         assert!(stderr(&output).contains(reason), "{args:?}: {}", stderr(&output));
     }
     assert!(!ws.dir.join("reports").exists(), "nothing should have been written");
+}
+
+/// A frame smaller than ColorVideoVDP scores (3×3) still runs, and says that JOD goes
+/// unmeasured: on the console, in run.json's warnings, and in compare's notes, where the gate
+/// has no JOD check of it.
+#[test]
+fn a_frame_too_small_for_jod_says_so_in_the_record_and_the_gate() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("tiny");
+    ws.manifest("edge", "edge", |m| m["resolution"] = json!({ "quick": [3, 3], "nightly": [3, 3] }));
+    let output = ws.run(&["run", "--modes", "deferred-1x1,reference-2x2", "--repetitions", "1"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let said = "resolution 3×3: JOD is not measured, since ColorVideoVDP needs at least 4×4 pixels";
+    assert!(stderr(&output).contains(said), "{}", stderr(&output));
+    let scene = &ws.record()["scenes"][0];
+    assert!(
+        scene["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().starts_with(said)),
+        "{scene}"
+    );
+    assert!(scene["modes"][0]["vs_ground_truth"]["jod"].is_null());
+    let run = ws.run_dir().display().to_string();
+    assert_eq!(ws.run(&["bless", &run]).status.code(), Some(0));
+    let compared = ws.run(&["compare", &run]);
+    let stdout = String::from_utf8_lossy(&compared.stdout).into_owned();
+    assert_eq!(compared.status.code(), Some(0), "{stdout}");
+    assert!(
+        stdout.contains("edge: JOD not measured (its frame, 3×3, is smaller than ColorVideoVDP scores)"),
+        "{stdout}"
+    );
 }
 
 #[test]

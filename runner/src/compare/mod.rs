@@ -71,6 +71,7 @@ fn scene_checks(runs: &[RunRecord], baselines: &BaselineSet, notes: &mut Vec<Str
             let detail = scene.error.clone().unwrap_or_else(|| format!("the scene's status is {status}"));
             checks.push(status_check(&scene.name, "*", Outcome::Failed, &detail));
         }
+        notes.extend(unscored_note(scene));
         let processes: Vec<&SceneRecord> =
             runs.iter().filter_map(|r| r.scenes.iter().find(|s| s.name == scene.name)).collect();
         match baselines.scene(&scene.name) {
@@ -407,6 +408,21 @@ fn input_notes(scene: &SceneRecord, baseline: &Baseline) -> Vec<String> {
         }
     }
     notes
+}
+
+/// A note where the scene measured quality but no mode has a JOD against the truth (a frame
+/// too small for ColorVideoVDP): the gate has no JOD check of it, and says so.
+fn unscored_note(scene: &SceneRecord) -> Option<String> {
+    let judged = scene.modes.iter().filter_map(|mode| mode.vs_ground_truth.as_ref());
+    let unscored =
+        scene.jod_display.is_some() && judged.clone().count() > 0 && judged.clone().all(|q| q.jod.is_none());
+    unscored.then(|| {
+        let size = scene.resolution.map_or("?".into(), |[w, h]| format!("{w}×{h}"));
+        format!(
+            "{}: JOD not measured (its frame, {size}, is smaller than ColorVideoVDP scores): no JOD check",
+            scene.name
+        )
+    })
 }
 
 /// Notes on modes whose place on one of the scene's error-against-run-time fronts was decided

@@ -18,6 +18,19 @@ use crate::scenes;
 use crate::truth::{self, TRUTH_ID, TRUTH_M, TruthRecord};
 
 impl<'a> SceneRun<'a> {
+    /// Why JOD goes unmeasured where quality is measured: a frame narrower or lower than
+    /// ColorVideoVDP scores.
+    fn unscored(&self) -> Option<String> {
+        let [width, height] = self.resolution;
+        let side = aabench_cvvdp::MIN_SIDE as u32;
+        (self.jod.is_some() && (width < side || height < side)).then(|| {
+            format!(
+                "resolution {width}×{height}: JOD is not measured, since ColorVideoVDP needs at least \
+                 {side}×{side} pixels; PSNR, FLIP and SSIM judge its modes"
+            )
+        })
+    }
+
     /// The scene, phase after phase, into its record.
     pub async fn run(mut self) -> SceneRecord {
         let mut record = empty_scene(self.manifest);
@@ -39,6 +52,10 @@ impl<'a> SceneRun<'a> {
             Ok(loaded) => loaded,
             Err(error) => return fail(record, error),
         };
+        if let Some(warning) = self.unscored() {
+            self.warn(&warning);
+            record.warnings.push(warning);
+        }
         let (still_camera, pivot, camera_path) = (loaded.camera, loaded.pivot, loaded.camera_path.clone());
         let timeline = loaded.timeline;
         self.textured = loaded.scene.is_textured();

@@ -33,6 +33,22 @@ fn strip(joints: [[u16; 4]; 4], weights: [[f32; 4]; 4]) -> GltfWriter {
     let material = writer.add_material(&MaterialDesc::new("grey", [0.5; 3], 0.8));
     let bent = writer.add_joint("bent", [2.0, 0.0, 0.0], &[]);
     let root = writer.add_joint("root", [0.0, 0.0, -1.0], &[bent]);
+    writer.add_skinned_mesh("strip", &strip_mesh(), material, &strip_skin([root, bent], joints, weights));
+    let quarter = Quat::from_rotation_z(std::f32::consts::FRAC_PI_2).to_array();
+    writer.add_animation(
+        "bend",
+        &[Channel {
+            node: bent,
+            path: "rotation",
+            times: vec![0.0, 1.0],
+            values: [[0.0, 0.0, 0.0, 1.0], quarter].concat(),
+        }],
+    );
+    writer
+}
+
+/// The strip's 8 vertices, two at each x from 0 to 3, and its 6 triangles.
+fn strip_mesh() -> MeshData {
     let mut mesh = MeshData::default();
     for x in 0..4 {
         for y in 0..2 {
@@ -45,28 +61,20 @@ fn strip(joints: [[u16; 4]; 4], weights: [[f32; 4]; 4]) -> GltfWriter {
         let a = 2 * quad;
         mesh.indices.extend([a, a + 2, a + 1, a + 1, a + 2, a + 3]);
     }
-    let identity = glam::Mat4::IDENTITY.to_cols_array();
-    let skin = SkinDesc {
-        joints: vec![root, bent],
+    mesh
+}
+
+/// The strip's skin of `nodes` (root, bent), with each x's joints and weights.
+fn strip_skin(nodes: [usize; 2], joints: [[u16; 4]; 4], weights: [[f32; 4]; 4]) -> SkinDesc {
+    SkinDesc {
+        joints: nodes.to_vec(),
         inverse_binds: vec![
-            identity,
+            glam::Mat4::IDENTITY.to_cols_array(),
             glam::Mat4::from_translation(glam::Vec3::new(-2.0, 0.0, 0.0)).to_cols_array(),
         ],
         vertex_joints: joints.iter().flat_map(|j| [*j, *j]).collect(),
         vertex_weights: weights.iter().flat_map(|w| [*w, *w]).collect(),
-    };
-    writer.add_skinned_mesh("strip", &mesh, material, &skin);
-    let quarter = Quat::from_rotation_z(std::f32::consts::FRAC_PI_2).to_array();
-    writer.add_animation(
-        "bend",
-        &[Channel {
-            node: bent,
-            path: "rotation",
-            times: vec![0.0, 1.0],
-            values: [[0.0, 0.0, 0.0, 1.0], quarter].concat(),
-        }],
-    );
-    writer
+    }
 }
 
 const ROOT: [u16; 4] = [0, 0, 0, 0];
@@ -141,6 +149,75 @@ fn a_skinned_strip_rests_where_its_skeleton_does_and_bends_with_its_joint() {
     assert!((tip - expected).length() < 1e-6, "an eighth turn at half time: {tip}, expected {expected}");
 }
 
+/// Each x's joints and weights, one set of the strip's.
+type StripSet = ([[u16; 4]; 4], [[f32; 4]; 4]);
+
+/// The strip of `first` joints and weights, given two more sets of them (each set's accessors
+/// taken from a mesh added for it and left out of the scene), loaded.
+fn strip_of_three_sets(
+    folder: &Folder,
+    name: &str,
+    first: StripSet,
+    more: [StripSet; 2],
+) -> aabench_renderer::scene::Scene {
+    let mut writer = strip(first.0, first.1);
+    let material = writer.add_material(&MaterialDesc::new("donor", [0.5; 3], 0.8));
+    for (set, (joints, weights)) in more.into_iter().enumerate() {
+        // Joints 0 and 1 of the skin: the root and the bent joint, as in the strip's own skin.
+        writer.add_skinned_mesh(
+            &format!("set {}", set + 1),
+            &strip_mesh(),
+            material,
+            &strip_skin([1, 0], joints, weights),
+        );
+    }
+    let path = write_edited(folder, name, &writer, |d| {
+        for set in [1, 2] {
+            let donor = d["meshes"][set]["primitives"][0]["attributes"].clone();
+            let attributes = &mut d["meshes"][0]["primitives"][0]["attributes"];
+            attributes[format!("JOINTS_{set}")] = donor["JOINTS_0"].clone();
+            attributes[format!("WEIGHTS_{set}")] = donor["WEIGHTS_0"].clone();
+        }
+        let mesh_nodes: Vec<u64> = (d["nodes"].as_array().unwrap().iter().enumerate())
+            .filter(|(_, n)| n["mesh"].as_u64().is_some_and(|m| m > 0))
+            .map(|(i, _)| i as u64)
+            .collect();
+        d["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .retain(|n| !mesh_nodes.contains(&n.as_u64().unwrap()));
+    });
+    load_gltf(&path).expect("the strip loads")
+}
+
+/// A third set of joints and weights carries its share: the shared vertices' weight half on
+/// the root in `WEIGHTS_0`, none in `WEIGHTS_1`, half on the bent joint in `WEIGHTS_2` bends as
+/// the good strip does. Past eight joints a vertex keeps its heaviest, and the file is told.
+#[test]
+fn a_third_set_of_joints_and_weights_carries_its_share() {
+    let folder = Folder::new("skin-sets");
+    let (half, nothing) = ([0.5, 0.0, 0.0, 0.0], [0.0; 4]);
+    let first = ([ROOT, ROOT, ROOT, BENT], [ALONE, ALONE, half, ALONE]);
+    let more = [([ROOT; 4], [nothing; 4]), ([ROOT, ROOT, BENT, ROOT], [nothing, nothing, half, nothing])];
+    let mut scene = strip_of_three_sets(&folder, "sets.glb", first, more);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    scene.playing = Some(0);
+    let poser = Poser::of(&scene).expect("the animation plays");
+    let bent: Vec<DVec3> =
+        poser.vertices_at(1.0)[0].vertices.iter().map(|v| point(v.position) + scene.origin).collect();
+    // (2, 1) halfway between staying and going to (1, 0), as it is with both halves in one set.
+    assert!((bent[5] - DVec3::new(1.5, 0.5, -1.0)).length() < 1e-6, "{:?}", bent[5]);
+
+    // Every vertex names the root nine times, the ninth at half weight: it goes.
+    let full = ([ROOT; 4], [[1.0; 4]; 4]);
+    let ninth = ([ROOT; 4], [half; 4]);
+    let crowded = strip_of_three_sets(&folder, "crowded.glb", full, [full, ninth]);
+    let said = "attributes.JOINTS_0 to JOINTS_2: 8 vertices name more than 8 joints; each keeps its 8 \
+                heaviest, dropping at most 5.9 % of a vertex's weight";
+    let told = crowded.warnings.iter().any(|w| w == &format!("meshes[0] (strip) primitives[0]: {said}"));
+    assert!(told, "{:?}", crowded.warnings);
+}
+
 /// A change to a written file's JSON, which breaks it.
 type Edit = dyn Fn(&mut Value);
 
@@ -169,6 +246,16 @@ fn a_broken_skin_is_refused_naming_the_part_at_fault() {
                 d["meshes"][0]["primitives"][0]["attributes"].as_object_mut().unwrap().remove("WEIGHTS_0");
             }),
             "needs attributes.JOINTS_0 and WEIGHTS_0 together",
+        ),
+        (
+            "gap.glb",
+            good_strip(),
+            Box::new(|d| {
+                let attributes = &mut d["meshes"][0]["primitives"][0]["attributes"];
+                attributes["JOINTS_2"] = attributes["JOINTS_0"].clone();
+                attributes["WEIGHTS_2"] = attributes["WEIGHTS_0"].clone();
+            }),
+            "needs attributes.JOINTS_1 and WEIGHTS_1 together, as it has a set numbered 2",
         ),
         (
             "few-binds.glb",

@@ -13,7 +13,8 @@ use glam::{DMat3, DMat4, DVec3, Vec3};
 
 use super::Vertex;
 
-/// At most this many joints carry one vertex: two sets of `JOINTS_n` and `WEIGHTS_n`.
+/// At most this many joints carry one vertex: two sets of `JOINTS_n` and `WEIGHTS_n`. A vertex
+/// that names more keeps its heaviest ([`Influence::from_sets`]).
 pub const MAX_INFLUENCES: usize = 8;
 
 /// The joints that carry one vertex: indices into its skin's joints, each with its weight.
@@ -34,19 +35,27 @@ impl Influence {
         blend
     }
 
-    /// Reads one vertex's influences from its `JOINTS_n` and `WEIGHTS_n` sets (four each),
-    /// checked against the skin's `joints` count and normalised. On failure, why (the caller
-    /// names the vertex).
-    pub fn from_sets(sets: &[([u16; 4], [f32; 4])], joints: usize) -> Result<Influence, String> {
-        let mut influence = Influence::default();
-        let pairs = sets.iter().flat_map(|(j, w)| j.iter().copied().zip(w.iter().copied()));
-        for (slot, (joint, weight)) in pairs.enumerate().take(MAX_INFLUENCES) {
+    /// Reads one vertex's influences from its `JOINTS_n` and `WEIGHTS_n` sets (four each, as
+    /// many sets as the file gives), checked against the skin's `joints` count and normalised,
+    /// and the share of its weight dropped: past [`MAX_INFLUENCES`] joints it keeps the
+    /// heaviest (the first of equal ones). On failure, why (the caller names the vertex).
+    pub fn from_sets(sets: &[([u16; 4], [f32; 4])], joints: usize) -> Result<(Influence, f32), String> {
+        let mut pairs: Vec<(u16, f32)> =
+            sets.iter().flat_map(|(j, w)| j.iter().copied().zip(w.iter().copied())).collect();
+        for (slot, &(joint, weight)) in pairs.iter().enumerate() {
             if !(weight.is_finite() && weight >= 0.0) {
                 return Err(format!("weight {slot} is {weight}; weights must be finite and ≥ 0"));
             }
             if weight > 0.0 && usize::from(joint) >= joints {
                 return Err(format!("joint {joint} (weight {weight}) does not exist: the skin has {joints}"));
             }
+        }
+        let all: f32 = pairs.iter().map(|(_, w)| w).sum();
+        if pairs.len() > MAX_INFLUENCES {
+            pairs.sort_by(|a, b| b.1.total_cmp(&a.1));
+        }
+        let mut influence = Influence::default();
+        for (slot, (joint, weight)) in pairs.into_iter().take(MAX_INFLUENCES).enumerate() {
             influence.joints[slot] = joint;
             influence.weights[slot] = weight;
         }
@@ -55,7 +64,7 @@ impl Influence {
             return Err(format!("its weights sum to {total}, so no joint carries it"));
         }
         influence.weights = influence.weights.map(|w| w / total);
-        Ok(influence)
+        Ok((influence, 1.0 - total / all))
     }
 }
 
@@ -226,11 +235,12 @@ mod tests {
 
     #[test]
     fn weights_are_normalised_and_joints_beyond_the_skin_refused() {
-        let influence = Influence::from_sets(&[([0, 1, 0, 0], [1.0, 3.0, 0.0, 0.0])], 2).unwrap();
+        let influence = Influence::from_sets(&[([0, 1, 0, 0], [1.0, 3.0, 0.0, 0.0])], 2).unwrap().0;
         assert_eq!(influence.weights[..2], [0.25, 0.75]);
         // A second set adds four more joints.
-        let eight = Influence::from_sets(&[([0, 1, 2, 3], [1.0; 4]), ([4, 5, 6, 7], [1.0; 4])], 8).unwrap();
-        assert_eq!(eight.weights, [0.125; 8]);
+        let (eight, dropped) =
+            Influence::from_sets(&[([0, 1, 2, 3], [1.0; 4]), ([4, 5, 6, 7], [1.0; 4])], 8).unwrap();
+        assert_eq!((eight.weights, dropped), ([0.125; 8], 0.0));
         let beyond = Influence::from_sets(&[([0, 5, 0, 0], [0.5, 0.5, 0.0, 0.0])], 2).unwrap_err();
         assert!(beyond.contains("joint 5"), "{beyond}");
         // A joint index past the skin that weighs nothing is padding, as exporters write it.
@@ -239,6 +249,24 @@ mod tests {
         assert!(none.contains("sum to 0"), "{none}");
         let negative = Influence::from_sets(&[([0; 4], [1.0, -0.5, 0.0, 0.0])], 1).unwrap_err();
         assert!(negative.contains("≥ 0"), "{negative}");
+    }
+
+    #[test]
+    fn a_third_set_is_read_and_past_eight_joints_the_lightest_go() {
+        // Half the weight on joint 0 in the first set, half on joint 1 in the third, the second
+        // empty: both carry the vertex, half each.
+        let sets =
+            [([0, 0, 0, 0], [0.5, 0.0, 0.0, 0.0]), ([0; 4], [0.0; 4]), ([1, 0, 0, 0], [0.5, 0.0, 0.0, 0.0])];
+        let (halves, dropped) = Influence::from_sets(&sets, 2).unwrap();
+        assert_eq!(
+            (halves.joints[..2].to_vec(), halves.weights[..2].to_vec(), dropped),
+            (vec![0, 1], vec![0.5, 0.5], 0.0)
+        );
+        // Nine joints: the lightest (1 of 17) goes, and the rest are renormalised.
+        let sets = [([0, 1, 2, 3], [2.0; 4]), ([4, 5, 6, 7], [2.0; 4]), ([8, 0, 0, 0], [1.0, 0.0, 0.0, 0.0])];
+        let (kept, dropped) = Influence::from_sets(&sets, 9).unwrap();
+        assert_eq!((kept.joints, kept.weights), ([0, 1, 2, 3, 4, 5, 6, 7], [0.125; 8]));
+        assert!((dropped - 1.0 / 17.0).abs() < 1e-6, "{dropped}");
     }
 
     #[test]
@@ -251,7 +279,7 @@ mod tests {
             node: 0,
             joints: vec![(0, DMat4::IDENTITY), (1, DMat4::IDENTITY)],
             vertices: std::iter::once(0..1).collect(),
-            influences: vec![Influence::from_sets(&[([0, 1, 0, 0], [0.5, 0.5, 0.0, 0.0])], 2).unwrap()],
+            influences: vec![Influence::from_sets(&[([0, 1, 0, 0], [0.5, 0.5, 0.0, 0.0])], 2).unwrap().0],
         };
         let vertex =
             Vertex { position: [1.0, 0.0, 0.0], normal: [1.0, 0.0, 0.0], uv: [0.5, 0.5], material: 3 };
@@ -277,7 +305,7 @@ mod tests {
             node: 0,
             joints: vec![(0, DMat4::IDENTITY)],
             vertices: std::iter::once(0..1).collect(),
-            influences: vec![Influence::from_sets(&[([0; 4], [1.0, 0.0, 0.0, 0.0])], 1).unwrap()],
+            influences: vec![Influence::from_sets(&[([0; 4], [1.0, 0.0, 0.0, 0.0])], 1).unwrap().0],
         };
         let baked = Vertex { position: [3.0, 1.0, 0.0], normal: [0.0, 1.0, 0.0], uv: [0.0; 2], material: 0 };
         let origin = DVec3::new(1024.0, 0.0, 0.0);

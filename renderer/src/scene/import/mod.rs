@@ -59,7 +59,7 @@ pub fn load_gltf(path: &Path) -> Result<Scene, RenderError> {
     }
     importer.scene.materials = materials;
     importer.visit_scene(&document, &buffers).map_err(fail)?;
-    importer.add_skinned(&document, &buffers).map_err(fail)?;
+    warnings.extend(importer.add_skinned(&document, &buffers).map_err(fail)?);
 
     let animations = import_animations(&document, &buffers, &broken_animations, &importer.rig);
     let mut scene = importer.finish();

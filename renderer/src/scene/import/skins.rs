@@ -7,17 +7,19 @@ use glam::DMat4;
 
 use super::Importer;
 use super::primitives::{Placement, check_accessor, check_format, primitive_name};
-use crate::scene::skin::{Influence, Skin};
+use crate::scene::skin::{Influence, MAX_INFLUENCES, Skin};
 
 impl Importer {
     /// Adds the meshes of the skinned nodes that the walk met, once it has placed every joint:
-    /// each vertex where the blend of its joints at rest carries it. The node that holds a
+    /// each vertex where the blend of its joints at rest carries it. Returns what it warns of:
+    /// vertices that named more joints than it keeps. The node that holds a
     /// skinned mesh does not place it (glTF 2.0, 3.7.3.3).
     pub(super) fn add_skinned(
         &mut self,
         document: &gltf::Document,
         buffers: &[gltf::buffer::Data],
-    ) -> Result<(), String> {
+    ) -> Result<Vec<String>, String> {
+        let mut warnings = Vec::new();
         let places: HashMap<usize, usize> =
             self.rig.nodes.iter().enumerate().map(|(place, rest)| (rest.node, place)).collect();
         let rest_worlds = self.rig.rest_worlds();
@@ -33,8 +35,10 @@ impl Importer {
             let first = self.scene.vertices.len();
             let triangles = mesh.primitives().filter(|p| p.mode() == gltf::mesh::Mode::Triangles);
             for primitive in triangles {
-                let influences = read_influences(&primitive, buffers, joints.len())
-                    .map_err(|e| format!("{}: {e}", primitive_name(&mesh, &primitive)))?;
+                let name = primitive_name(&mesh, &primitive);
+                let (influences, dropped) =
+                    read_influences(&primitive, buffers, joints.len()).map_err(|e| format!("{name}: {e}"))?;
+                warnings.extend(dropped.map(|warning| format!("{name}: {warning}")));
                 let blends: Vec<DMat4> = influences.iter().map(|i| i.blend(&matrices)).collect();
                 let placement = Placement::Skinned { blends: &blends, influences: &influences };
                 self.add_primitive(&mesh, &primitive, placement, buffers)?;
@@ -48,7 +52,7 @@ impl Importer {
                 influences: Vec::new(),
             });
         }
-        Ok(())
+        Ok(warnings)
     }
 }
 
@@ -105,27 +109,31 @@ fn read_joints(
 /// One set of `JOINTS_n` and `WEIGHTS_n`: per vertex, four joints and their weights.
 type InfluenceSet = (Vec<[u16; 4]>, Vec<[f32; 4]>);
 
-/// Each vertex's influences, from `JOINTS_0` and `WEIGHTS_0` and the second set where present,
-/// checked against the skin's `joints` and normalised. Errors name the attribute and vertex.
+/// Each vertex's influences, from every set of `JOINTS_n` and `WEIGHTS_n` the primitive has
+/// (glTF allows any number; each must come in a pair), checked against the skin's `joints` and
+/// normalised, and a warning where a vertex named more joints than [`MAX_INFLUENCES`] and lost
+/// the lightest. Errors name the attribute and vertex.
 fn read_influences(
     primitive: &gltf::Primitive,
     buffers: &[gltf::buffer::Data],
     joints: usize,
-) -> Result<Vec<Influence>, String> {
+) -> Result<(Vec<Influence>, Option<String>), String> {
     use gltf::Semantic;
     let count = primitive.get(&Semantic::Positions).map_or(0, |a| a.count());
     let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(|d| &d.0[..]));
+    let numbered = primitive.attributes().filter_map(|(semantic, _)| match semantic {
+        Semantic::Joints(set) | Semantic::Weights(set) => Some(set),
+        _ => None,
+    });
+    let last = numbered.max().unwrap_or(0);
     let mut sets: Vec<InfluenceSet> = Vec::new();
-    for set in 0..2u32 {
+    for set in 0..=last {
         let pair = [Semantic::Joints(set), Semantic::Weights(set)].map(|s| primitive.get(&s).map(|a| (s, a)));
-        let present = pair.iter().filter(|p| p.is_some()).count();
         let [Some(joints_accessor), Some(weights_accessor)] = pair else {
-            if set == 0 || present > 0 {
-                return Err(format!(
-                    "a skinned mesh's primitive needs attributes.JOINTS_{set} and WEIGHTS_{set} together"
-                ));
-            }
-            break;
+            return Err(format!(
+                "a skinned mesh's primitive needs attributes.JOINTS_{set} and WEIGHTS_{set} together{}",
+                if set > 0 { format!(", as it has a set numbered {last}") } else { String::new() }
+            ));
         };
         for (semantic, accessor) in [joints_accessor, weights_accessor] {
             check_format(Some(&semantic), &accessor)
@@ -145,11 +153,22 @@ fn read_influences(
         };
         sets.push((joints.into_u16().collect(), weights.into_f32().collect()));
     }
-    (0..count)
+    let read: Vec<(Influence, f32)> = (0..count)
         .map(|v| {
             let per_vertex: Vec<([u16; 4], [f32; 4])> = sets.iter().map(|(j, w)| (j[v], w[v])).collect();
             Influence::from_sets(&per_vertex, joints)
                 .map_err(|e| format!("attributes.JOINTS and WEIGHTS: vertex {v}: {e}"))
         })
-        .collect()
+        .collect::<Result<_, _>>()?;
+    let dropped: Vec<f32> = read.iter().map(|(_, share)| *share).filter(|share| *share > 0.0).collect();
+    let warning = (!dropped.is_empty()).then(|| {
+        let most = dropped.iter().copied().fold(0.0f32, f32::max);
+        format!(
+            "attributes.JOINTS_0 to JOINTS_{last}: {} vertices name more than {MAX_INFLUENCES} joints; each \
+             keeps its {MAX_INFLUENCES} heaviest, dropping at most {:.1} % of a vertex's weight",
+            dropped.len(),
+            most * 100.0
+        )
+    });
+    Ok((read.into_iter().map(|(influence, _)| influence).collect(), warning))
 }

@@ -138,6 +138,16 @@ fn a_baseline_of_the_schema_before_is_compared_as_blessed_and_upgraded_to_what_b
     let again = ws.run(&["upgrade"]);
     assert!(String::from_utf8_lossy(&again.stdout).contains("of today's schema"), "{again:?}");
 
+    // A folder in the tier is no file upgrade can carry over: refused, naming upgrade.
+    write_json(&file, &whole);
+    let archive = file.parent().unwrap().join("archive");
+    std::fs::create_dir(&archive).unwrap();
+    let kept = ws.run(&["upgrade"]);
+    assert_eq!(kept.status.code(), Some(2));
+    let said = "archive: is no file: upgrade writes the tier's folder anew and could not keep it";
+    assert!(stderr(&kept).contains(said) && stderr(&kept).contains("and upgrade again"), "{}", stderr(&kept));
+    std::fs::remove_dir(&archive).unwrap();
+
     // A schema-1 file with fewer records than run ids is refused by name.
     let mut short = whole.clone();
     short["scenes"].as_array_mut().unwrap().pop();

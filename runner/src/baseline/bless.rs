@@ -101,7 +101,7 @@ pub fn bless(runs: &[RunRecord], root: &Path, consent: Consent, now: &str) -> Re
         .collect();
     let dir = root.join(&run.platform.key).join(run.tier.name());
     if !baselines.is_empty() {
-        write_together(&dir, &baselines)?;
+        write_together(&dir, &baselines, "bless")?;
     }
     blessed.written = baselines.into_iter().map(|(target, _)| target).collect();
     blessed.warnings.extend(strangers(&dir, &blessed.written));
@@ -135,8 +135,8 @@ pub fn replaced_by(runs: &[RunRecord], root: &Path) -> Vec<Baseline> {
 /// ones are assembled in a staging folder beside it (`<tier>.tmp-<pid>`, a temporary that a
 /// later bless removes once its process is gone), which then trades places with `dir` in one
 /// `renameat2(RENAME_EXCHANGE)`. A bless killed at any point leaves every baseline old or
-/// every one new, never a mix.
-fn write_together(dir: &Path, baselines: &[(PathBuf, Baseline)]) -> Result<(), String> {
+/// every one new, never a mix. `command` (`bless`, `upgrade`) is what a refusal names.
+fn write_together(dir: &Path, baselines: &[(PathBuf, Baseline)], command: &str) -> Result<(), String> {
     let parent = dir.parent().ok_or_else(|| format!("{}: no parent folder", dir.display()))?;
     let name = dir.file_name().ok_or_else(|| format!("{}: no folder name", dir.display()))?;
     let mut staging = name.to_owned();
@@ -144,7 +144,7 @@ fn write_together(dir: &Path, baselines: &[(PathBuf, Baseline)]) -> Result<(), S
     let staging = parent.join(staging);
     let error = |path: &Path, e: std::io::Error| format!("{}: {e}", path.display());
     let assemble = || -> Result<(), String> {
-        let kept = if dir.is_dir() { kept_files(dir)? } else { Vec::new() };
+        let kept = if dir.is_dir() { kept_files(dir, command)? } else { Vec::new() };
         std::fs::create_dir_all(&staging).map_err(|e| error(&staging, e))?;
         for file in kept {
             let copy = staging.join(file.file_name().unwrap_or_default());
@@ -164,8 +164,9 @@ fn write_together(dir: &Path, baselines: &[(PathBuf, Baseline)]) -> Result<(), S
 
 /// The files of a tier's folder that a bless carries over: every regular file, baselines and
 /// the user's own (notes, a README). Anything else there (a folder, a link, a FIFO) could not
-/// be carried over whole and would go with the old folder, so it is refused by name.
-fn kept_files(dir: &Path) -> Result<Vec<PathBuf>, String> {
+/// be carried over whole and would go with the old folder, so it is refused by name, with the
+/// `command` to run again.
+fn kept_files(dir: &Path, command: &str) -> Result<Vec<PathBuf>, String> {
     let mut files = Vec::new();
     for entry in std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))? {
         let entry = entry.map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -173,8 +174,8 @@ fn kept_files(dir: &Path) -> Result<Vec<PathBuf>, String> {
             Ok(kind) if kind.is_file() => files.push(entry.path()),
             _ => {
                 return Err(format!(
-                    "{}: is no file: bless writes the tier's folder anew and could not keep it; move it \
-                     out of {} and bless again",
+                    "{}: is no file: {command} writes the tier's folder anew and could not keep it; move \
+                     it out of {} and {command} again",
                     entry.path().display(),
                     dir.display()
                 ));
@@ -406,7 +407,7 @@ pub fn upgrade(root: &Path) -> Result<Vec<PathBuf>, String> {
     }
     let mut written = Vec::new();
     for (tier, baselines) in folders {
-        write_together(&tier, &baselines)?;
+        write_together(&tier, &baselines, "upgrade")?;
         written.extend(baselines.into_iter().map(|(file, _)| file));
     }
     Ok(written)

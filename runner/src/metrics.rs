@@ -357,7 +357,8 @@ pub fn blank_image(hdr: &[f32], display: &DisplayImage) -> Option<String> {
         };
         return Some(format!(
             "blank frame: every pixel has the same HDR colour ({r}, {g}, {b}): {unlit}no sample hit visible \
-             geometry (only back faces, geometry far below a pixel, or nothing in view); declare the scene \
+             geometry (only back faces, geometry far below a pixel, everything nearer than the camera's near \
+             plane or beyond its far plane, or nothing in view); declare the scene \
              `\"empty\": true` if that is meant"
         ));
     }

@@ -465,6 +465,7 @@ fn blank_frames_fail_their_modes_unless_the_scene_is_declared_empty() {
         |scene: usize, mode: usize| record["scenes"][scene]["modes"][mode]["error"].as_str().unwrap_or("");
     for mode in 0..2 {
         assert!(error(0, mode).contains("no sample hit visible geometry"), "{}", error(0, mode));
+        assert!(error(0, mode).contains("beyond its far plane"), "every cause it lists: {}", error(0, mode));
         assert_eq!(record["scenes"][1]["modes"][mode]["status"], "ok", "declared empty");
         assert!(error(2, mode).contains("every display pixel has the code (0, 0, 0)"), "{}", error(2, mode));
     }

@@ -188,7 +188,12 @@ fn a_run_against_its_own_baseline_passes_and_a_doctored_baseline_fails() {
     assert_eq!(quality.len(), 1);
     assert_eq!(quality[0]["outcome"], "unchanged");
     assert_eq!(checks_of(&verdict, "adaptive-2x2", "time_vs_reference").len(), 1);
-    assert!(std::fs::read_to_string(out.join("summary.md")).unwrap().contains("no regression"));
+    let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(summary.contains("no regression"), "{summary}");
+    // A green gate says how green: the smallest slowdown of each time it decided, before the
+    // tables.
+    let reach = "- adaptive over its reference, against the baselines: +";
+    assert!(summary.contains(reach) && summary.find(reach) < summary.find("checks unchanged"), "{summary}");
     assert!(std::fs::read_to_string(out.join("junit.xml")).unwrap().contains("failures=\"0\""));
 
     // The second run of the same scene takes its truth from the cache.

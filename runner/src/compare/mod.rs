@@ -22,6 +22,7 @@ mod mode;
 pub mod outputs;
 mod quality;
 mod request;
+mod sensitivity;
 mod shards;
 mod time;
 mod verdict;

@@ -66,6 +66,14 @@ pub fn summary(verdict: &Verdict) -> String {
     let _ = writeln!(out, "## aabench gate: {headline}\n");
     let _ = writeln!(out, "{}\n", tally(verdict));
     provenance(&mut out, verdict);
+    let reach = super::sensitivity::lines(&verdict.checks);
+    if !reach.is_empty() {
+        out.push_str("The smallest slowdown each time's intervals would have called a regression:\n");
+        for line in &reach {
+            let _ = writeln!(out, "- {line}");
+        }
+        out.push('\n');
+    }
     for note in &verdict.notes {
         let _ = writeln!(out, "- {note}");
     }

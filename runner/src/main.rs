@@ -187,10 +187,10 @@ struct CompareArgs {
     /// time is then gated against them, with the process as the unit (at least 4 a side).
     #[arg(long, num_args = 1.., value_name = "RUN")]
     base_runs: Vec<PathBuf>,
-    /// Fresh processes of the run's build that measured again the scenes a first compare found
-    /// slower than the base build (its `to_confirm`): a time regression against the base then
-    /// stands only where these, decided on their own against `--confirm-base-runs`, find it
-    /// again. `ci/gate.sh` runs them.
+    /// Fresh processes of the run's build that measured again the scenes of the times a first
+    /// compare found suspect against the base build (its `to_confirm`): each suspect is then
+    /// regressed only where all the processes together clear its tolerance and these, against
+    /// `--confirm-base-runs`, estimate it past the tolerance too. `ci/gate.sh` runs them.
     #[arg(long, num_args = 1.., value_name = "RUN", requires_all = ["base_runs", "confirm_base_runs"])]
     confirm_runs: Vec<PathBuf>,
     /// The base build's fresh processes of those scenes, alternating with `--confirm-runs`.

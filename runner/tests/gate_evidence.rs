@@ -301,6 +301,26 @@ fn bless_refuses_a_run_given_twice_and_a_run_that_did_not_finish() {
     assert!(stderr(&compared_twice).contains("is given twice"), "{}", stderr(&compared_twice));
 }
 
+/// A blessed run's record with adaptive-2x2's times scaled so that its pass of under a third of
+/// the frame is checked on its own (at 64×48 a pass takes tenths of a millisecond, too short to
+/// be), and that pass's index.
+fn record_with_a_checked_pass(ws: &Workspace) -> (Value, usize) {
+    let mut record = read_json(&blessed_run(ws).join("run.json"));
+    let (pass, _) = pass_below(&record, "adaptive-2x2", 0.33);
+    let pass_ms = mode_mut(&mut record, "adaptive-2x2")["passes"][pass]["ms"]["median"].as_f64().unwrap();
+    scale_mode(&mut record, "adaptive-2x2", (2.0 / pass_ms).max(1.0));
+    (record, pass)
+}
+
+/// Processes of one build differ a little, all modes together and each mode on its own: process
+/// `i` by up to ±2% and ±1.5%, a fixed pattern.
+fn process_pattern(record: &mut Value, i: usize) {
+    let machine = 1.0 + 0.01 * ((i * 7 % 5) as f64 - 2.0);
+    for (k, id) in MODES.split(',').enumerate() {
+        scale_mode(record, id, machine * (1.0 + 0.005 * (((i + k) * 3 % 7) as f64 - 3.0)));
+    }
+}
+
 /// Against six base processes, six head processes of the same build pass with every time
 /// check unchanged, and a 25% slowdown of one stalled mode regresses that mode alone; the
 /// regression stands when fresh processes find it again (or are too few to decide) and is
@@ -311,23 +331,11 @@ fn time_is_gated_against_the_base_build_process_by_process() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let ws = Workspace::new("base-build");
     ws.manifest("edge", "edge", |_| {});
-    let measured = blessed_run(&ws);
-    let mut record = read_json(&measured.join("run.json"));
-    // At 64×48 a pass takes tenths of a millisecond, too short to be checked on its own:
-    // adaptive-2x2's times are scaled on both sides so that the pass that slows below is not.
-    let (pass, _) = pass_below(&record, "adaptive-2x2", 0.33);
-    let pass_ms = mode_mut(&mut record, "adaptive-2x2")["passes"][pass]["ms"]["median"].as_f64().unwrap();
-    scale_mode(&mut record, "adaptive-2x2", (2.0 / pass_ms).max(1.0));
-    // Processes of one build differ a little, all modes together and each mode on its own:
-    // here by up to ±2% and ±1.5%, a fixed pattern per process.
+    let (record, _) = record_with_a_checked_pass(&ws);
     let process = |folder: String, i: usize, slow: f64| {
         doctored(&ws, &folder, &record, move |r| {
-            let machine = 1.0 + 0.01 * ((i * 7 % 5) as f64 - 2.0);
-            for (k, id) in MODES.split(',').enumerate() {
-                let own = 1.0 + 0.005 * (((i + k) * 3 % 7) as f64 - 3.0);
-                let slowdown = if id == "reference-2x2-stalled" { slow } else { 1.0 };
-                scale_mode(r, id, machine * own * slowdown);
-            }
+            process_pattern(r, i);
+            scale_mode(r, "reference-2x2-stalled", slow);
         })
     };
     let side = |name: &str, count: usize, slow: f64, offset: usize| -> Vec<PathBuf> {
@@ -404,7 +412,13 @@ fn time_is_gated_against_the_base_build_process_by_process() {
     assert_eq!(output.status.code(), Some(1), "{}", String::from_utf8_lossy(&output.stdout));
     let check = stalled(&verdict);
     assert_eq!(check["outcome"], "regressed");
-    assert!(check["detail"].as_str().unwrap().contains("; found again in fresh processes: "), "{check}");
+    assert!(
+        check["detail"]
+            .as_str()
+            .unwrap()
+            .contains("; found again with fresh processes: first and fresh together "),
+        "{check}"
+    );
     assert_eq!(verdict["confirm_run_ids"].as_array().map(Vec::len), Some(6));
     assert!(verdict.get("to_confirm").is_none(), "{}", verdict["to_confirm"]);
     assert!(!list.exists(), "an earlier compare's list outlived it");
@@ -412,13 +426,24 @@ fn time_is_gated_against_the_base_build_process_by_process() {
     assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stdout));
     let check = stalled(&verdict);
     assert_eq!(check["outcome"], "noisy");
-    assert!(check["detail"].as_str().unwrap().contains("; not found again in fresh processes: "), "{check}");
+    assert!(
+        check["detail"]
+            .as_str()
+            .unwrap()
+            .contains("; not found again with fresh processes: first and fresh together "),
+        "{check}"
+    );
     let others = outcomes(&verdict, "relative_time", "base");
     assert!(others.iter().filter(|(m, _)| *m != "reference-2x2-stalled").all(|(_, o)| *o == "unchanged"));
     // Too few fresh processes to decide leave the regression standing.
     let (output, verdict) = confirmed("gate-few-again", &side("few-again", 3, 1.0, 7));
     assert_eq!(output.status.code(), Some(1), "{}", String::from_utf8_lossy(&output.stdout));
-    assert!(stalled(&verdict)["detail"].as_str().unwrap().contains("; not decided in fresh processes: "));
+    assert!(
+        stalled(&verdict)["detail"]
+            .as_str()
+            .unwrap()
+            .contains("; not decided again by the 3 fresh processes of the run and 6 of the base")
+    );
     // A first process given again as a fresh one is refused: it is no new evidence.
     let (output, _) = confirmed("gate-reused", &[slow[0].to_path_buf()]);
     assert_eq!(output.status.code(), Some(2));
@@ -435,6 +460,91 @@ fn time_is_gated_against_the_base_build_process_by_process() {
     let headline = summary.lines().next().unwrap();
     assert!(headline.ends_with("— time not gated"), "no time check could decide: {headline}");
     assert!(summary.contains("but no time check had the evidence to decide"), "{summary}");
+}
+
+/// A pass a quarter slower in both scenes of a run: besides each scene's check, one check pooled
+/// over the scenes (scene `*`) regresses, the summary gives its reach on a line of its own, and
+/// both scenes are named to be measured again; fresh processes that find it again keep it
+/// regressed, with the processes together and the fresh estimate in its detail.
+#[test]
+fn a_pass_slower_in_every_scene_is_also_decided_pooled_over_the_scenes() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("pooled");
+    ws.manifest("edge", "edge", |_| {});
+    let (mut record, pass) = record_with_a_checked_pass(&ws);
+    let name = mode_mut(&mut record, "adaptive-2x2")["passes"][pass]["name"].as_str().unwrap().to_string();
+    // Process `i` of a side: the one scene with a fixed pattern of machine and mode speeds, and
+    // a second scene, the first's record under another name, with another pattern.
+    let process = |folder: String, i: usize, slow: f64| {
+        let pattern = |r: &mut Value, i: usize| {
+            process_pattern(r, i);
+            slow_pass(r, "adaptive-2x2", pass, slow);
+        };
+        doctored(&ws, &folder, &record, move |r| {
+            let mut second = r.clone();
+            pattern(r, i);
+            pattern(&mut second, i + 2);
+            let mut scene = second["scenes"][0].clone();
+            scene["name"] = json!("edge-again");
+            scene["manifest"] = json!("scenes/edge-again.json");
+            r["scenes"].as_array_mut().unwrap().push(scene);
+        })
+    };
+    let side = |name: &str, slow: f64, offset: usize| -> Vec<PathBuf> {
+        (0..4).map(|i| process(format!("{name}-{i}"), i + offset, slow)).collect()
+    };
+    let base = side("base", 1.0, 0);
+    let base_args: Vec<&str> = std::iter::once("--base-runs").chain(base.iter().map(|p| arg(p))).collect();
+    let slow = side("slow", 1.25, 3);
+    let slow: Vec<&Path> = slow.iter().map(PathBuf::as_path).collect();
+    let (output, verdict) = compare(&ws, &slow, "gate-slow", &base_args);
+    assert_eq!(output.status.code(), Some(1), "{}", String::from_utf8_lossy(&output.stdout));
+    let metric = format!("pass_time:{name}");
+    let pass_checks = |verdict: &Value| -> Vec<(String, String)> {
+        let checks = verdict["checks"].as_array().unwrap().iter();
+        let mine = checks
+            .filter(|c| c["against"] == "base" && c["mode"] == "adaptive-2x2" && c["metric"] == *metric);
+        mine.map(|c| (c["scene"].as_str().unwrap().into(), c["outcome"].as_str().unwrap().into())).collect()
+    };
+    let checks = pass_checks(&verdict);
+    assert_eq!(checks.len(), 3, "two scenes and the pool: {checks:?}");
+    assert!(checks.contains(&("*".into(), "regressed".into())), "{checks:?}");
+    let pooled = verdict["checks"].as_array().unwrap().iter().find(|c| c["scene"] == "*").unwrap();
+    assert!(pooled["detail"].as_str().unwrap().contains("geometric mean over 2 scenes"), "{pooled}");
+    assert_eq!(verdict["to_confirm"], json!([record["scenes"][0]["manifest"], "scenes/edge-again.json"]));
+    let summary = std::fs::read_to_string(ws.dir.join("gate-slow/summary.md")).unwrap();
+    assert!(
+        summary.contains(&format!("- pass {name} pooled over the scenes, against the base build: +")),
+        "{summary}"
+    );
+
+    // Fresh processes of both builds: the pooled regression found again stands; not found
+    // again, it is noisy and the gate passes.
+    let confirmed = |folder: &str, slow_again: f64| {
+        let head = side(&format!("{folder}-head"), slow_again, 5);
+        let fresh_base = side(&format!("{folder}-base"), 1.0, 6);
+        let mut args = base_args.clone();
+        args.push("--confirm-runs");
+        args.extend(head.iter().map(|p| arg(p)));
+        args.push("--confirm-base-runs");
+        args.extend(fresh_base.iter().map(|p| arg(p)));
+        compare(&ws, &slow, folder, &args)
+    };
+    let pooled_of = |verdict: &Value| -> Value {
+        let checks = verdict["checks"].as_array().unwrap();
+        checks.iter().find(|c| c["scene"] == "*" && c["metric"] == *metric).unwrap().clone()
+    };
+    let (output, verdict) = confirmed("found", 1.25);
+    assert_eq!(output.status.code(), Some(1), "{}", String::from_utf8_lossy(&output.stdout));
+    let pooled = pooled_of(&verdict);
+    assert_eq!(pooled["outcome"], "regressed", "{pooled}");
+    let detail = pooled["detail"].as_str().unwrap();
+    assert!(detail.contains("; found again with fresh processes: first and fresh together "), "{detail}");
+    assert!(detail.contains("over 8 processes of the base and 8 of the run); the fresh alone +"), "{detail}");
+    let (output, verdict) = confirmed("not-found", 1.0);
+    assert_eq!(output.status.code(), Some(0), "{}", String::from_utf8_lossy(&output.stdout));
+    assert_eq!(pooled_of(&verdict)["outcome"], "noisy");
+    assert!(pass_checks(&verdict).iter().all(|(_, outcome)| outcome != "regressed"));
 }
 
 /// A quarter more time in one pass of adaptive-2x2 that is under a third of its frame moves the

@@ -7,15 +7,22 @@
 //! describes. So each process contributes one number per mode and metric, the median of its
 //! frames, and the shift between the two builds is the Hodges–Lehmann estimate over those
 //! numbers with its Moses interval.
+//!
+//! Each time is decided twice: per scene, and pooled over the scenes ([`super::pooled`]), the
+//! question a change to one pass poses ("did this pass get slower?") asked with all the
+//! evidence the gate holds. A check whose first processes point past its tolerance (regressed,
+//! or noisy with its interval wholly above 0) is a *suspect*: its scenes are measured again in
+//! fresh processes and it is decided once more ([`confirm`]).
 
 use crate::baseline::BaselineSet;
-use crate::record::{RunRecord, SceneRecord, Status};
-use crate::stats::{Rounds, Shift, Summary};
+use crate::record::{ModeRecord, RunRecord, SceneRecord, Status};
+use crate::stats::Rounds;
 use crate::vocabulary::TimeMetric;
 
+use super::pooled;
 use super::request::Confirmation;
-use super::time::decide;
-use super::verdict::{Against, CONFIDENCE, Check, MIN_PROCESSES, Outcome};
+use super::series::{Series, median};
+use super::verdict::{Against, Check, Outcome};
 
 /// Passes shorter than this in the base build are not checked on their own: at a few tenths of
 /// a millisecond a pass is mostly submission and timer, and its slowdown cannot hide much.
@@ -27,65 +34,59 @@ pub const PASS_MIN_MS: f64 = 0.5;
 pub const PASS_MAX_SHARE: f64 = 0.5;
 
 /// The checks of every mode that ran ok in the first process of `runs` and in the base's
-/// processes: `relative_time`, `time_vs_reference` (adaptive modes) and `frame_time`, each
-/// against the time-ratio tolerance of the scene's baseline (its run's when it has none). The
-/// run's processes that did other work than the base's between their rounds (quality measured
-/// where the base timed alone) give no time: [`timing_processes`].
+/// processes: per scene `relative_time`, `time_vs_reference` (adaptive modes), `frame_time` and
+/// `pass_time:<pass>`, each against the time-ratio tolerance of the scene's baseline (its run's
+/// when it has none), then each of them pooled over the scenes. The run's processes that did
+/// other work than the base's between their rounds (quality measured where the base timed
+/// alone) give no time: [`timing_processes`].
 pub(super) fn checks(
-    runs: &[RunRecord],
-    base: &[RunRecord],
+    runs: &[&RunRecord],
+    base: &[&RunRecord],
     baselines: &BaselineSet,
     notes: &mut Vec<String>,
 ) -> Vec<Check> {
+    let series = all_series(runs, base, baselines, notes);
+    let mut checks: Vec<Check> = series.iter().filter_map(Series::check).collect();
+    checks.extend(pooled::checks(&series));
+    checks
+}
+
+/// Every time of every mode of every scene that `runs` (its first process giving the scenes and
+/// modes) and `base` both timed ok.
+fn all_series(
+    runs: &[&RunRecord],
+    base: &[&RunRecord],
+    baselines: &BaselineSet,
+    notes: &mut Vec<String>,
+) -> Vec<Series> {
     let timing = timing_processes(runs, base, notes);
-    let base: Vec<&RunRecord> = base.iter().collect();
     let mut untimed = std::collections::BTreeSet::new();
-    let mut checks = Vec::new();
+    let mut series = Vec::new();
     for scene in runs[0].scenes.iter().filter(|s| s.status == Status::Ok) {
-        let head = records(&timing, &scene.name);
-        let then = records(&base, &scene.name);
-        if then.is_empty() || head.is_empty() {
-            let side = if then.is_empty() { "the base build" } else { "the run's timing processes" };
-            notes
-                .push(format!("{}: not rendered ok by {side}: its time is not compared with it", scene.name));
+        let side = Side { head: records(&timing, &scene.name), base: records(base, &scene.name) };
+        if side.present(&side.head).is_empty() || side.present(&side.base).is_empty() {
+            let which = if side.present(&side.base).is_empty() {
+                "the base build"
+            } else {
+                "the run's timing processes"
+            };
+            notes.push(format!(
+                "{}: not rendered ok by {which}: its time is not compared with it",
+                scene.name
+            ));
             continue;
         }
         let tolerance = baselines.scene(&scene.name).map_or(scene.gate, |b| b.gate).time_ratio;
-        let side = Side { head: &head, base: &then };
-        let anchors = side.anchor_modes();
         let bound = (1.0 + tolerance).ln();
+        let anchors = side.anchor_modes();
         for mode in scene.modes.iter().filter(|m| m.status == Status::Ok) {
             let id = mode.mode.as_str();
             let ok = |record: &&SceneRecord| record.mode(id).is_some_and(|m| m.status == Status::Ok);
-            if !then.iter().all(ok) || !head.iter().any(ok) {
+            if !side.present(&side.base).iter().all(ok) || !side.present(&side.head).iter().any(ok) {
                 untimed.insert(id.to_string());
                 continue;
             }
-            let template = |metric: &str| Check {
-                against: Against::Base,
-                unit: "relative".into(),
-                ..Check::new(&scene.name, id, metric, Outcome::Unchanged, String::new())
-            };
-            let relative = |record: &SceneRecord| {
-                let anchor = record.round_anchor(&anchors, id)?;
-                let samples = &record.mode(id)?.frame_ms.as_ref()?.samples;
-                median(samples.iter().zip(&anchor).map(|(s, a)| s.ln() - a).collect())
-            };
-            let what = "frame time over the geometric mean of the round's other unstalled modes";
-            checks.extend(side.check(relative, bound, what, "×", template(TimeMetric::Relative.id())));
-            if let Some(cost) = &mode.adaptive {
-                let reference = cost.reference.as_str();
-                let ratio = |record: &SceneRecord| {
-                    median(record.paired_ratios(id, reference)?.iter().map(|r| r.ln()).collect())
-                };
-                let what = format!("frame time over {reference}'s in the same round");
-                checks.extend(side.check(ratio, bound, &what, "×", template(TimeMetric::VsReference.id())));
-            }
-            let frame = |record: &SceneRecord| {
-                median(record.mode(id)?.frame_ms.as_ref()?.samples.iter().map(|s| s.ln()).collect())
-            };
-            checks.extend(side.check(frame, bound, "frame time", "ms", template(TimeMetric::Frame.id())));
-            checks.extend(pass_checks(&side, id, bound, template));
+            series.extend(mode_series(&scene.name, &side, &anchors, bound, mode));
         }
     }
     if !untimed.is_empty() {
@@ -96,89 +97,137 @@ pub(super) fn checks(
             ids.join(", ")
         ));
     }
-    checks
+    series
 }
 
-/// One check per pass of mode `id` that takes at least [`PASS_MIN_MS`] and at most
-/// [`PASS_MAX_SHARE`] of its frame in the base build, so that a regression inside a pass is
-/// caught where the frame hides it (a fifth of the frame slowed by a quarter moves the frame
-/// by 5 %). What is compared is the pass's time over the
-/// rest of its own frame: a process that lands slow or fast lands so in every pass of a frame,
-/// and the ratio cancels that, while a slower pass moves it by its whole slowdown (docs/gate.md
-/// has the false alarms and the slowdowns found on recorded gates).
-fn pass_checks(side: &Side, id: &str, bound: f64, template: impl Fn(&str) -> Check) -> Vec<Check> {
-    // Each frame's pass time and the rest of the frame, paired by frame.
-    let frames = |record: &SceneRecord, pass: &str| -> Option<Vec<(f64, f64)>> {
-        let mode = record.mode(id)?;
-        let pass = mode.passes.iter().find(|p| p.name == pass)?;
-        let frame = &mode.frame_ms.as_ref()?.samples;
-        Some(pass.ms.samples.iter().zip(frame).map(|(&pass, &frame)| (pass, frame - pass)).collect())
-    };
-    let Some(first) = side.head[0].mode(id) else { return Vec::new() };
+/// Mode `id`'s frames in `record`, each as its pass `pass`'s time and the rest of the frame.
+fn pass_and_rest(record: &SceneRecord, id: &str, pass: &str) -> Option<Vec<(f64, f64)>> {
+    let mode = record.mode(id)?;
+    let pass = mode.passes.iter().find(|p| p.name == pass)?;
+    let frame = &mode.frame_ms.as_ref()?.samples;
+    Some(pass.ms.samples.iter().zip(frame).map(|(&pass, &frame)| (pass, frame - pass)).collect())
+}
+
+/// The passes of mode `id` checked on their own: those that take at least [`PASS_MIN_MS`] and
+/// at most [`PASS_MAX_SHARE`] of their frame in the base build, so that a regression inside a
+/// pass is caught where the frame hides it (a fifth of the frame slowed by a quarter moves the
+/// frame by 5 %). What is compared is the pass's time over the rest of its own frame: a process
+/// that lands slow or fast lands so in every pass of a frame, and the ratio cancels that, while
+/// a slower pass moves it by its whole slowdown (docs/gate.md has the false alarms and the
+/// slowdowns found on recorded gates).
+fn checked_passes(side: &Side, id: &str) -> Vec<String> {
+    let Some(first) = side.present(&side.head).first().and_then(|s| s.mode(id)) else { return Vec::new() };
     first
         .passes
         .iter()
         .filter(|pass| {
-            let base: Vec<(f64, f64)> =
-                side.base.iter().filter_map(|record| frames(record, &pass.name)).flatten().collect();
+            let base: Vec<(f64, f64)> = side
+                .present(&side.base)
+                .iter()
+                .filter_map(|record| pass_and_rest(record, id, &pass.name))
+                .flatten()
+                .collect();
             let ms = median(base.iter().map(|&(pass, _)| pass).collect());
             let share = median(base.iter().map(|&(pass, rest)| pass / (pass + rest)).collect());
             ms.is_some_and(|ms| ms >= PASS_MIN_MS) && share.is_some_and(|share| share <= PASS_MAX_SHARE)
         })
-        .filter_map(|pass| {
-            let per_process = |record: &SceneRecord| {
-                let ratios = frames(record, &pass.name)?.into_iter().filter(|&(_, rest)| rest > 0.0);
-                median(ratios.map(|(pass, rest)| pass.ln() - rest.ln()).collect())
-            };
-            let what = format!("{} pass time over the rest of its frame", pass.name);
-            side.check(
-                per_process,
-                bound,
-                &what,
-                "×",
-                template(&format!("{}{}", TimeMetric::Pass.id(), pass.name)),
-            )
-        })
+        .map(|pass| pass.name.clone())
         .collect()
 }
 
-/// The manifests of the scenes of `run` with a time regression against the base build, each
-/// once, in the run's order.
-pub(super) fn regressed_manifests(checks: &[Check], run: &RunRecord) -> Vec<String> {
-    let regressed = |scene: &SceneRecord| {
-        checks
-            .iter()
-            .any(|c| c.against == Against::Base && c.outcome == Outcome::Regressed && c.scene == scene.name)
-    };
-    run.scenes.iter().filter(|s| regressed(s)).map(|s| s.manifest.clone()).collect()
+/// Whether the first processes point a check past its tolerance: regressed, or noisy with its
+/// whole interval above 0 (the estimate past the tolerance, the interval not wholly). A suspect
+/// is measured again before the gate decides it ([`confirm`]).
+pub(super) fn is_suspect(check: &Check) -> bool {
+    check.against == Against::Base
+        && match check.outcome {
+            Outcome::Regressed => true,
+            Outcome::Noisy => check.interval.is_some_and(|[low, _]| low > 0.0),
+            _ => false,
+        }
 }
 
-/// Decides each time regression of `checks` again on the fresh processes alone: it stands when
-/// they find it again, or cannot decide (too few of them, the scene or mode not among them);
-/// it becomes `noisy` when they decide that it did not regress. Other checks are left alone:
-/// the fresh processes test only what the first ones found.
-pub(super) fn confirm(checks: &mut [Check], fresh: Confirmation, baselines: &BaselineSet) {
-    let again = self::checks(fresh.runs, fresh.base, baselines, &mut Vec::new());
-    for check in checks.iter_mut().filter(|c| c.outcome == Outcome::Regressed) {
+/// The manifests of the scenes to measure again in fresh processes: each suspect's scene, and
+/// every scene a suspect pooled over the scenes drew on; each once, in the run's order.
+pub(super) fn manifests_to_confirm(checks: &[Check], run: &RunRecord) -> Vec<String> {
+    let suspects: Vec<&Check> = checks.iter().filter(|c| is_suspect(c)).collect();
+    let pooled_over = |scene: &str, check: &Check| {
+        checks.iter().any(|c| {
+            c.scene == scene && c.against == Against::Base && c.mode == check.mode && c.metric == check.metric
+        })
+    };
+    let wanted = |scene: &SceneRecord| {
+        suspects
+            .iter()
+            .any(|s| s.scene == scene.name || (s.scene == pooled::ALL_SCENES && pooled_over(&scene.name, s)))
+    };
+    run.scenes.iter().filter(|s| wanted(s)).map(|s| s.manifest.clone()).collect()
+}
+
+/// Decides each suspect of `checks` again, once `fresh` processes of both builds have measured
+/// its scenes: on the first processes and the fresh ones together, so that the interval
+/// narrows, and against the fresh ones alone, so that the first cannot carry the verdict by
+/// themselves. A suspect is regressed when, taken together, its whole interval lies past the
+/// tolerance and the fresh processes' own estimate lies past it too. A first-pass regression
+/// that is not found again becomes `noisy`; a noisy suspect takes the outcome of all its
+/// processes together (never `regressed` without the fresh estimate). A first-pass regression
+/// that the fresh processes did not measure, or could not decide, stands. Other checks are left
+/// alone: the fresh processes test only what the first ones found.
+pub(super) fn confirm(
+    checks: &mut [Check],
+    first: (&[&RunRecord], &[&RunRecord]),
+    fresh: Confirmation,
+    baselines: &BaselineSet,
+) {
+    let (fresh_runs, fresh_base): (Vec<&RunRecord>, Vec<&RunRecord>) =
+        (fresh.runs.iter().collect(), fresh.base.iter().collect());
+    let again = self::checks(&fresh_runs, &fresh_base, baselines, &mut Vec::new());
+    let all_runs: Vec<&RunRecord> = first.0.iter().copied().chain(fresh_runs.iter().copied()).collect();
+    let all_base: Vec<&RunRecord> = first.1.iter().copied().chain(fresh_base.iter().copied()).collect();
+    let together = self::checks(&all_runs, &all_base, baselines, &mut Vec::new());
+    for check in checks.iter_mut().filter(|c| is_suspect(c)) {
         let same = |c: &&Check| c.scene == check.scene && c.mode == check.mode && c.metric == check.metric;
-        let Some(again) = again.iter().find(same) else {
+        let decided = |c: &&Check| c.outcome != Outcome::Insufficient;
+        let (Some(together), Some(again)) =
+            (together.iter().find(same).filter(decided), again.iter().find(same).filter(decided))
+        else {
             check.detail = format!(
-                "{}; not measured again by the {} fresh processes of the run",
+                "{}; not decided again by the {} fresh processes of the run and {} of the base",
                 check.detail,
-                fresh.runs.len()
+                fresh.runs.len(),
+                fresh.base.len()
             );
             continue;
         };
-        let (outcome, verb) = match again.outcome {
-            Outcome::Regressed => (Outcome::Regressed, "found again"),
-            Outcome::Insufficient => (Outcome::Regressed, "not decided"),
-            _ => (Outcome::Noisy, "not found again"),
-        };
-        // The fresh detail without its "<what> against the base build: " lead, which the
-        // first detail already says.
-        let numbers = again.detail.split_once(": ").map_or(again.detail.as_str(), |(_, numbers)| numbers);
+        let bound = check.threshold.map_or(f64::INFINITY, f64::ln_1p);
+        let fresh_past = again.change.is_some_and(|change| change.ln_1p() > bound);
+        let outcome = reconsidered(check.outcome, together.outcome, fresh_past);
+        let verb = if outcome == Outcome::Regressed { "found again" } else { "not found again" };
+        let numbers = |c: &Check| c.detail.split_once(": ").map_or(c.detail.clone(), |(_, n)| n.to_string());
+        let fresh_change = again.change.map_or("?".into(), |c| format!("{:+.1}%", c * 100.0));
+        check.detail = format!(
+            "{}; {verb} with fresh processes: first and fresh together {}; the fresh alone {fresh_change}",
+            check.detail,
+            numbers(together)
+        );
         check.outcome = outcome;
-        check.detail = format!("{}; {verb} in fresh processes: {numbers}", check.detail);
+        check.change = together.change;
+        check.interval = together.interval;
+        check.baseline = together.baseline;
+        check.current = together.current;
+    }
+}
+
+/// What a suspect whose first outcome was `first` becomes once all its processes together
+/// decided `together`, the fresh ones alone estimating it past the tolerance or not
+/// (`fresh_past`): regressed where both say so; else a first-pass regression is noisy, and a
+/// noisy suspect takes the outcome of all its processes, short of regressed.
+fn reconsidered(first: Outcome, together: Outcome, fresh_past: bool) -> Outcome {
+    match (together, fresh_past) {
+        (Outcome::Regressed, true) => Outcome::Regressed,
+        (Outcome::Regressed, false) => Outcome::Noisy,
+        _ if first == Outcome::Regressed => Outcome::Noisy,
+        (outcome, _) => outcome,
     }
 }
 
@@ -187,8 +236,8 @@ pub(super) fn confirm(checks: &mut [Check], fresh: Confirmation, baselines: &Bas
 /// that also measured quality (the gate's first, which gives the verdict its quality) did other
 /// work between its rounds and is left out.
 fn timing_processes<'a>(
-    runs: &'a [RunRecord],
-    base: &[RunRecord],
+    runs: &[&'a RunRecord],
+    base: &[&RunRecord],
     notes: &mut Vec<String>,
 ) -> Vec<&'a RunRecord> {
     let alone = base.iter().all(|run| !run.settings.quality);
@@ -204,67 +253,84 @@ fn timing_processes<'a>(
     timing
 }
 
-/// The records of scene `name` that ran ok, one per process that has it.
-fn records<'a>(runs: &[&'a RunRecord], name: &str) -> Vec<&'a SceneRecord> {
-    runs.iter()
-        .filter_map(|run| run.scenes.iter().find(|s| s.name == name && s.status == Status::Ok))
-        .collect()
+/// Every time of `mode` in `scene` that the gate compares: `relative_time`, `time_vs_reference`
+/// (adaptive modes), `frame_time` and `pass_time:<pass>` of its checked passes.
+fn mode_series(scene: &str, side: &Side, anchors: &[&str], bound: f64, mode: &ModeRecord) -> Vec<Series> {
+    let id = mode.mode.as_str();
+    let mut series = Vec::new();
+    let mut add = |metric: String,
+                   what: String,
+                   unit: &'static str,
+                   per_process: &dyn Fn(&SceneRecord) -> Option<f64>| {
+        series.push(Series {
+            scene: scene.to_string(),
+            mode: id.to_string(),
+            metric,
+            what,
+            unit,
+            bound,
+            head: side.head.iter().map(|r| r.and_then(per_process)).collect(),
+            base: side.base.iter().map(|r| r.and_then(per_process)).collect(),
+        });
+    };
+    let relative = |record: &SceneRecord| {
+        let anchor = record.round_anchor(anchors, id)?;
+        let samples = &record.mode(id)?.frame_ms.as_ref()?.samples;
+        median(samples.iter().zip(&anchor).map(|(s, a)| s.ln() - a).collect())
+    };
+    let what = "frame time over the geometric mean of the round's other unstalled modes";
+    add(TimeMetric::Relative.id().into(), what.into(), "×", &relative);
+    if let Some(cost) = &mode.adaptive {
+        let reference = cost.reference.as_str();
+        let ratio = |record: &SceneRecord| {
+            median(record.paired_ratios(id, reference)?.iter().map(|r| r.ln()).collect())
+        };
+        let what = format!("frame time over {reference}'s in the same round");
+        add(TimeMetric::VsReference.id().into(), what, "×", &ratio);
+    }
+    let frame = |record: &SceneRecord| {
+        median(record.mode(id)?.frame_ms.as_ref()?.samples.iter().map(|s| s.ln()).collect())
+    };
+    add(TimeMetric::Frame.id().into(), "frame time".into(), "ms", &frame);
+    for pass in checked_passes(side, id) {
+        let per_process = |record: &SceneRecord| {
+            let ratios = pass_and_rest(record, id, &pass)?.into_iter().filter(|&(_, rest)| rest > 0.0);
+            median(ratios.map(|(pass, rest)| pass.ln() - rest.ln()).collect())
+        };
+        let what = format!("{pass} pass time over the rest of its frame");
+        add(format!("{}{pass}", TimeMetric::Pass.id()), what, "×", &per_process);
+    }
+    series
 }
 
-fn median(logs: Vec<f64>) -> Option<f64> {
-    Summary::new(logs).map(|s| s.median)
+/// Per process of `runs`, its record of scene `name` where it rendered it ok.
+fn records<'a>(runs: &[&'a RunRecord], name: &str) -> Vec<Option<&'a SceneRecord>> {
+    runs.iter().map(|run| run.scenes.iter().find(|s| s.name == name && s.status == Status::Ok)).collect()
 }
 
-/// One scene in the run's processes and in the base build's.
+/// One scene in the run's processes and in the base build's, a record per process where it
+/// rendered the scene ok.
 struct Side<'a> {
-    head: &'a [&'a SceneRecord],
-    base: &'a [&'a SceneRecord],
+    head: Vec<Option<&'a SceneRecord>>,
+    base: Vec<Option<&'a SceneRecord>>,
 }
 
-impl Side<'_> {
+impl<'a> Side<'a> {
+    /// The records that are there.
+    fn present(&self, records: &[Option<&'a SceneRecord>]) -> Vec<&'a SceneRecord> {
+        records.iter().flatten().copied().collect()
+    }
+
     /// The unstalled modes that ran ok in every process of both builds (every such mode when
     /// fewer than two are unstalled): the anchor of `relative_time`, as against baselines.
-    fn anchor_modes(&self) -> Vec<&str> {
-        let first = self.head[0];
-        let everywhere = |id: &str| {
-            self.head.iter().chain(self.base).all(|s| s.mode(id).is_some_and(|m| m.status == Status::Ok))
-        };
+    fn anchor_modes(&self) -> Vec<&'a str> {
+        let (head, base) = (self.present(&self.head), self.present(&self.base));
+        let first = head[0];
+        let everywhere =
+            |id: &str| head.iter().chain(&base).all(|s| s.mode(id).is_some_and(|m| m.status == Status::Ok));
         let common: Vec<_> = first.modes.iter().filter(|m| everywhere(&m.mode)).collect();
         let plain: Vec<&str> = common.iter().filter(|m| !m.stalled).map(|m| m.mode.as_str()).collect();
         if plain.len() >= 2 { plain } else { common.iter().map(|m| m.mode.as_str()).collect() }
-    }
-
-    /// One metric: `per_process` gives a process's log value; the head's against the base's.
-    fn check(
-        &self,
-        per_process: impl Fn(&SceneRecord) -> Option<f64>,
-        bound: f64,
-        what: &str,
-        unit: &str,
-        template: Check,
-    ) -> Option<Check> {
-        let head: Vec<f64> = self.head.iter().filter_map(|s| per_process(s)).collect();
-        let base: Vec<f64> = self.base.iter().filter_map(|s| per_process(s)).collect();
-        let value = |logs: &[f64]| median(logs.to_vec()).map(f64::exp);
-        let values = (value(&base)?, value(&head)?);
-        if head.len() < MIN_PROCESSES || base.len() < MIN_PROCESSES {
-            return Some(Check {
-                outcome: Outcome::Insufficient,
-                baseline: Some(values.0),
-                current: Some(values.1),
-                detail: format!(
-                    "{what} against the base build: {} process(es) of the base and {} of the run, fewer than the \
-                     {MIN_PROCESSES} on each side a time verdict needs",
-                    base.len(),
-                    head.len()
-                ),
-                ..template
-            });
-        }
-        let shift = Shift::between(&head, &base, CONFIDENCE)?;
-        let extra = format!(", over {} processes of the base and {} of the run", base.len(), head.len());
-        let what = format!("{what} against the base build");
-        Some(decide(shift, bound, values, unit, &what, &extra).into_check(template))
     }
 }
 
@@ -272,28 +338,17 @@ impl Side<'_> {
 mod tests {
     use super::*;
 
+    /// A suspect is regressed only where all its processes together and the fresh ones alone
+    /// both point past the tolerance; otherwise no more than noisy.
     #[test]
-    fn four_processes_a_side_reach_the_confidence_three_do_not() {
-        let base = [0.0, 0.01, -0.01, 0.005];
-        let slower: Vec<f64> = base.iter().map(|x| x + 0.25).collect();
-        let shift = Shift::between(&slower, &base, CONFIDENCE).unwrap();
-        assert!(shift.level >= CONFIDENCE, "{shift:?}");
-        let decided = decide(shift, 0.1f64.ln_1p(), (1.0, 1.28), "×", "t", "");
-        assert_eq!(decided.outcome, Outcome::Regressed);
-        let few = Shift::between(&slower[..3], &base[..3], CONFIDENCE).unwrap();
-        assert!(few.level < CONFIDENCE, "three a side cannot reach 95%: {few:?}");
-    }
-
-    /// One head process of six landing 30% slower while the others do not move leaves the
-    /// outcome `unchanged`: the Hodges–Lehmann estimate stays within the threshold, so the
-    /// stray process is not called a regression.
-    #[test]
-    fn one_stray_process_makes_a_shift_noisy_not_regressed() {
-        let base = [0.0, 0.01, -0.01, 0.005, 0.0, 0.002];
-        // One head process landed 30% slower, as bimodal modes do; the others did not move.
-        let head = [0.26, 0.01, -0.005, 0.0, 0.004, 0.003];
-        let shift = Shift::between(&head, &base, CONFIDENCE).unwrap();
-        let decided = decide(shift, 0.1f64.ln_1p(), (1.0, 1.0), "×", "t", "");
-        assert_eq!(decided.outcome, Outcome::Unchanged, "{}", decided.detail);
+    fn a_suspect_stands_only_where_the_fresh_processes_point_the_same_way() {
+        use Outcome::*;
+        for first in [Regressed, Noisy] {
+            assert_eq!(reconsidered(first, Regressed, true), Regressed);
+            assert_eq!(reconsidered(first, Regressed, false), Noisy, "all together, not the fresh alone");
+            assert_eq!(reconsidered(first, Noisy, true), Noisy, "the fresh alone, not all together");
+        }
+        assert_eq!(reconsidered(Regressed, Unchanged, false), Noisy, "a first regression stays in view");
+        assert_eq!(reconsidered(Noisy, Unchanged, false), Unchanged, "more processes settle a noisy one");
     }
 }

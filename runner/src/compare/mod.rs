@@ -20,9 +20,11 @@
 mod ab;
 mod mode;
 pub mod outputs;
+mod pooled;
 mod quality;
 mod request;
 mod sensitivity;
+mod series;
 mod shards;
 mod time;
 mod verdict;
@@ -135,10 +137,11 @@ pub fn compare(request: &Request) -> Verdict {
     checks.extend(scene_checks(runs, baselines, &mut notes));
     let mut to_confirm = Vec::new();
     if !base.is_empty() {
-        let mut time = ab::checks(runs, base, baselines, &mut notes);
+        let (runs, base): (Vec<&RunRecord>, Vec<&RunRecord>) = (runs.iter().collect(), base.iter().collect());
+        let mut time = ab::checks(&runs, &base, baselines, &mut notes);
         match confirmation {
-            Some(fresh) => ab::confirm(&mut time, fresh, baselines),
-            None => to_confirm = ab::regressed_manifests(&time, run),
+            Some(fresh) => ab::confirm(&mut time, (&runs, &base), fresh, baselines),
+            None => to_confirm = ab::manifests_to_confirm(&time, run),
         }
         checks.extend(time);
     }

@@ -169,8 +169,10 @@ fn provenance(out: &mut String, verdict: &Verdict) {
     if !verdict.confirm_run_ids.is_empty() {
         let _ = writeln!(
             out,
-            "Each time regression against the base build was decided again on {} fresh processes of the base and \
-             {} of the run: it stands only where they found it again.\n",
+            "Each suspect time against the base build (regressed, or noisy with its interval above 0) was decided \
+             again with {} fresh processes of the base and {} of the run: it is regressed only where all the \
+             processes together put its whole interval past the tolerance and the fresh ones alone estimate it past \
+             the tolerance too.\n",
             verdict.confirm_base_run_ids.len(),
             verdict.confirm_run_ids.len()
         );
@@ -178,7 +180,7 @@ fn provenance(out: &mut String, verdict: &Verdict) {
     if !verdict.to_confirm.is_empty() {
         let _ = writeln!(
             out,
-            "Time regressed against the base build in {}: not yet measured again in fresh processes \
+            "Time against the base build is suspect in {}: not yet measured again in fresh processes \
              (`ci/gate.sh` does; by hand, `--confirm-runs` and `--confirm-base-runs`).\n",
             verdict.to_confirm.join(", ")
         );

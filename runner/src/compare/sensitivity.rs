@@ -11,6 +11,7 @@
 
 use std::collections::BTreeMap;
 
+use super::pooled::ALL_SCENES;
 use super::verdict::{Against, Check, Outcome, is_time_metric};
 use crate::vocabulary::TimeMetric;
 
@@ -34,25 +35,28 @@ fn what(metric: &str) -> String {
     }
 }
 
-/// One line per time the verdict decided, against the baselines or the base build: `frame over
-/// the round's other modes, against the baselines: +14.2 % (median of 493), +31.0 % at most`.
+/// One line per time the verdict decided, against the baselines or the base build, per scene or
+/// pooled over the scenes: `frame over the round's other modes, against the baselines: +14.2 %
+/// (median of 493), +31.0 % at most`; a pooled line's count is of modes.
 pub fn lines(checks: &[Check]) -> Vec<String> {
-    let mut groups: BTreeMap<(bool, String), Vec<f64>> = BTreeMap::new();
+    let mut groups: BTreeMap<(bool, String, bool), Vec<f64>> = BTreeMap::new();
     let timed = checks.iter().filter(|c| is_time_metric(&c.metric) && c.outcome != Outcome::Insufficient);
     for check in timed {
         let Some(smallest) = smallest_caught(check) else { continue };
-        let group = (check.against == Against::Base, check.metric.clone());
+        let pooled = check.scene == ALL_SCENES;
+        let group = (check.against == Against::Base, check.metric.clone(), pooled);
         groups.entry(group).or_default().push(smallest);
     }
     groups
         .into_iter()
-        .map(|((base, metric), mut caught)| {
+        .map(|((base, metric, pooled), mut caught)| {
             caught.sort_by(f64::total_cmp);
             let n = caught.len();
             let median = if n % 2 == 1 { caught[n / 2] } else { (caught[n / 2 - 1] + caught[n / 2]) / 2.0 };
             let against = if base { "the base build" } else { "the baselines" };
+            let over = if pooled { " pooled over the scenes" } else { "" };
             format!(
-                "{}, against {against}: {:+.1} % (median of {n}), {:+.1} % at most",
+                "{}{over}, against {against}: {:+.1} % (median of {n}), {:+.1} % at most",
                 what(&metric),
                 median * 100.0,
                 caught[n - 1] * 100.0

@@ -21,8 +21,8 @@ pub enum Outcome {
     /// Better beyond the tolerance.
     Improved,
     /// A time whose estimate is past the threshold but whose interval is not wholly: the
-    /// repetitions cannot tell; or a time regression against the base build that fresh
-    /// processes did not find again. Reported, not failed.
+    /// repetitions cannot tell; or a time suspect against the base build that fresh processes
+    /// did not find again. Reported, not failed.
     Noisy,
     /// A time with too little evidence to decide either way: fewer than [`MIN_FRAMES`] frames
     /// on a side, or fewer than [`MIN_PROCESSES`] processes of the base or the head. Reported,
@@ -116,6 +116,7 @@ pub enum Against {
 /// One decision: a metric of a mode of a scene.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Check {
+    /// The scene; `*` for the run as a whole, or for a time pooled over the scenes.
     pub scene: String,
     pub mode: String,
     /// `status`, `psnr_vs_truth`, `mse_vs_truth`, `flip_vs_truth`, `ssim_vs_truth`,
@@ -193,7 +194,8 @@ pub struct Verdict {
     pub confirm_run_ids: Vec<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub confirm_base_run_ids: Vec<String>,
-    /// The manifests of the scenes whose time regressed against the base build and was not yet
+    /// The manifests of the scenes of the times suspect against the base build (regressed, or
+    /// noisy with the interval above 0; a pooled suspect names every scene it drew on), not yet
     /// measured again: `ci/gate.sh` runs them in fresh processes and compares once more.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub to_confirm: Vec<String>,

@@ -15,7 +15,7 @@ use std::path::PathBuf;
 
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::load_gltf;
-use aabench_renderer::scene::pose::Poser;
+use aabench_renderer::scene::pose::{FileCamera, Poser};
 use aabench_renderer::scene::skin::Influence;
 use aabench_renderer::scene::write::{Channel, GltfWriter, MaterialDesc, MeshData, SkinDesc, glb};
 use glam::{DVec3, Quat};
@@ -151,6 +151,25 @@ fn a_skinned_strip_rests_where_its_skeleton_does_and_bends_with_its_joint() {
 
 /// Each x's joints and weights, one set of the strip's.
 type StripSet = ([[u16; 4]; 4], [[f32; 4]; 4]);
+
+/// An animation that moves only a skinned mesh's own node moves nothing (its joints place it,
+/// and glTF ignores that node's transform): refused as such, not as a node without geometry.
+#[test]
+fn an_animation_of_a_skinned_meshs_node_alone_is_refused_naming_the_skin() {
+    let folder = Folder::new("skin-node-only");
+    let path = write_edited(&folder, "strip.glb", &good_strip(), |d| {
+        let node = d["nodes"].as_array().unwrap().len() - 1;
+        d["animations"][0]["channels"][0]["target"] = json!({ "node": node, "path": "rotation" });
+    });
+    let mut scene = load_gltf(&path).expect("the strip loads");
+    scene.playing = Some(0);
+    let poser = Poser::of(&scene).expect("the animation plays");
+    let error = poser.check_moves_something(FileCamera::Still).expect_err("nothing in the frame moves");
+    let node = scene.rig.nodes.iter().map(|n| n.node).max().unwrap();
+    let expected =
+        format!("moves only nodes[{node}]: nodes[{node}] holds a skinned mesh, which its joints place");
+    assert!(error.starts_with(&expected), "{error}");
+}
 
 /// The strip of `first` joints and weights, given two more sets of them (each set's accessors
 /// taken from a mesh added for it and left out of the scene), loaded.

@@ -283,7 +283,7 @@ fn run_command(args: RunArgs) -> u8 {
         Ok(runtime) => runtime,
         Err(error) => return fail(format!("cannot start the async runtime: {error}")),
     };
-    runtime.block_on(async move {
+    let code = runtime.block_on(async move {
         let progress = Progress::new();
         let cancel = Arc::new(AtomicBool::new(false));
         let flag = Arc::clone(&cancel);
@@ -311,7 +311,10 @@ fn run_command(args: RunArgs) -> u8 {
             // Errors print whole; `no Vulkan adapter` prints as its one-line install hint.
             Err(error) => fail(format!("{error:#}")),
         }
-    })
+    });
+    // An image task that a signal cut short may still run: dropping the runtime would wait.
+    runtime.shutdown_background();
+    code
 }
 
 /// Waits for SIGINT, SIGTERM or (when `hangup`) SIGHUP: what a terminal, `kill` and a

@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use aabench_renderer::scene::generate::GENERATOR_STAMP;
-use aabench_renderer::scene::pose::{CameraPath, Poser};
+use aabench_renderer::scene::pose::{CameraPath, FileCamera, Poser};
 use aabench_renderer::scene::{
     Camera, Light, LightKind, Lighting, MAX_LIGHTS, Scene, Shadow, load_gltf, read_generator,
 };
@@ -111,6 +111,7 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
         scene.playing.map(|index| [scene.animations[index].start(), scene.animations[index].duration()]);
     let timeline = manifest.motion.as_ref().map(|motion| motion.timeline(warmup_frames(motion), keys));
     let camera = camera(manifest, &scene)?;
+    scene.warnings.extend(aspect_warning(manifest, &scene));
     let camera = match (&camera_path, &timeline) {
         (Some(path), Some(timeline)) => start_camera(manifest, path, timeline, camera)?,
         _ => camera,
@@ -181,7 +182,11 @@ fn pick_animation(manifest: &Manifest, scene: &mut Scene) -> anyhow::Result<()> 
     scene.playing = Some(index);
     // Every pose it takes is held to the bounds that the rest pose was, and some pose moves
     // what a frame shows.
-    let camera = manifest.camera.is_none() && CameraPath::of(scene).is_some();
+    let camera = match (CameraPath::of(scene), scene.camera_node) {
+        (Some(_), Some(node)) if manifest.camera.is_some() => FileCamera::Replaced(node),
+        (Some(_), _) => FileCamera::Moved,
+        (None, _) => FileCamera::Still,
+    };
     let checked = Poser::of(scene)
         .map_or(Ok(()), |poser| poser.check().and_then(|()| poser.check_moves_something(camera)));
     if let Err(error) = checked {
@@ -388,6 +393,30 @@ pub fn default_rig() -> Vec<Light> {
         shadow: None,
     };
     vec![directional(Vec3::new(0.4, -1.0, -0.6), 3.0), directional(Vec3::new(-0.7, -0.3, -0.4), 1.0)]
+}
+
+/// Where the file's camera, which the scene renders from, declares an aspect ratio that a tier's
+/// frame does not have: aabench keeps the camera's vertical field of view at the manifest's
+/// resolution, so the frame spans more or less of the width the file's camera frames.
+fn aspect_warning(manifest: &Manifest, scene: &Scene) -> Option<String> {
+    let (camera, declared) = scene.camera_aspect.filter(|_| manifest.camera.is_none())?;
+    let tiers: Vec<String> = [("quick", manifest.resolution.quick), ("nightly", manifest.resolution.nightly)]
+        .into_iter()
+        .filter_map(|(tier, [width, height])| {
+            let spans = f64::from(width) / f64::from(height) / declared;
+            ((spans - 1.0).abs() > 0.01).then(|| {
+                format!("resolution.{tier} ({width}×{height}) spans {:.0} % of its width", 100.0 * spans)
+            })
+        })
+        .collect();
+    (!tiers.is_empty()).then(|| {
+        format!(
+            "cameras[{camera}].aspectRatio is {declared:.3}, and aabench keeps the camera's vertical field of view \
+             at the manifest's resolution: {}; give the manifest a resolution of that aspect to frame what the \
+             file's camera frames",
+            tiers.join(" and ")
+        )
+    })
 }
 
 /// The manifest's camera, else the file's, checked by the renderer's rules. A missing far plane

@@ -467,6 +467,48 @@ fn ctrl_c_while_the_path_is_measured_leaves_the_scene_interrupted_not_ok() {
     assert_eq!(scene["sequences"][0]["frames_done"], 16);
 }
 
+/// A signal while a large still's FLIP, SSIM and JOD are computed gives them up half a second later
+/// (they cannot be stopped midway): the run exits with what it measured, each mode's timings,
+/// while a cancelled CI job's SIGKILL is still seconds away, where it used to wait them out.
+#[test]
+fn a_signal_during_a_large_stills_metrics_gives_them_up_and_keeps_the_timings() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let ws = Workspace::new("interrupt-metrics");
+    ws.manifest("edge", "edge", |m| m["resolution"]["quick"] = json!([2048, 1536]));
+    let modes = "deferred-1x1,fxaa,smaa,reference-2x2";
+    let mut child =
+        ws.command(&["run", "--modes", modes, "--repetitions", "1"]).stderr(Stdio::piped()).spawn().unwrap();
+    wait_for_line(&stderr_lines(&mut child), "writing images and metrics");
+    let signalled = Instant::now();
+    let sent = Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap();
+    assert!(sent.success());
+    assert_eq!(child.wait().unwrap().code(), Some(130));
+    let waited = signalled.elapsed();
+
+    let record = ws.record();
+    assert_eq!(record["status"], "interrupted");
+    let scene = &record["scenes"][0];
+    assert_eq!(scene["status"], "interrupted", "{scene}");
+    assert_eq!(scene["error"], "interrupted while its metrics and images were computed");
+    let given_up: Vec<&Value> =
+        scene["modes"].as_array().unwrap().iter().filter(|m| m["status"] == "interrupted").collect();
+    assert!(
+        !given_up.is_empty(),
+        "the metrics of four modes at 2048×1536 take longer than half a second: {scene}"
+    );
+    for mode in given_up {
+        assert!(mode["vs_ground_truth"].is_null(), "{mode}");
+        assert_eq!(
+            mode["frame_ms"]["samples"].as_array().map(Vec::len),
+            Some(1),
+            "its timing is kept: {mode}"
+        );
+    }
+    // Without the grace the metrics take tens of seconds here; the bound leaves room for a
+    // loaded machine.
+    assert!(waited < Duration::from_secs(8), "exited {waited:?} after the signal");
+}
+
 #[test]
 fn a_killed_run_leaves_the_scenes_that_finished() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());

@@ -206,8 +206,10 @@ fn a_manifest_that_picks_a_missing_or_broken_animation_is_refused_by_name() {
 }
 
 /// A grey panel from x = −1 to 5 m, 2 m tall, facing +z; the file's camera 3 m before it (node 1),
-/// which the animation `fly` carries 6 m along x in a second; an empty node (node 2), which the
-/// animation `idle` lifts. Written as `fly.gltf` into the workspace's scenes.
+/// which the animation `fly` carries 6 m along x in a second (a 16:9 camera: the tests' 4:3 frames
+/// span three quarters of its width); an empty node (node 2), which the
+/// animation `idle` lifts; an orthographic camera (node 3) and a second perspective one (node 4),
+/// which the animation `look` lifts. Written as `fly.gltf` into the workspace's scenes.
 fn write_flying_camera(space: &support::Workspace) {
     let square: [[f32; 3]; 6] = [
         [-1.0, -1.0, 0.0],
@@ -236,13 +238,26 @@ fn write_flying_camera(space: &support::Workspace) {
             { "bufferView": 3, "componentType": 5126, "count": 2, "type": "VEC3" }
         ],
         "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
-        "cameras": [{ "type": "perspective", "perspective": { "yfov": 0.8, "znear": 0.1, "zfar": 50 } }],
-        "nodes": [{ "mesh": 0 }, { "camera": 0, "translation": [0, 0, 3] }, { "name": "marker" }],
-        "scenes": [{ "nodes": [0, 1, 2] }],
+        "cameras": [
+            { "type": "perspective", "perspective": { "yfov": 0.8, "aspectRatio": 1.7778, "znear": 0.1, "zfar": 50 } },
+            { "type": "orthographic", "orthographic": { "xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 50 } },
+            { "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.1 } }
+        ],
+        "nodes": [
+            { "mesh": 0 }, { "camera": 0, "translation": [0, 0, 3] }, { "name": "marker" },
+            { "camera": 1, "translation": [0, 0, 4] }, { "camera": 2, "translation": [0, 0, 5] }
+        ],
+        "scenes": [{ "nodes": [0, 1, 2, 3, 4] }],
         "animations": [
             { "name": "fly", "channels": [{ "sampler": 0, "target": { "node": 1, "path": "translation" } }],
               "samplers": [{ "input": 1, "output": 2 }] },
             { "name": "idle", "channels": [{ "sampler": 0, "target": { "node": 2, "path": "translation" } }],
+              "samplers": [{ "input": 1, "output": 3 }] },
+            { "name": "look",
+              "channels": [
+                  { "sampler": 0, "target": { "node": 3, "path": "translation" } },
+                  { "sampler": 0, "target": { "node": 4, "path": "translation" } }
+              ],
               "samplers": [{ "input": 1, "output": 3 }] }
         ]
     });
@@ -272,6 +287,15 @@ fn an_animated_camera_moves_the_view_and_an_animation_that_moves_nothing_is_refu
     let speed = sequence["measured_speed"]["median"].as_f64().expect("a measured speed");
     assert!((speed - 1.89).abs() < 0.15, "the view moves as the camera's node: {speed} px a frame");
     assert!(sequence["truth_change"].as_f64().unwrap() > 0.0, "the frames change");
+    let warnings = support::scene(&record, "flying")["warnings"].to_string();
+    assert!(
+        warnings.contains(
+            "cameras[0].aspectRatio is 1.778, and aabench keeps the camera's vertical field of view at the \
+             manifest's resolution: resolution.quick (64×48) spans 75 % of its width and resolution.nightly \
+             (128×96) spans 75 % of its width"
+        ),
+        "{warnings}"
+    );
     let refused = |manifest, parts: &[&str]| {
         let output = run(manifest);
         assert_eq!(output.status.code(), Some(3), "the scene fails");
@@ -286,7 +310,30 @@ fn an_animated_camera_moves_the_view_and_an_animation_that_moves_nothing_is_refu
     );
     refused(
         manifest("idle", "idle", "static"),
-        &["idle.json", "animations[1] (\"idle\")", "moves only nodes[2]"],
+        &[
+            "idle.json",
+            "animations[1] (\"idle\")",
+            "moves only nodes[2], which hold no geometry and no camera",
+        ],
+    );
+    // Cameras it moves that the frames are not rendered from are named as such.
+    refused(
+        manifest("look", "look", "static"),
+        &[
+            "moves only nodes[3], nodes[4]: ",
+            "nodes[3] holds an orthographic camera, and aabench renders from the file's first perspective camera",
+            "nodes[4] holds a camera after the first",
+        ],
+    );
+    let replaced = space.manifest("replaced", "crossing", |m| {
+        m.as_object_mut().unwrap().remove("generate");
+        m["gltf"] = json!("fly.gltf");
+        m["camera"] = json!({ "position": [2.0, 0.0, 4.0], "target": [2.0, 0.0, 0.0], "fov_y_degrees": 45 });
+        m["motion"] = json!({ "path": "static", "animation": { "name": "fly" } });
+    });
+    refused(
+        replaced,
+        &["moves only nodes[1]: nodes[1] holds the file's camera, which the manifest's `camera` replaces"],
     );
 }
 

@@ -257,7 +257,8 @@ fn sigterm_ends_the_run_like_ctrl_c_and_marks_later_scenes_not_run() {
 }
 
 /// Under `--memory-limit 0.001` (1 MiB), reference-4x4 fails with its estimate while
-/// deferred-1x1 runs, and the run exits 3.
+/// deferred-1x1 runs, and the run exits 3. The closing summary says why the scene failed,
+/// though the scene's own record names no error: its mode did.
 #[test]
 fn a_mode_over_the_memory_limit_fails_alone_with_its_estimate() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
@@ -284,6 +285,13 @@ fn a_mode_over_the_memory_limit_fails_alone_with_its_estimate() {
         error.contains("reference-4x4 needs an estimated")
             && error.contains("over the memory limit of 1 MiB"),
         "{error}"
+    );
+    assert!(scene["error"].is_null(), "{scene}");
+    let closing =
+        stderr(&output).lines().find(|l| l.trim_start().starts_with("edge ")).unwrap_or_default().to_string();
+    assert!(
+        closing.contains("failed: 1 of 2 modes failed; reference-4x4: reference-4x4 needs an estimated"),
+        "{closing}"
     );
 }
 

@@ -288,6 +288,40 @@ pub struct RestNode {
 pub struct Rig {
     pub nodes: Vec<RestNode>,
     pub skins: Vec<Skin>,
+    /// The nodes (glTF indices) that hold something no move of their own shows in a frame.
+    pub unseen: Vec<(usize, Unseen)>,
+}
+
+/// What a node holds that moving the node does not move in a frame: why an animation of such
+/// nodes alone moves nothing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Unseen {
+    /// A skinned mesh: its joints place its vertices, and glTF ignores its own node's transform.
+    SkinnedMesh,
+    /// An orthographic camera: aabench renders from the file's first perspective camera.
+    OrthographicCamera,
+    /// A perspective camera after the first, which aabench renders from.
+    LaterCamera,
+}
+
+impl Unseen {
+    /// Why `nodes[node]`, which holds this, moves nothing in a frame.
+    pub fn why(self, node: usize) -> String {
+        match self {
+            Unseen::SkinnedMesh => format!(
+                "nodes[{node}] holds a skinned mesh, which its joints place (glTF ignores the transform of a \
+                 skinned mesh's node), and the animation moves none of them"
+            ),
+            Unseen::OrthographicCamera => format!(
+                "nodes[{node}] holds an orthographic camera, and aabench renders from the file's first \
+                 perspective camera"
+            ),
+            Unseen::LaterCamera => format!(
+                "nodes[{node}] holds a camera after the first, and aabench renders from the file's first \
+                 perspective camera"
+            ),
+        }
+    }
 }
 
 impl Rig {
@@ -487,6 +521,7 @@ mod tests {
                 rest(None, 2, 3..6, DVec3::Z),
             ],
             skins: vec![],
+            unseen: vec![],
         };
         rig.nodes[1].world = DMat4::from_translation(DVec3::X + DVec3::Y);
         rig.nodes[2].world = DMat4::from_translation(DVec3::Z);
@@ -537,6 +572,7 @@ mod tests {
                 },
             ],
             skins: vec![],
+            unseen: vec![],
         };
         let slide = track(Property::Translation, Interpolation::Step, &[0.0], &[[5.0, 0.0, 0.0, 0.0]]);
         let moves = rig.moves(&[slide], 0.0);

@@ -285,6 +285,9 @@ pub struct Scene {
     pub camera: Option<Camera>,
     /// The glTF node that holds `camera`, which an animation can move.
     pub camera_node: Option<usize>,
+    /// The `aspectRatio` that `camera` declares, with its index in `cameras`: aabench renders at
+    /// the manifest's resolution and keeps the vertical field of view.
+    pub camera_aspect: Option<(usize, f64)>,
     /// Where the scene's coordinates start, in the file's world space: vertices, bounds and
     /// the camera are relative to it, so geometry far from the file's origin keeps f32
     /// precision. Manifest cameras and lights are moved by it before rendering.

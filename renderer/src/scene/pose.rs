@@ -217,9 +217,11 @@ impl Poser {
     }
 
     /// Whether the animation moves anything a frame shows: a node's vertices, a skin's, or the
-    /// file's camera (`camera`: [`CameraPath::of`] found one). On failure, the nodes it moves.
-    pub fn check_moves_something(&self, camera: bool) -> Result<(), String> {
-        let shows = camera || !self.skins.is_empty() || !self.rig.node_changes(&self.tracks, 0.0).is_empty();
+    /// camera aabench renders from. On failure, the nodes it moves and why none of them shows.
+    pub fn check_moves_something(&self, camera: FileCamera) -> Result<(), String> {
+        let shows = camera == FileCamera::Moved
+            || !self.skins.is_empty()
+            || !self.rig.node_changes(&self.tracks, 0.0).is_empty();
         if shows {
             return Ok(());
         }
@@ -227,12 +229,45 @@ impl Poser {
         nodes.sort_unstable();
         nodes.dedup();
         let nodes: Vec<String> = nodes.iter().map(|n| format!("nodes[{n}]")).collect();
-        Err(format!(
-            "moves only {}, which hold no geometry and no camera, nor do the nodes below them: nothing \
-             in the frame would move",
-            nodes.join(", ")
-        ))
+        let moved = self.rig.moved(&self.tracks);
+        let moved_nodes: Vec<usize> = self
+            .rig
+            .nodes
+            .iter()
+            .zip(&moved)
+            .filter(|(_, moved)| **moved)
+            .map(|(rest, _)| rest.node)
+            .collect();
+        let mut why: Vec<String> = (self.rig.unseen.iter())
+            .filter(|(node, _)| moved_nodes.contains(node))
+            .map(|&(node, unseen)| unseen.why(node))
+            .collect();
+        if let FileCamera::Replaced(node) = camera {
+            why.push(format!(
+                "nodes[{node}] holds the file's camera, which the manifest's `camera` replaces"
+            ));
+        }
+        if why.is_empty() {
+            return Err(format!(
+                "moves only {}, which hold no geometry and no camera, nor do the nodes below them: nothing \
+                 in the frame would move",
+                nodes.join(", ")
+            ));
+        }
+        Err(format!("moves only {}: {}: nothing in the frame would move", nodes.join(", "), why.join("; ")))
     }
+}
+
+/// The file's camera as an animation's check sees it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FileCamera {
+    /// The animation moves the camera that the frames are rendered from.
+    Moved,
+    /// The animation moves the file's camera, on `nodes[n]`, but the manifest's `camera`
+    /// replaces it.
+    Replaced(usize),
+    /// The animation leaves it where it is, or the file has none.
+    Still,
 }
 
 /// The file's camera as the playing animation moves it (the node that holds it, or one above).
@@ -251,7 +286,7 @@ impl CameraPath {
         let tracks = scene.playing_tracks()?.to_vec();
         let node = scene.camera_node?;
         let place = scene.rig.nodes.iter().position(|n| n.node == node)?;
-        let rig = Rig { nodes: scene.rig.nodes.clone(), skins: Vec::new() };
+        let rig = Rig { nodes: scene.rig.nodes.clone(), ..Rig::default() };
         rig.moved(&tracks)[place].then_some(CameraPath { tracks, rig, place, origin: scene.origin })
     }
 

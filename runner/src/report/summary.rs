@@ -38,11 +38,31 @@ pub fn closing(run: &RunRecord, run_json: &Path) -> Vec<String> {
     lines
 }
 
+/// Why a scene whose own record names no error did not finish ok: its modes that did not, and
+/// the first one's error (`2 of 4 modes failed; fxaa: …`).
+fn modes_at_fault(scene: &SceneRecord) -> String {
+    let at_fault: Vec<_> = scene.modes.iter().filter(|m| m.status != Status::Ok).collect();
+    let Some(first) = at_fault.first() else { return "no reason recorded".into() };
+    let error = first.error.as_deref().and_then(|e| e.lines().next());
+    format!(
+        "{} of {} modes {}; {}: {}",
+        at_fault.len(),
+        scene.modes.len(),
+        first.status,
+        first.mode,
+        error.unwrap_or("no reason recorded")
+    )
+}
+
 /// `path   msaa-4x 9.66 JOD, 30.2 ms (2.04× deferred-1x1); the best, reference-4x4, 9.70`, or
 /// why the scene has no answer.
 fn scene_answer(scene: &SceneRecord) -> String {
     if scene.status != Status::Ok {
-        let why = scene.error.as_deref().and_then(|e| e.lines().next()).unwrap_or("no reason recorded");
+        let why = scene
+            .error
+            .as_deref()
+            .and_then(|e| e.lines().next())
+            .map_or_else(|| modes_at_fault(scene), String::from);
         return format!("{}: {why}", scene.status);
     }
     match Basis::of_scene(scene).into_iter().find_map(|basis| Some((basis, answer(scene, basis)?))) {

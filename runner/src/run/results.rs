@@ -4,6 +4,8 @@
 
 use std::path::Path;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 use aabench_renderer::{DisplayImage, FrameImages, Mode, Technique};
 
@@ -19,19 +21,27 @@ use crate::truth::TRUTH_ID;
 /// Display differences of this many 8-bit steps reach the top of the difference heatmap.
 const DIFFERENCE_FULL_SCALE: f64 = 32.0;
 
+/// How long the image tasks may go on once the run is interrupted. A small scene's metrics and
+/// images finish within it; a large still's FLIP, SSIM and JOD (tens of seconds at 4096², in a
+/// library that cannot be stopped midway) are given up, so that the run exits while a cancelled
+/// CI job's SIGKILL is still seconds away and its record says what was measured.
+const GRACE_AFTER_SIGNAL: Duration = Duration::from_millis(500);
+
 /// Builds the mode records from the scene's runs: timing summaries, then quality metrics and
-/// image files, one blocking task per mode. Returns them and the CPU seconds that the
-/// comparisons with the truth took (MSE, FLIP and SSIM).
+/// image files, one blocking task per mode. Returns them, the CPU seconds that the comparisons
+/// with the truth took (MSE, FLIP and SSIM), and whether a signal cut the tasks short: the
+/// modes whose task had not finished [`GRACE_AFTER_SIGNAL`] after it are `interrupted`, their
+/// timings kept.
 pub(super) async fn finish_modes(
     scene: &SceneRun<'_>,
     runs: Vec<ModeRun>,
     truth: Option<DisplayImage>,
     interrupted: bool,
-) -> (Vec<ModeRecord>, f64) {
+) -> (Vec<ModeRecord>, f64, bool) {
     let modes = &scene.plan.modes;
     let mut records = timing_records(scene, &runs, interrupted);
     if !scene.plan.quality {
-        return (records, 0.0);
+        return (records, 0.0, false);
     }
     let images: Arc<Vec<Option<FrameImages>>> = Arc::new(runs.into_iter().map(|r| r.images).collect());
     // The truth's share of SSIM is computed once here, for all of them (a few tens of
@@ -60,15 +70,48 @@ pub(super) async fn finish_modes(
     // What was measured is kept when an image cannot be written (a full disk): the mode then
     // fails with the write's error, its metrics and the images that were written recorded.
     let mut perceptual_s = 0.0;
+    let mut deadline = None;
+    let mut cut_short = false;
     for (record, task) in records.iter_mut().zip(tasks) {
         let Some(task) = task else { continue };
-        match task.await {
-            Ok(results) => perceptual_s += results.record_into(record),
-            Err(panic) => fail_mode(record, format!("image task panicked: {panic}")),
+        match finished_in_time(task, scene.cancel, &mut deadline).await {
+            Some(Ok(results)) => perceptual_s += results.record_into(record),
+            Some(Err(panic)) => fail_mode(record, format!("image task panicked: {panic}")),
+            None => {
+                cut_short = true;
+                record.status = Status::Interrupted;
+                record.error = Some(
+                    "interrupted while its metrics and images were computed: its timings are kept".into(),
+                );
+            }
         }
     }
     crate::front::place(&mut records);
-    (records, perceptual_s)
+    (records, perceptual_s, cut_short)
+}
+
+/// Waits for an image task, unless a signal came more than [`GRACE_AFTER_SIGNAL`] ago
+/// (`deadline`, set on the first wait that sees `cancel`): then `None`, and the task is left to
+/// the process's exit (it writes each file atomically, so nothing half-written is left behind
+/// under a file's own name).
+async fn finished_in_time<T>(
+    mut task: tokio::task::JoinHandle<T>,
+    cancel: &AtomicBool,
+    deadline: &mut Option<Instant>,
+) -> Option<Result<T, tokio::task::JoinError>> {
+    const POLL: Duration = Duration::from_millis(50);
+    loop {
+        if deadline.is_none() && cancel.load(Ordering::SeqCst) {
+            *deadline = Some(Instant::now() + GRACE_AFTER_SIGNAL);
+        }
+        if !task.is_finished() && deadline.is_some_and(|d| Instant::now() >= d) {
+            return None;
+        }
+        tokio::select! {
+            result = &mut task => return Some(result),
+            () = tokio::time::sleep(POLL) => {}
+        }
+    }
 }
 
 /// Each mode's record of its frames' timings (see [`timing_record`]), its frame time over

@@ -104,11 +104,13 @@ impl<'a> SceneRun<'a> {
         self.status("writing images and metrics");
         let interrupted = self.cancelled();
         let started = Instant::now();
-        let (modes, perceptual_s) = finish_modes(&self, runs, truth_image, interrupted).await;
+        let (modes, perceptual_s, cut_short) = finish_modes(&self, runs, truth_image, interrupted).await;
         record.modes = modes;
         record.images_s = Some(started.elapsed().as_secs_f64());
         record.perceptual_s = Some(perceptual_s);
-        conclude(record, self.worker.is_stuck(), interrupted)
+        let cut = "interrupted while its metrics and images were computed";
+        record.error = record.error.take().or_else(|| cut_short.then(|| cut.into()));
+        conclude(record, self.worker.is_stuck(), interrupted || cut_short)
     }
 
     /// The scene's sequences along its camera path, where it has one and the plan renders

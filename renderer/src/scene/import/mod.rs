@@ -13,7 +13,7 @@ use std::path::Path;
 
 use glam::{DMat4, DVec3};
 
-use super::animation::{RestNode, Rig};
+use super::animation::{RestNode, Rig, Unseen};
 use super::skin::Influence;
 use super::{DrawClass, Light, Scene};
 use crate::error::RenderError;
@@ -177,7 +177,10 @@ impl Importer {
             return Err(format!("nodes[{}]: the transform is not finite", node.index()));
         }
         match (node.mesh(), node.skin()) {
-            (Some(_), Some(_)) => self.skinned.push(node.index()),
+            (Some(_), Some(_)) => {
+                self.skinned.push(node.index());
+                self.rig.unseen.push((node.index(), Unseen::SkinnedMesh));
+            }
             (Some(mesh), None) => {
                 for primitive in mesh.primitives() {
                     self.add_primitive(&mesh, &primitive, Placement::Node(world), buffers)?;
@@ -185,9 +188,26 @@ impl Importer {
             }
             (None, _) => {}
         }
-        if let (Some(camera), None) = (node.camera(), &self.scene.camera) {
-            self.scene.camera = camera_from_node(document, camera.index(), world)?;
-            self.scene.camera_node = self.scene.camera.is_some().then_some(node.index());
+        // The first perspective camera is the one aabench renders from; the others are noted,
+        // so that an animation of them alone is refused for what it is.
+        if let Some(camera) = node.camera() {
+            // Read from the JSON: the gltf crate's `projection()` panics on a camera whose
+            // projection object is missing, which `camera_from_node` refuses by name.
+            use gltf::json::{camera::Type, validation::Checked};
+            let json = &document.as_json().cameras[camera.index()];
+            let perspective = json.type_ == Checked::Valid(Type::Perspective);
+            let unseen = if !perspective {
+                Some(Unseen::OrthographicCamera)
+            } else if self.scene.camera.is_some() {
+                Some(Unseen::LaterCamera)
+            } else {
+                self.scene.camera = camera_from_node(document, camera.index(), world)?;
+                self.scene.camera_node = self.scene.camera.is_some().then_some(node.index());
+                let aspect = json.perspective.as_ref().and_then(|p| p.aspect_ratio);
+                self.scene.camera_aspect = aspect.map(|aspect| (camera.index(), f64::from(aspect)));
+                None
+            };
+            self.rig.unseen.extend(unseen.map(|unseen| (node.index(), unseen)));
         }
         if let Some(light) = node.light() {
             self.lights

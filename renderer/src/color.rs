@@ -523,9 +523,39 @@ pub fn headroom(hdr: &[[f32; 4]], scene: Option<&[bool]>, exposure: f64, white: 
     Ok(())
 }
 
+/// Whether the background shows as the manifest gives it: an error where a channel of its
+/// radiance passes the HDR target's limit and `exposure` displays that limit below `white`, so
+/// that the sky would show as a flat grey, as [`headroom`] refuses of the scene's own light (the
+/// background is no pixel of the scene, so that check does not see it).
+pub fn background_headroom(background: [f32; 3], exposure: f64, white: f64) -> Result<(), String> {
+    if HALF_MAX * exposure >= white || background.iter().all(|&c| f64::from(c) < HALF_MAX) {
+        return Ok(());
+    }
+    let shown: Vec<String> = background.iter().map(f32::to_string).collect();
+    Err(format!(
+        "[{}] passes the HDR target's limit of 65 504, which exposure {:e} displays below white: the \
+         sky would show as a flat grey; scale the background down and the exposure up",
+        shown.join(", "),
+        // The manifest's exposure is an f32: shown as written.
+        exposure as f32
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A sky past the f16 limit under an exposure that displays the limit grey is refused like
+    /// the scene's own light; one within the limit, or under an exposure that displays the limit
+    /// white, passes.
+    #[test]
+    fn a_background_past_the_hdr_limit_is_refused_where_the_exposure_would_show_it_grey() {
+        let error = background_headroom([1e6, 0.7, 0.95], 1e-4, 64.0).unwrap_err();
+        assert!(error.starts_with("[1000000, 0.7, 0.95] passes the HDR target's limit of 65 504"), "{error}");
+        assert!(error.contains("exposure 1e-4 displays below white"), "{error}");
+        assert!(background_headroom([6e4, 6e4, 6e4], 1e-4, 64.0).is_ok(), "within the limit");
+        assert!(background_headroom([1e6; 3], 1.0, 64.0).is_ok(), "the limit displays white");
+    }
 
     #[test]
     fn the_curve_meets_its_two_anchors() {

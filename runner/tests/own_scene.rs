@@ -174,18 +174,21 @@ fn automatic_exposure_meters_the_scene_not_its_sky_and_refuses_light_beyond_the_
     let ws = Workspace::new("exposure-sky");
     // The blaze metered, and under exposures of its own: one that shows the lost light as grey
     // (refused like the metered one), one that displays the limit white (it hides nothing).
+    // And a sky past the limit under an exposure that displays it grey, refused like the blaze.
+    let (night, blazing) = ([0.0005, 0.0006, 0.001], [1e6, 1e6, 1e6]);
     let scenes = [
-        ("sunlit", 2000.0, None),
-        ("blaze", 1e9, None),
-        ("dimmed", 1e9, Some(1e-9)),
-        ("white", 1e9, Some(1.0)),
+        ("sunlit", 2000.0, None, night),
+        ("blaze", 1e9, None, night),
+        ("dimmed", 1e9, Some(1e-9), night),
+        ("white", 1e9, Some(1.0), night),
+        ("sky", 2000.0, Some(1e-4), blazing),
     ];
-    for (name, lux, exposure) in scenes {
+    for (name, lux, exposure, background) in scenes {
         let mut writer = box_scene();
         writer.add_directional_light(glam::DVec3::new(-0.4, -1.0, -0.6), [1.0, 0.97, 0.9], lux);
         writer.write(&ws.dir.join(format!("scenes/{name}.glb"))).unwrap();
         let mut manifest = json!({ "schema_version": 1, "name": name, "gltf": format!("{name}.glb"),
-            "ambient": [0, 0, 0], "background": [0.0005, 0.0006, 0.001] });
+            "ambient": [0, 0, 0], "background": background });
         if let Some(exposure) = exposure {
             manifest["tonemap"] = json!({ "exposure": exposure });
         }
@@ -201,6 +204,17 @@ fn automatic_exposure_meters_the_scene_not_its_sky_and_refuses_light_beyond_the_
     let error = dimmed["error"].as_str().unwrap();
     assert!(
         error.contains("dimmed.glb") && error.contains("which exposure 1e-9 displays below white"),
+        "{error}"
+    );
+    let sky = scene(&record, "sky");
+    assert_eq!(sky["status"], "failed", "{sky}");
+    let error = sky["error"].as_str().unwrap();
+    assert!(
+        error.ends_with(
+            "sky.json: background: [1000000, 1000000, 1000000] passes the HDR target's limit of 65 504, which \
+             exposure 1e-4 displays below white: the sky would show as a flat grey; scale the background down \
+             and the exposure up"
+        ),
         "{error}"
     );
     assert_eq!(

@@ -205,6 +205,7 @@ impl<'a> SceneRun<'a> {
     async fn upload(&mut self, loaded: scenes::LoadedScene) -> Result<(Option<u64>, ExposureRecord), String> {
         let (plan, manifest) = (self.plan, self.manifest);
         let settings = render_settings(manifest, plan.tier, plan.extra_samples);
+        let white = settings.color.tonemap.map_or(1.0, |tonemap| tonemap.hdr_max);
         self.status("uploading");
         let memory_limit = plan.memory_limit;
         let metered = manifest.tonemap.exposure.is_none();
@@ -242,7 +243,11 @@ impl<'a> SceneRun<'a> {
             })
             .await;
         match uploaded {
-            Ok(Ok(uploaded)) => Ok(uploaded),
+            Ok(Ok(uploaded)) => {
+                color::background_headroom(manifest.background, f64::from(uploaded.1.value), white)
+                    .map_err(|error| format!("{}: background: {error}", manifest.path.display()))?;
+                Ok(uploaded)
+            }
             // What the device refuses of the file's content (too many textures) names the file.
             Ok(Err(error @ aabench_renderer::RenderError::Limit(_))) => {
                 Err(format!("{}: {error}", manifest.gltf_path().display()))

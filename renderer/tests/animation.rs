@@ -72,7 +72,7 @@ fn slide<'a>(times: &'a [f32], values: &'a [f32]) -> Channel<'a> {
 fn posed(path: &Path, time: f64) -> Vec<DVec3> {
     let mut scene = load_gltf(path).expect("the file loads");
     assert!(scene.animations[0].tracks.is_ok(), "{:?}", scene.animations[0].tracks);
-    scene.playing = Some(0);
+    scene.play(&[0]).unwrap();
     let poser = Poser::of(&scene).expect("an animation plays");
     let moved = poser.vertices_at(time);
     assert_eq!(moved.len(), 1, "the one node with vertices moves");
@@ -111,7 +111,7 @@ fn translation_rotation_and_scale_tracks_pose_the_vertices_through_a_parent() {
 /// rest, or none.
 fn pose_error(path: &Path) -> Option<String> {
     let mut scene = load_gltf(path).expect("the file loads");
-    scene.playing = Some(0);
+    scene.play(&[0]).unwrap();
     Poser::of(&scene).expect("an animation plays").check().err()
 }
 
@@ -248,7 +248,7 @@ fn a_moving_objects_motion_vectors_hold_its_projected_motion_and_the_wall_stays_
     let (gpu, _guard) = support::gpu();
     let (mut scene, camera) = support::generated(Generator::Crossing);
     let index = scene.animations.iter().position(|a| a.name.as_deref() == Some("crossing")).unwrap();
-    scene.playing = Some(index);
+    scene.play(&[index]).unwrap();
     let (width, height) = (128u32, 96u32);
     let settings = support::settings(width, height);
     let mut renderer =
@@ -340,7 +340,7 @@ fn a_normal_mapped_node_moves_the_vertices_its_tangents_split_off() {
     std::fs::write(&path, document.to_string()).unwrap();
     let mut scene = load_gltf(&path).unwrap();
     assert!(scene.vertices.len() > 4, "the tangents split vertices: {}", scene.vertices.len());
-    scene.playing = Some(0);
+    scene.play(&[0]).unwrap();
     let moved = Poser::of(&scene).unwrap().vertices_at(0.5);
     let mut covered: Vec<usize> = moved.iter().flat_map(|m| m.first..m.first + m.vertices.len()).collect();
     covered.sort_unstable();

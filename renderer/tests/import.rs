@@ -283,7 +283,8 @@ fn accessors_the_gltf_crate_cannot_read_are_refused_by_name() {
     }
 }
 
-/// A camera whose type names a projection object the file lacks is an error naming the camera;
+/// A camera whose type names a projection object the file lacks is an error naming the camera,
+/// and so is one whose field of view passes what a glTF float holds, quoted as written;
 /// node scales finite in f32 that multiply positions past ±10¹² are an error naming the vertex;
 /// a GLB whose header states less than its own 12 bytes is an error.
 #[test]
@@ -309,6 +310,16 @@ fn cameras_without_their_projection_and_positions_beyond_range_are_errors() {
         json!({ "type": "orthographic", "orthographic": { "xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 10 } }),
     );
     assert!(load_gltf(&ortho).unwrap().camera.is_none());
+    // A field of view past what a 32-bit float holds is quoted as written, not as infinity.
+    let wide = with_camera(
+        "wide.gltf",
+        json!({ "type": "perspective", "perspective": { "yfov": 1e39, "znear": 0.1 } }),
+    );
+    let message = error(&wide);
+    assert!(
+        message.contains("cameras[0].perspective.yfov: 1e39 is past the largest number a glTF float holds"),
+        "{message}"
+    );
 
     // Scales finite in f32 that multiply up past what a position may be.
     let huge = folder.gltf(

@@ -29,11 +29,18 @@ use support::Folder;
 /// a skinned mesh ignores. The animation `bend` turns the bent joint a quarter about z in a
 /// second.
 fn strip(joints: [[u16; 4]; 4], weights: [[f32; 4]; 4]) -> GltfWriter {
+    strip_bound(joints, weights, BINDS)
+}
+
+/// The strip with the root's and the bent joint's inverse bind matrices `binds`.
+fn strip_bound(joints: [[u16; 4]; 4], weights: [[f32; 4]; 4], binds: [[f32; 16]; 2]) -> GltfWriter {
     let mut writer = GltfWriter::new("skin test");
     let material = writer.add_material(&MaterialDesc::new("grey", [0.5; 3], 0.8));
     let bent = writer.add_joint("bent", [2.0, 0.0, 0.0], &[]);
     let root = writer.add_joint("root", [0.0, 0.0, -1.0], &[bent]);
-    writer.add_skinned_mesh("strip", &strip_mesh(), material, &strip_skin([root, bent], joints, weights));
+    let mut skin = strip_skin([root, bent], joints, weights);
+    skin.inverse_binds = binds.to_vec();
+    writer.add_skinned_mesh("strip", &strip_mesh(), material, &skin);
     let quarter = Quat::from_rotation_z(std::f32::consts::FRAC_PI_2).to_array();
     writer.add_animation(
         "bend",
@@ -68,14 +75,17 @@ fn strip_mesh() -> MeshData {
 fn strip_skin(nodes: [usize; 2], joints: [[u16; 4]; 4], weights: [[f32; 4]; 4]) -> SkinDesc {
     SkinDesc {
         joints: nodes.to_vec(),
-        inverse_binds: vec![
-            glam::Mat4::IDENTITY.to_cols_array(),
-            glam::Mat4::from_translation(glam::Vec3::new(-2.0, 0.0, 0.0)).to_cols_array(),
-        ],
+        inverse_binds: BINDS.to_vec(),
         vertex_joints: joints.iter().flat_map(|j| [*j, *j]).collect(),
         vertex_weights: weights.iter().flat_map(|w| [*w, *w]).collect(),
     }
 }
+
+/// The root's inverse bind matrix (bound at the origin) and the bent joint's (2 along x).
+const BINDS: [[f32; 16]; 2] = [
+    [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+    [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, -2.0, 0.0, 0.0, 1.0],
+];
 
 const ROOT: [u16; 4] = [0, 0, 0, 0];
 const SHARED: [u16; 4] = [0, 1, 0, 0];
@@ -118,7 +128,7 @@ fn a_skinned_strip_rests_where_its_skeleton_does_and_bends_with_its_joint() {
         assert!((*p - expected).length() < 1e-6, "vertex {v} at rest: {p}, expected {expected}");
     }
     assert_eq!(scene.rig.skins.len(), 1);
-    scene.playing = Some(0);
+    scene.play(&[0]).unwrap();
     let poser = Poser::of(&scene).expect("the animation plays");
     poser.check().expect("every pose within bounds");
     let moved = poser.vertices_at(1.0);
@@ -162,7 +172,7 @@ fn an_animation_of_a_skinned_meshs_node_alone_is_refused_naming_the_skin() {
         d["animations"][0]["channels"][0]["target"] = json!({ "node": node, "path": "rotation" });
     });
     let mut scene = load_gltf(&path).expect("the strip loads");
-    scene.playing = Some(0);
+    scene.play(&[0]).unwrap();
     let poser = Poser::of(&scene).expect("the animation plays");
     let error = poser.check_moves_something(FileCamera::Still).expect_err("nothing in the frame moves");
     let node = scene.rig.nodes.iter().map(|n| n.node).max().unwrap();
@@ -220,7 +230,7 @@ fn a_third_set_of_joints_and_weights_carries_its_share() {
     let more = [([ROOT; 4], [nothing; 4]), ([ROOT, ROOT, BENT, ROOT], [nothing, nothing, half, nothing])];
     let mut scene = strip_of_three_sets(&folder, "sets.glb", first, more);
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-    scene.playing = Some(0);
+    scene.play(&[0]).unwrap();
     let poser = Poser::of(&scene).expect("the animation plays");
     let bent: Vec<DVec3> =
         poser.vertices_at(1.0)[0].vertices.iter().map(|v| point(v.position) + scene.origin).collect();
@@ -286,6 +296,14 @@ fn a_broken_skin_is_refused_naming_the_part_at_fault() {
             "skins[0].inverseBindMatrices: accessors[",
         ),
         (
+            // An inverse bind matrix undoes the joint's bind pose; one of zeros has no inverse
+            // and collapses the strip's bent end to a point, at rest as in motion.
+            "zero-bind.glb",
+            strip_bound([ROOT, ROOT, SHARED, BENT], [ALONE, ALONE, HALVES, ALONE], [BINDS[0], [0.0; 16]]),
+            Box::new(|_| {}),
+            "skins[0].inverseBindMatrices: matrix 1 has no inverse (its determinant is 0)",
+        ),
+        (
             "stray-joint.glb",
             good_strip(),
             Box::new(|d| {
@@ -315,7 +333,8 @@ fn the_walkers_figure_bends_its_limbs_and_keeps_its_head() {
     assert_eq!(skin.joints.len(), 11);
     assert_eq!(skin.influences.len(), skin.vertex_indices().count());
     assert!(skin.influences.iter().all(|i| (i.weights.iter().sum::<f32>() - 1.0).abs() < 1e-5));
-    scene.playing = scene.animations.iter().position(|a| a.name.as_deref() == Some("walk"));
+    let walk = scene.animations.iter().position(|a| a.name.as_deref() == Some("walk")).unwrap();
+    scene.play(&[walk]).unwrap();
     let poser = Poser::of(&scene).expect("the walk plays");
     poser.check().expect("every pose within bounds");
     let at = |t: f64| -> Vec<(usize, DVec3)> {

@@ -56,7 +56,7 @@ pub fn crossing_playing(
     let (gpu, guard) = gpu();
     let (mut scene, camera) = generated(Generator::Crossing);
     let index = scene.animations.iter().position(|a| a.name.as_deref() == Some("crossing")).unwrap();
-    scene.playing = Some(index);
+    scene.play(&[index]).unwrap();
     let track = scene.animations[index].tracks.as_ref().unwrap()[0].clone();
     let moving: Vec<f32> = (scene.materials.iter().enumerate())
         .filter(|(_, m)| m.name == "crate" || m.name == "bars")

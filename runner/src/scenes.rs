@@ -5,6 +5,7 @@
 use std::path::Path;
 use std::time::Instant;
 
+use aabench_renderer::scene::animation::Animation;
 use aabench_renderer::scene::generate::GENERATOR_STAMP;
 use aabench_renderer::scene::pose::{CameraPath, FileCamera, Poser};
 use aabench_renderer::scene::{
@@ -15,14 +16,14 @@ use glam::{DVec3, DVec4, Vec3};
 
 use crate::fs::regular_file;
 use crate::manifest::{FileLights, Manifest, check_shadows};
-use crate::motion::{MotionSpec, PathFrame, PathKind, Timeline};
+use crate::motion::{AnimationPick, MotionSpec, PathFrame, PathKind, Picked, Timeline};
 
 #[derive(Debug)]
 pub struct LoadedScene {
     pub scene: Scene,
     pub camera: Camera,
     /// How far along the camera's view a preset path's target lies: what an orbit turns about
-    /// (`motion.rs`). Every sequence's cameras in either tier were checked at load.
+    /// (`motion/mod.rs`). Every sequence's cameras in either tier were checked at load.
     pub pivot: f64,
     /// Where the playing animation carries the file's camera, when it moves it: the view of
     /// every frame of a sequence follows it (`camera` is its pose at the animation's start).
@@ -107,8 +108,7 @@ pub fn load(manifest: &Manifest) -> anyhow::Result<LoadedScene> {
         bail!("{}: gltf: {} holds no triangles", manifest.path.display(), path.display());
     }
     let camera_path = animated_camera(manifest, &scene)?;
-    let keys =
-        scene.playing.map(|index| [scene.animations[index].start(), scene.animations[index].duration()]);
+    let keys = scene.playing.as_ref().map(|playing| [playing.start(), playing.duration()]);
     let timeline = manifest.motion.as_ref().map(|motion| motion.timeline(warmup_frames(motion), keys));
     let camera = camera(manifest, &scene)?;
     scene.warnings.extend(aspect_warning(manifest, &scene));
@@ -146,40 +146,29 @@ pub struct View<'a> {
     pub timeline: Option<&'a Timeline>,
 }
 
-/// Sets the animation that the manifest's `motion.animation` picks playing, or says why it
-/// cannot: no such animation in the file (naming those it has), or one that cannot play (naming
-/// it and the part at fault, a pose beyond the scene's bounds included). A file whose animations no manifest picks stands still, and says so.
+/// Plays the animations that the manifest's `motion.animation` picks, or says why it cannot: no
+/// such animation in the file (naming those it has), one that cannot play (naming it and the
+/// part at fault, a pose beyond the scene's bounds included), or two that drive one property of
+/// one node. A file whose animations no manifest picks stands still, and says so; one whose
+/// picked animations leave out others that move the same figure or nodes says which.
 fn pick_animation(manifest: &Manifest, scene: &mut Scene) -> anyhow::Result<()> {
     let pick = manifest.motion.as_ref().and_then(|motion| motion.animation.as_ref());
     let Some(pick) = pick else {
         if !scene.animations.is_empty() {
             scene.warnings.push(format!(
-                "{} animation(s) that the manifest does not play (motion.animation picks one): the scene stands still",
+                "{} animation(s) that the manifest does not play (motion.animation picks them): the scene stands still",
                 scene.animations.len()
             ));
         }
         return Ok(());
     };
     let (manifest_path, gltf) = (manifest.path.display(), manifest.gltf_path());
-    let found = match (&pick.name, pick.index) {
-        (Some(name), _) => scene.animations.iter().position(|a| a.name.as_deref() == Some(name)),
-        (None, Some(index)) => (index < scene.animations.len()).then_some(index),
-        (None, None) => None,
-    };
-    let Some(index) = found else {
-        let field = if pick.name.is_some() { "name" } else { "index" };
-        let known: Vec<String> = scene.animations.iter().enumerate().map(|(i, a)| a.label(i)).collect();
-        let known = if known.is_empty() { "none".to_string() } else { known.join(", ") };
-        bail!(
-            "{manifest_path}: motion.animation.{field}: {} has no such animation (it has {known})",
-            gltf.display()
-        );
-    };
-    let animation = &scene.animations[index];
-    if let Err(error) = &animation.tracks {
-        bail!("{manifest_path}: motion.animation: {}: {}: {error}", gltf.display(), animation.label(index));
-    }
-    scene.playing = Some(index);
+    let picked = picked_animations(pick, &scene.animations).map_err(|(field, message)| {
+        anyhow::anyhow!("{manifest_path}: motion.animation.{field}: {} {message}", gltf.display())
+    })?;
+    scene
+        .play(&picked)
+        .map_err(|error| anyhow::anyhow!("{manifest_path}: motion.animation: {}: {error}", gltf.display()))?;
     // Every pose it takes is held to the bounds that the rest pose was, and some pose moves
     // what a frame shows.
     let camera = match (CameraPath::of(scene), scene.camera_node) {
@@ -190,17 +179,61 @@ fn pick_animation(manifest: &Manifest, scene: &mut Scene) -> anyhow::Result<()> 
     let checked = Poser::of(scene)
         .map_or(Ok(()), |poser| poser.check().and_then(|()| poser.check_moves_something(camera)));
     if let Err(error) = checked {
-        scene.playing = None;
-        bail!(
-            "{manifest_path}: motion.animation: {}: {}: {error}",
-            gltf.display(),
-            scene.animations[index].label(index)
-        );
+        let label = scene.playing.as_ref().map(|playing| playing.label.clone()).unwrap_or_default();
+        scene.stop();
+        bail!("{manifest_path}: motion.animation: {}: {label}: {error}", gltf.display());
     }
+    scene.warnings.extend(unplayed_parts_warning(scene));
     Ok(())
 }
 
-/// The pivot of the manifest's path (`motion.rs`) from the view's camera, once the cameras of
+/// The indices of the animations `pick` names, or the field at fault and why (after the file's
+/// name): a name or an index the file does not have.
+fn picked_animations(pick: &AnimationPick, animations: &[Animation]) -> Result<Vec<usize>, (String, String)> {
+    let missing = |field: &str, what: String| {
+        let known: Vec<String> = animations.iter().enumerate().map(|(i, a)| a.label(i)).collect();
+        let known = if known.is_empty() { "none".to_string() } else { known.join(", ") };
+        (field.to_string(), format!("has no {what} (it has {known})"))
+    };
+    match pick.picked() {
+        Picked::Names(names) => (names.iter())
+            .map(|name| {
+                let found = animations.iter().position(|a| a.name.as_deref() == Some(name.as_str()));
+                found.ok_or_else(|| missing("name", format!("animation named {name:?}")))
+            })
+            .collect(),
+        Picked::Indices(indices) => (indices.iter())
+            .map(|&index| {
+                (index < animations.len())
+                    .then_some(index)
+                    .ok_or_else(|| missing("index", format!("animations[{index}]")))
+            })
+            .collect(),
+        Picked::All if animations.is_empty() => Err(("all".into(), "has no animations".into())),
+        Picked::All => Ok((0..animations.len()).collect()),
+    }
+}
+
+/// A warning where animations that move other parts of what plays do not play: a figure whose
+/// exporter split its walk into an animation per joint moves in part.
+fn unplayed_parts_warning(scene: &Scene) -> Option<String> {
+    let parts = scene.unplayed_parts();
+    let playing = scene.playing.as_ref()?;
+    let first = parts.first()?;
+    let more = match parts.len() {
+        1 => String::new(),
+        n => format!(" and {} more", n - 1),
+    };
+    Some(format!(
+        "motion.animation plays {} but not {}{more}, which move{} other parts of the same figure or nodes: \
+         they stand at rest; list them too, or give `\"all\": true`",
+        playing.label,
+        scene.animations[*first].label(*first),
+        if parts.len() == 1 { "s" } else { "" }
+    ))
+}
+
+/// The pivot of the manifest's path (`motion/mod.rs`) from the view's camera, once the cameras of
 /// each of its sequences in either tier are checked: valid, and each measured frame with some of
 /// the scene's triangles in view unless the scene is declared empty. The target is the manifest
 /// camera's; a camera from the file or the framing camera has only a direction, so its target

@@ -189,8 +189,9 @@ impl Spool {
             std::fs::create_dir_all(&folder).map_err(|e| format!("{}: {e}", folder.display()))?;
             for index in 0..self.warmup + frames {
                 let path = folder.join(format!("{index:03}.png"));
+                // The write's error names the file already.
                 images::write_display_png(&path, width, height, &self.seen_image(stream, index)?)
-                    .map_err(|e| format!("{}: {e}", path.display()))?;
+                    .map_err(|e| format!("{e:#}"))?;
             }
         }
         Ok(())
@@ -250,6 +251,24 @@ mod tests {
         assert!(error.contains("1.rgba (taa) holds 32 bytes") && error.contains("take 48"), "{error}");
         drop(spool);
         assert!(!spool_dir.exists(), "the folder goes with the spool");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_kept_frame_that_cannot_be_written_names_its_path_once() {
+        let dir = std::env::temp_dir().join(format!("aabench-spool-keep-{}", std::process::id()));
+        let mut spool = Spool::create(folder(&dir), [2, 2], 8, 0, vec!["truth".into()]).unwrap();
+        spool.append(0, &DisplayImage::from_rgba8(&[7; 16])).unwrap();
+        // A folder where the frame's file goes: the rename onto it fails, as a full disk's
+        // write would.
+        let kept = dir.join("frames");
+        let blocked = kept.join("truth/000.png");
+        std::fs::create_dir_all(blocked.join("inside")).unwrap();
+        let error = spool.write_pngs(&kept, 1).unwrap_err();
+        let named = blocked.display().to_string();
+        assert_eq!(error.matches(&named).count(), 1, "{error}");
+        assert!(error.starts_with(&format!("{named}: write: ")), "{error}");
+        drop(spool);
         let _ = std::fs::remove_dir_all(&dir);
     }
 

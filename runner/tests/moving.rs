@@ -28,8 +28,8 @@ const STEP: f64 = 1.0 / 60.0;
 /// camera.
 fn playing(generator: Generator, name: &str) -> (SceneRenderer, Camera) {
     let mut scene = support::generated_scene(generator);
-    scene.playing = scene.animations.iter().position(|a| a.name.as_deref() == Some(name));
-    assert!(scene.playing.is_some(), "the scene carries its animation");
+    let index = scene.animations.iter().position(|a| a.name.as_deref() == Some(name));
+    scene.play(&[index.expect("the scene carries its animation")]).unwrap();
     let camera = scene.camera.expect("generated scenes carry a camera");
     (support::plain_renderer(&scene, &camera, [WIDTH, HEIGHT], 0.1), camera)
 }
@@ -381,4 +381,105 @@ fn an_animation_warms_up_in_motion_and_a_warm_up_that_cannot_move_says_so() {
     assert!(held.get("lead_s").is_none(), "{held}");
     assert_eq!(held["warmup_still_frames"], 15, "{held}");
     assert!(stderr.contains("15 of the 16 warm-up frames hold still"), "{stderr}");
+}
+
+/// The `walker` scene's file with its walk split into one animation per channel (`walk.0`, …),
+/// as exporters that write an action per joint do, and the whole walk beside them as `whole`:
+/// an alternative that drives every joint the parts drive. Written as `split.gltf` and
+/// `split.bin` into the workspace's scenes; returns the number of parts.
+fn write_split_walker(space: &support::Workspace) -> usize {
+    let source = space.dir.join("walker-source.glb");
+    Generator::Walker.write(1, &source).unwrap();
+    let glb = std::fs::read(&source).unwrap();
+    let chunk = |at: usize| {
+        let length = u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
+        (&glb[at + 8..at + 8 + length], at + 8 + length)
+    };
+    let (json, next) = chunk(12);
+    let (bin, _) = chunk(next);
+    let mut document: serde_json::Value = serde_json::from_slice(json).unwrap();
+    let walk = (document["animations"].as_array().unwrap().iter())
+        .find(|a| a["name"] == "walk")
+        .expect("the walker walks")
+        .clone();
+    let channels = walk["channels"].as_array().unwrap();
+    let mut animations: Vec<serde_json::Value> = (channels.iter().enumerate())
+        .map(|(c, channel)| {
+            let sampler = walk["samplers"][channel["sampler"].as_u64().unwrap() as usize].clone();
+            let mut channel = channel.clone();
+            channel["sampler"] = json!(0);
+            json!({ "name": format!("walk.{c}"), "channels": [channel], "samplers": [sampler] })
+        })
+        .collect();
+    let parts = animations.len();
+    let mut whole = walk.clone();
+    whole["name"] = json!("whole");
+    animations.push(whole);
+    document["animations"] = json!(animations);
+    document["buffers"][0]["uri"] = json!("split.bin");
+    std::fs::write(space.dir.join("scenes/split.bin"), bin).unwrap();
+    std::fs::write(space.dir.join("scenes/split.gltf"), document.to_string()).unwrap();
+    parts
+}
+
+#[test]
+fn a_walk_split_into_an_animation_per_joint_plays_together_as_the_whole_walk() {
+    let space = support::Workspace::new("moving-split");
+    let parts = write_split_walker(&space);
+    assert!(parts > 3, "the walk moves several joints: {parts} channels");
+    let manifest = |name: &str, animation: serde_json::Value| {
+        space.manifest(name, "walker", |m| {
+            m.as_object_mut().unwrap().remove("generate");
+            m["gltf"] = json!("split.gltf");
+            m["motion"] =
+                json!({ "path": "static", "frames": { "quick": 4, "nightly": 4 }, "animation": animation });
+        });
+    };
+    let names: Vec<String> = (0..parts).map(|c| format!("walk.{c}")).collect();
+    manifest("whole", json!({ "name": "whole" }));
+    manifest("parts", json!({ "name": names }));
+    manifest("one-part", json!({ "name": "walk.1" }));
+    manifest("everything", json!({ "all": true }));
+    let output = space.run(&["run", "scenes", "--tier", "quick", "--modes", "deferred-1x1"]);
+    let stderr = support::stderr(&output);
+    assert_eq!(output.status.code(), Some(3), "one scene fails, the others run: {stderr}");
+    let record = space.record();
+    let sequence = |scene: &str| {
+        let scene = support::scene(&record, scene);
+        assert_eq!(scene["status"], "ok", "{scene}");
+        (
+            scene["sequences"][0].clone(),
+            support::mode(scene, "deferred-1x1")["sequences"][0]["hashes"].clone(),
+        )
+    };
+    // Played on one clock, the parts pose the figure frame for frame as the whole walk does.
+    let ((whole, whole_hashes), (together, together_hashes)) = (sequence("whole"), sequence("parts"));
+    assert!(whole["truth_change"].as_f64().unwrap() > 0.0, "the figure walks");
+    assert_eq!(whole_hashes.as_array().map(Vec::len), Some(4), "{whole_hashes}");
+    assert_eq!(together_hashes, whole_hashes, "the parts together are the walk");
+    assert_eq!(whole["animation"], "whole");
+    assert_eq!(together["animation"], format!("walk.0 and {} more", parts - 1));
+    // One part alone moves one joint, and the run says which parts stand at rest; the whole
+    // walk drives what that part drives, so it is another action, not a part.
+    let (_, alone) = sequence("one-part");
+    assert_ne!(alone, whole_hashes, "one joint moves, not the figure");
+    let warnings = support::scene(&record, "one-part")["warnings"].to_string();
+    let expected = format!(
+        r#"motion.animation plays animations[1] (\"walk.1\") but not animations[0] (\"walk.0\") and {} more, which move other parts of the same figure or nodes"#,
+        parts - 2
+    );
+    assert!(warnings.contains(&expected), "{warnings}");
+    assert!(!warnings.contains("whole"), "an alternative is not a missing part: {warnings}");
+    // All of them at once drive each joint twice: refused, naming both channels.
+    let everything = support::scene(&record, "everything");
+    assert_eq!(everything["status"], "failed");
+    let error = everything["error"].as_str().unwrap();
+    for part in [
+        "everything.json: motion.animation: ",
+        "split.gltf: animations[0] (\"walk.0\") channels[0] and ",
+        " (\"whole\") channels[0] both animate the ",
+        "pick one of them",
+    ] {
+        assert!(error.contains(part), "names {part}: {error}");
+    }
 }

@@ -30,21 +30,6 @@ impl Animation {
             None => format!("animations[{index}]"),
         }
     }
-
-    /// The time of its first keyframe, in seconds: before it every track holds its first
-    /// value (0 for one that cannot play).
-    pub fn start(&self) -> f64 {
-        let tracks = self.tracks.as_deref().unwrap_or_default();
-        let first =
-            tracks.iter().filter_map(|t| t.times.first()).fold(f64::INFINITY, |a, &b| a.min(f64::from(b)));
-        if first.is_finite() { first } else { 0.0 }
-    }
-
-    /// The time of its last keyframe, in seconds (0 for one that cannot play).
-    pub fn duration(&self) -> f64 {
-        let tracks = self.tracks.as_deref().unwrap_or_default();
-        tracks.iter().filter_map(|t| t.times.last()).fold(0.0, |a, &b| a.max(f64::from(b)))
-    }
 }
 
 /// What a track moves.

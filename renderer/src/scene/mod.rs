@@ -6,6 +6,7 @@ pub mod animation;
 mod camera;
 pub mod generate;
 mod import;
+pub mod playing;
 pub mod pose;
 pub mod shadow;
 pub mod skin;
@@ -302,16 +303,14 @@ pub struct Scene {
     pub animations: Vec<animation::Animation>,
     /// The node trees the animations move, with the vertices each node's meshes gave.
     pub rig: animation::Rig,
-    /// The animation that frames play (an index into `animations`, whose tracks are `Ok`);
-    /// none leaves every node at rest.
-    pub playing: Option<usize>,
+    /// The animations that frames play ([`Scene::play`]); none leaves every node at rest.
+    pub playing: Option<playing::Playing>,
 }
 
 impl Scene {
-    /// The tracks of the animation that plays, if one does.
+    /// The tracks of the animations that play, if any do.
     pub fn playing_tracks(&self) -> Option<&[animation::Track]> {
-        let animation = self.animations.get(self.playing?)?;
-        animation.tracks.as_deref().ok()
+        self.playing.as_ref().map(|playing| playing.tracks.as_slice())
     }
 
     /// Whether any material samples a texture.

@@ -17,6 +17,8 @@ use super::{Camera, MAX_COORDINATE, Scene, Vertex};
 #[derive(Debug, Clone)]
 pub struct Poser {
     tracks: Vec<Track>,
+    /// How messages name each track (`channels[2]`).
+    channel_names: Vec<String>,
     rig: Rig,
     origin: DVec3,
     rest: Vec<Vertex>,
@@ -34,15 +36,17 @@ pub struct Moved {
 }
 
 impl Poser {
-    /// The poser of the scene's playing animation; none where no animation plays.
+    /// The poser of the scene's playing animations; none where no animation plays.
     pub fn of(scene: &Scene) -> Option<Poser> {
-        let tracks = scene.playing_tracks()?.to_vec();
+        let playing = scene.playing.as_ref()?;
+        let tracks = playing.tracks.clone();
         let rest_worlds = scene.rig.rest_worlds();
         let skins = (scene.rig.moved_skins(&tracks).into_iter())
             .map(|skin| BindPose::new(skin, &rest_worlds, scene.origin, &scene.vertices, &scene.tangents))
             .collect();
         Some(Poser {
             tracks,
+            channel_names: playing.channel_names.clone(),
             rig: scene.rig.clone(),
             origin: scene.origin,
             rest: scene.vertices.clone(),
@@ -138,8 +142,9 @@ impl Poser {
                 };
                 let track = &self.tracks[channel];
                 return Err(format!(
-                    "channels[{channel}] ({} of nodes[{}]), {key} (t = {time} s), carries {what}, beyond \
+                    "{} ({} of nodes[{}]), {key} (t = {time} s), carries {what}, beyond \
                      ±{MAX_COORDINATE:e} (the bounds of a scene at rest)",
+                    self.channel_names[channel],
                     track.property.name(),
                     track.node,
                 ));

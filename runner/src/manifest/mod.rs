@@ -88,7 +88,7 @@ pub struct Manifest {
     pub tonemap: TonemapSpec,
     #[serde(default)]
     pub display: DisplaySpec,
-    /// A camera path: the scene is also rendered as a sequence (`motion.rs`).
+    /// A camera path: the scene is also rendered as a sequence (`motion/mod.rs`).
     pub motion: Option<MotionSpec>,
     /// Tolerances of the regression gate; omitted fields take [`Tolerances::default`].
     #[serde(default)]

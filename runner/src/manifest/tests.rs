@@ -129,6 +129,33 @@ fn malformed_manifests_name_the_file_and_the_field() {
         "motion.animation.start_s",
         "1e300 must be within",
     );
+    // Several animations: a list of names or indices, or all of them; never two ways at once.
+    let pick = |animation: serde_json::Value| {
+        move |j: &mut serde_json::Value| {
+            j["motion"] = json!({"path": "static", "animation": animation.clone()});
+        }
+    };
+    check(
+        pick(json!({"name": 3})),
+        "motion.animation.name",
+        "expected an animation's name, or a list of names",
+    );
+    check(
+        pick(json!({"index": [0, -1]})),
+        "motion.animation.index[1]",
+        "integer `-1`, expected an animation's index",
+    );
+    check(pick(json!({"name": [["walk"]]})), "motion.animation.name[0]", "invalid type: sequence");
+    check(pick(json!({"name": []})), "motion.animation.name", "the list is empty");
+    check(
+        pick(json!({"name": ["walk", "wave", "walk"]})),
+        "motion.animation.name",
+        "\"walk\" is listed twice",
+    );
+    check(pick(json!({"index": [2, 2]})), "motion.animation.index", "2 is listed twice");
+    check(pick(json!({"all": false})), "motion.animation.all", "false picks nothing");
+    check(pick(json!({"all": true, "index": 0})), "motion.animation.all", "not both");
+    check(pick(json!({"start_s": 1})), "motion.animation.name", "or `\"all\": true`");
     check(|j| j["adaptive"] = json!({"depth_metric": "linear"}), "adaptive.depth_metric", "unknown variant");
     check(|j| j["stall_iterations"] = json!(1_000_001), "stall_iterations", "65 535 loop iterations");
     check(|j| j["gltf"] = json!("../elsewhere.glb"), "gltf", "generated files stay inside");
@@ -251,4 +278,22 @@ fn syntax_errors_give_the_line_and_column() {
     assert!(error.to_string().contains("line 3 column 3"), "{error}");
     let error = Manifest::load(Path::new("scenes/does-not-exist.json")).unwrap_err();
     assert!(error.to_string().starts_with("scenes/does-not-exist.json: cannot read"), "{error}");
+}
+
+#[test]
+fn an_animation_is_picked_by_a_name_an_index_a_list_of_either_or_all() {
+    use crate::motion::Picked;
+    let picked = |animation: serde_json::Value| {
+        let mut json: serde_json::Value = serde_json::from_str(VALID).unwrap();
+        json["motion"] = serde_json::json!({"path": "static", "animation": animation});
+        let manifest = Manifest::parse(Path::new("scenes/edge.json"), &json.to_string()).unwrap();
+        manifest.motion.unwrap().animation.unwrap()
+    };
+    let name = picked(serde_json::json!({"name": "walk"}));
+    assert_eq!(name.picked(), Picked::Names(&["walk".to_string()]));
+    let names = picked(serde_json::json!({"name": ["walk", "wave"]}));
+    assert_eq!(names.picked(), Picked::Names(&["walk".to_string(), "wave".to_string()]));
+    assert_eq!(picked(serde_json::json!({"index": [0, 2]})).picked(), Picked::Indices(&[0, 2]));
+    assert_eq!(picked(serde_json::json!({"index": 1})).picked(), Picked::Indices(&[1]));
+    assert_eq!(picked(serde_json::json!({"all": true, "start_s": 0.5})).picked(), Picked::All);
 }

@@ -31,6 +31,9 @@ pub(super) struct SceneRun<'a> {
     /// Whether a material samples a texture: where none does, an adaptive mode's full windows
     /// reuse S (see `sample_stats`). Known once the scene is loaded.
     pub textured: bool,
+    /// What plays along the path, as the record names it (`walk + wave`). Known once the
+    /// scene is loaded.
+    pub animation: Option<String>,
     /// ColorVideoVDP on the scene's display model, where quality is measured.
     pub jod: Option<crate::perceptual::Jod>,
 }
@@ -45,7 +48,25 @@ impl<'a> SceneRun<'a> {
     ) -> SceneRun<'a> {
         let resolution = plan.tier.resolution(manifest);
         let dir = plan.run_dir.join(&manifest.name);
-        SceneRun { worker, plan, manifest, progress, cancel, resolution, dir, textured: false, jod: None }
+        SceneRun {
+            worker,
+            plan,
+            manifest,
+            progress,
+            cancel,
+            resolution,
+            dir,
+            textured: false,
+            animation: None,
+            jod: None,
+        }
+    }
+
+    /// What the phases after the upload need to know of the loaded scene: whether it is
+    /// textured, and what plays along its path.
+    pub fn note_scene(&mut self, scene: &aabench_renderer::scene::Scene) {
+        self.textured = scene.is_textured();
+        self.animation = scene.playing.as_ref().map(|playing| playing.short_label.clone());
     }
 
     /// Whether a signal asked the run to stop.

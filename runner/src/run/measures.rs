@@ -336,8 +336,9 @@ pub(super) fn write_jod_maps(
                 &crate::perceptual::magma_rgba(&jod.map),
             );
             Some(
+                // The write's error names the file already.
                 written
-                    .map_err(|e| format!("{}: {e}", path.display()))
+                    .map_err(|e| format!("{e:#}"))
                     .map(|()| path.strip_prefix(run_dir).unwrap_or(&path).to_string_lossy().into_owned()),
             )
         })

@@ -58,7 +58,7 @@ impl<'a> SceneRun<'a> {
         }
         let (still_camera, pivot, camera_path) = (loaded.camera, loaded.pivot, loaded.camera_path.clone());
         let timeline = loaded.timeline;
-        self.textured = loaded.scene.is_textured();
+        self.note_scene(&loaded.scene);
         match self.upload(loaded).await {
             Ok((budget, exposure)) => {
                 record.memory_limit_bytes = budget;
@@ -141,6 +141,7 @@ impl<'a> SceneRun<'a> {
             record.warnings.push(warning);
         }
         let still_key = record.truth.as_ref().map(|truth| truth.key.clone()).unwrap_or_default();
+        let animation = self.animation.clone();
         for (index, pace) in paces.iter().enumerate() {
             if self.cancelled() || self.worker.is_stuck() {
                 return;
@@ -163,6 +164,7 @@ impl<'a> SceneRun<'a> {
                 still_camera,
                 still_truth,
                 still_key: &still_key,
+                animation: animation.as_deref(),
             };
             let (sequence, outcomes) = sequence::run(self, along, &modes).await;
             for (run, outcome) in runs.iter_mut().zip(outcomes) {

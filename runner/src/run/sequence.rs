@@ -1,5 +1,5 @@
 //! A scene's sequence: once its stills are timed, every mode renders each frame of the
-//! manifest's camera path (`motion.rs`) once, untimed, and is measured against the truth's frame
+//! manifest's camera path (`motion/mod.rs`) once, untimed, and is measured against the truth's frame
 //! at the same camera (`measures.rs`: the error per frame, flicker along the truth's motion and
 //! what lag costs, the uncompensated instability). A stalled mode whose still is its unstalled
 //! twin's to the bit renders no path of its own: it takes its twin's frames (the stall changes
@@ -54,6 +54,8 @@ pub struct Along<'a> {
     pub still_camera: &'a Camera,
     pub still_truth: Option<&'a DisplayImage>,
     pub still_key: &'a str,
+    /// What plays along the path, as the record names it (`walk`, `walk + wave`).
+    pub animation: Option<&'a str>,
 }
 
 impl Along<'_> {
@@ -179,10 +181,7 @@ fn empty_record(along: &Along) -> SequenceRecord {
         path: along.motion.path.name().to_string(),
         rate: (!fixed).then_some(along.pace.rate),
         pixels_per_frame: along.pace.pixels_per_frame,
-        animation: along.motion.animation.as_ref().map(|pick| match (&pick.name, pick.index) {
-            (Some(name), _) => name.clone(),
-            (None, index) => format!("animations[{}]", index.unwrap_or_default()),
-        }),
+        animation: along.animation.map(str::to_string),
         frames: along.measured() as u32,
         frames_done: 0,
         time_step_s: along.motion.time_step_s,

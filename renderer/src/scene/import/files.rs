@@ -190,10 +190,49 @@ pub(super) fn open(path: &Path) -> Result<Opened, String> {
             ));
         }
     }
+    check_camera_numbers(&json, &bytes)?;
     lower_data_schemes(&mut json);
     let broken_animations = super::animations::quarantine(&mut json);
     let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
     Ok(Opened { gltf: gltf::Gltf { document, blob }, warnings, broken_animations })
+}
+
+/// A camera's number past what a 32-bit float holds: the crate reads it as infinity, which a
+/// message would quote as `inf°`. Refused here, quoting the number as the file writes it.
+fn check_camera_numbers(json: &gltf::json::Root, bytes: &[u8]) -> Result<(), String> {
+    for (index, camera) in json.cameras.iter().enumerate() {
+        let Some(p) = &camera.perspective else { continue };
+        let fields = [
+            ("yfov", Some(p.yfov)),
+            ("znear", Some(p.znear)),
+            ("zfar", p.zfar),
+            ("aspectRatio", p.aspect_ratio),
+        ];
+        let Some((field, _)) = fields.into_iter().find(|(_, v)| v.is_some_and(|v| v.is_infinite())) else {
+            continue;
+        };
+        let pointer = format!("/cameras/{index}/perspective/{field}");
+        let written = written_json(bytes)
+            .and_then(|document| document.pointer(&pointer).and_then(serde_json::Value::as_f64))
+            .map_or_else(|| "its number".to_string(), crate::scene::number);
+        return Err(format!(
+            "cameras[{index}].perspective.{field}: {written} is past the largest number a glTF float holds \
+             (a 32-bit float: ±3.4e38)"
+        ));
+    }
+    Ok(())
+}
+
+/// The file's JSON as written: a GLB's first chunk, or the whole file.
+fn written_json(bytes: &[u8]) -> Option<serde_json::Value> {
+    let text = match bytes.strip_prefix(b"glTF") {
+        Some(_) => {
+            let length = u32::from_le_bytes(bytes.get(12..16)?.try_into().ok()?) as usize;
+            bytes.get(20..20 + length)?
+        }
+        None => bytes,
+    };
+    serde_json::from_slice(text).ok()
 }
 
 /// The glTF extensions the importer reads. A file may require only these; others it merely

@@ -93,6 +93,16 @@ fn read_joints(
             if let Some(j) = matrices.iter().position(|m| !m.is_finite()) {
                 return Err(format!(".inverseBindMatrices: matrix {j} is not finite"));
             }
+            // An inverse bind matrix undoes its joint's bind pose: one without an inverse
+            // flattens every vertex it carries, the still's rest pose included.
+            if let Some(j) =
+                matrices.iter().position(|m| !(m.determinant() != 0.0 && m.inverse().is_finite()))
+            {
+                return Err(format!(
+                    ".inverseBindMatrices: matrix {j} has no inverse (its determinant is 0), so it cannot \
+                     undo a bind pose: the vertices its joint carries would collapse"
+                ));
+            }
             matrices
         }
     };

@@ -14,9 +14,13 @@
 //! frame's (a dolly's image moves faster as it nears the target, and stops at 90 % of the way). Keyframes give positions and targets at times and
 //! are interpolated linearly between them (held after the last).
 
+mod pick;
+
 use aabench_renderer::scene::{Camera, number};
 use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
+
+pub use pick::{AnimationPick, MAX_ANIMATION_START_S, Picked};
 
 /// A manifest's `motion` section.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -41,24 +45,6 @@ pub struct MotionSpec {
     /// The file's animation that plays along the path, and from when.
     pub animation: Option<AnimationPick>,
 }
-
-/// Which of the glTF file's animations plays (by `name` or by `index`, one of them), from
-/// `start_s` seconds into it: frame f of the measured window shows it at `start_s + f ·
-/// time_step_s`, and the still is its pose at `start_s`, unless the warm-up before the window
-/// would begin before the animation's first key: then the window starts that much later
-/// ([`Timeline`]).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct AnimationPick {
-    pub name: Option<String>,
-    pub index: Option<usize>,
-    #[serde(default)]
-    pub start_s: f64,
-}
-
-/// The latest start an animation may be given, in seconds (a day: past it, an f32 keyframe time
-/// no longer resolves a frame).
-pub const MAX_ANIMATION_START_S: f64 = 86_400.0;
 
 /// How the camera moves.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
@@ -282,19 +268,7 @@ impl MotionSpec {
 
     fn check_animation(&self) -> Result<(), (String, String)> {
         let Some(pick) = &self.animation else { return Ok(()) };
-        let fail = |field: &str, message: String| Err((format!("animation.{field}"), message));
-        match (&pick.name, pick.index) {
-            (Some(_), Some(_)) => return fail("index", "give a name or an index, not both".into()),
-            (None, None) => return fail("name", "give the animation's name or its index".into()),
-            _ => {}
-        }
-        if !(pick.start_s.is_finite() && (0.0..=MAX_ANIMATION_START_S).contains(&pick.start_s)) {
-            return fail(
-                "start_s",
-                format!("{} must be within [0, {MAX_ANIMATION_START_S}] seconds", number(pick.start_s)),
-            );
-        }
-        Ok(())
+        pick.check().map_err(|(field, message)| (format!("animation.{field}"), message))
     }
 
     fn check_speeds(&self) -> Result<(), (String, String)> {

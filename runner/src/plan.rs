@@ -8,7 +8,7 @@ use aabench_renderer::{ExtraSamples, Mode};
 use serde::{Deserialize, Serialize};
 
 use crate::manifest::{Manifest, ManifestError};
-use crate::repetitions::{Confidence, Repetitions};
+use crate::repetitions::{Confidence, DECIDING_ROUNDS, Repetitions};
 
 /// One slice of a run: scene k of the plan (in manifest order) belongs to shard k mod N + 1.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -38,7 +38,7 @@ pub struct RunArgs {
     #[arg(long, default_value = "reports")]
     pub out: PathBuf,
     /// Timed rounds per mode, 1 to 10 000 [default: by confidence: each mode's rounds until its
-    /// median frame time is known to ±5 %, or its scene's frames took 20 s, at least 5 and
+    /// median frame time is known to ±5 %, or its scene's frames took 20 s, at least 9 and
     /// at most the tier's 15 (nightly 7)].
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub repetitions: Option<u32>,
@@ -247,13 +247,15 @@ impl Tier {
     /// median is known to ±5 % (its interval no wider than the gate's 10 % time tolerance, so
     /// that a change of that size shows), or its scene's timed frames
     /// took 20 s (four of criterion's 5 s measurement times: most quick scenes time their 15
-    /// rounds within it, the heaviest stop early), at least the 5 a time check needs
-    /// ([`crate::gate::MIN_FRAMES`]) and at most [`Tier::most_rounds`]. On the suite's own
+    /// rounds within it, the heaviest stop early), at least the 9 from which the rankings and
+    /// fronts compare two modes past one round out of line ([`DECIDING_ROUNDS`]; the 5 a time
+    /// check needs, [`crate::gate::MIN_FRAMES`], decide only where every round agrees) and at
+    /// most [`Tier::most_rounds`]. On the suite's own
     /// recorded rounds this keeps all but about 3 % of the front's memberships that 15 rounds
     /// decide (`docs/measuring.md`).
     pub fn confidence(self) -> Confidence {
         Confidence {
-            floor: crate::gate::MIN_FRAMES as u32,
+            floor: DECIDING_ROUNDS.min(self.most_rounds()),
             most: self.most_rounds(),
             width: 0.10,
             budget_s: 20.0,

@@ -4,6 +4,13 @@
 
 use serde::{Deserialize, Serialize};
 
+/// The fewest rounds a mode takes by confidence (where its tier allows as many): two modes'
+/// times are compared round by round, the sign test's interval of the median ratio at 90 %
+/// (`front::TIME_CONFIDENCE`). With five rounds that interval decides an order only where every
+/// round agrees, so one round out of line (a frame that took twice its time) leaves the pair
+/// undecided in one run and decided in the next; with nine it decides past one such round.
+pub const DECIDING_ROUNDS: u32 = 9;
+
 /// How many timed rounds each mode of a scene takes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Repetitions {

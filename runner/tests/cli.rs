@@ -578,7 +578,7 @@ fn a_run_takes_its_rounds_by_confidence_unless_given_a_count() {
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
     let record = ws.record();
     let rule = &record["settings"]["confidence"];
-    assert_eq!(rule, &json!({"floor": 5, "most": 15, "width": 0.1, "budget_s": 20.0}));
+    assert_eq!(rule, &json!({"floor": 9, "most": 15, "width": 0.1, "budget_s": 20.0}));
     assert_eq!(record["settings"]["repetitions"], 15);
     let scene = &record["scenes"][0];
     let spent_ms: f64 = scene["modes"]
@@ -593,7 +593,7 @@ fn a_run_takes_its_rounds_by_confidence_unless_given_a_count() {
         assert_eq!(m["status"], "ok", "{id}: {}", m["error"]);
         let frames = &m["frame_ms"];
         let taken = frames["samples"].as_array().unwrap().len();
-        assert!((5..=15).contains(&taken), "{id}: {taken} rounds");
+        assert!((9..=15).contains(&taken), "{id}: {taken} rounds");
         let (low, high, median) = (
             frames["ci_low"].as_f64().unwrap(),
             frames["ci_high"].as_f64().unwrap(),

@@ -13,7 +13,7 @@
 # `aabench merge-verdicts` joins. --verdict-out copies summary.md, junit.xml and verdict.json
 # into DIR (a CI artifact).
 #
-# The base is REF, or else the commit that last changed baselines/ (the build they were blessed
+# The base is REF, or else the commit that last changed a baseline file (the build they were blessed
 # from). When the base's code differs from the working tree's, the gate builds the base beside
 # the head and runs both at the quick tier in alternating processes ($AABENCH_GATE_PROCESSES a
 # side, default 4, of $AABENCH_GATE_REPETITIONS rounds each, default 3), after one head process
@@ -84,7 +84,8 @@ resolve_base() {
             exit 2
         }
     else
-        git log -1 --format=%H -- baselines 2>/dev/null
+        # A baseline file's commit: a README or a note beside them is no bless.
+        git log -1 --format=%H -- ':(glob)baselines/**/*.json' 2>/dev/null
     fi
 }
 base=$(resolve_base) || exit 2

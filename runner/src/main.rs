@@ -382,10 +382,9 @@ fn gen_scenes(paths: &[PathBuf], force: bool) -> u8 {
 }
 
 fn bless(runs: &[PathBuf], root: &Path, consent: baseline::Consent) -> u8 {
-    let records: Result<Vec<_>, String> =
-        runs.iter().map(|run| aabench::record::load_run(run).map(|(record, _)| record)).collect();
-    let records = match records {
-        Ok(records) => records,
+    let loaded: Result<Vec<_>, String> = runs.iter().map(|run| aabench::record::load_run(run)).collect();
+    let (records, folders): (Vec<_>, Vec<_>) = match loaded {
+        Ok(loaded) => loaded.into_iter().unzip(),
         Err(message) => return fail(message),
     };
     // What a killed bless left (files being written, a staging folder) goes first.
@@ -403,7 +402,7 @@ fn bless(runs: &[PathBuf], root: &Path, consent: baseline::Consent) -> u8 {
             for path in &blessed.written {
                 say!("blessed {}", path.display());
             }
-            if let Err(message) = say_what_moved(&records, root, &replaced, &blessed) {
+            if let Err(message) = say_what_moved(&records, &folders[0], &replaced, &blessed) {
                 tell!("aabench: warning: {message}");
             }
             for (scene, reason) in &blessed.skipped {
@@ -419,11 +418,12 @@ fn bless(runs: &[PathBuf], root: &Path, consent: baseline::Consent) -> u8 {
     }
 }
 
-/// Prints what the bless moved against the baselines it replaced, and writes it beside them
-/// (`<key>/<tier>.bless.md`) for the commit that carries them.
+/// Prints what the bless moved against the baselines it replaced, and writes it into the
+/// first run's folder (`bless.md`), for the message of the commit that carries them: a tracked
+/// file that every bless rewrote would churn the tree.
 fn say_what_moved(
     records: &[RunRecord],
-    root: &Path,
+    folder: &Path,
     replaced: &[baseline::Baseline],
     blessed: &baseline::Blessed,
 ) -> Result<(), String> {
@@ -440,9 +440,9 @@ fn say_what_moved(
     );
     let text = aabench::moved::markdown(&changes, &heading);
     say!("{text}");
-    let path = root.join(&run.platform.key).join(format!("{}.bless.md", run.tier.name()));
+    let path = folder.join("bless.md");
     aabench::fs::write(&path, text.as_bytes())?;
-    say!("(written to {})", path.display());
+    say!("(written to {}, for the commit message: `git commit -e -F {0}`)", path.display());
     Ok(())
 }
 

@@ -712,9 +712,12 @@ fn bless_says_what_it_moved_and_calls_out_the_papers_bits() {
     ws.manifest("edge", "edge", |_| {});
     let measured = blessed_run(&ws);
     let record = read_json(&measured.join("run.json"));
-    let written =
-        ws.dir.join("baselines").join(record["platform"]["key"].as_str().unwrap()).join("quick.bless.md");
+    // Into the run's folder, for the commit message: nothing beside the baselines to churn.
+    let written = measured.join("bless.md");
     assert!(std::fs::read_to_string(&written).unwrap().contains("- edge: a new scene (4 modes)"));
+    let key = ws.dir.join("baselines").join(record["platform"]["key"].as_str().unwrap());
+    let beside: Vec<_> = std::fs::read_dir(&key).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(beside, ["quick"], "only the tier's folder beside the baselines");
     // The same run blessed again moves nothing.
     let again = ws.run(&["bless", arg(&measured)]);
     assert_eq!(again.status.code(), Some(0), "{}", stderr(&again));
@@ -741,7 +744,7 @@ fn bless_says_what_it_moved_and_calls_out_the_papers_bits() {
         rows[0].contains("**adaptive-2x2** (the paper's) | ") && rows[0].ends_with("→ 0123456789abcdef |")
     );
     assert!(rows[1].starts_with("| edge | adaptive-2x2 | psnr_vs_truth | "), "{}", rows[1]);
-    let file = std::fs::read_to_string(&written).unwrap();
+    let file = std::fs::read_to_string(moved.join("bless.md")).unwrap();
     assert!(file.starts_with("# What the bless moved") && said.contains(&file), "{file}");
 }
 

@@ -38,14 +38,14 @@ impl Playing {
 
 /// The time of the first keyframe of `tracks`, in seconds: before it every track holds its
 /// first value (0 for no tracks).
-pub fn first_key(tracks: &[Track]) -> f64 {
+fn first_key(tracks: &[Track]) -> f64 {
     let first =
         tracks.iter().filter_map(|t| t.times.first()).fold(f64::INFINITY, |a, &b| a.min(f64::from(b)));
     if first.is_finite() { first } else { 0.0 }
 }
 
 /// The time of the last keyframe of `tracks`, in seconds (0 for no tracks).
-pub fn last_key(tracks: &[Track]) -> f64 {
+fn last_key(tracks: &[Track]) -> f64 {
     tracks.iter().filter_map(|t| t.times.last()).fold(0.0, |a, &b| a.max(f64::from(b)))
 }
 

@@ -42,7 +42,7 @@ fn main() {
     let mut render = Vec::new();
     files_under(Path::new("../renderer/src"), rust, &mut render);
     files_under(Path::new("src/manifest"), rust, &mut render);
-    render.push(PathBuf::from("src/scenes.rs"));
+    render.push(PathBuf::from("src/run/scenes.rs"));
     // The build's identity, recorded in every run: everything that renders and measures (the
     // crates' source, ColorVideoVDP's tables, the shaders, the lock file). Runs of one build
     // pool; runs of two do not.

@@ -12,7 +12,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 fn frames(c: &mut Criterion) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/atrium.json");
     let manifest = Manifest::load(&root).expect("scenes/atrium.json");
-    let loaded = aabench::scenes::load(&manifest).expect("atrium loads");
+    let loaded = aabench::run::scenes::load(&manifest).expect("atrium loads");
     let gpu = Arc::new(Gpu::new().expect("a Vulkan adapter (lavapipe)"));
     let extra_samples = manifest.adaptive.settings().extra_samples;
     let settings = aabench::run::render_settings(&manifest, Tier::Quick, extra_samples);

@@ -2,7 +2,7 @@
 //! without the perceptual ones), sample statistics, and the CPU twin of the adaptive metric over
 //! every window of a 4×4 G-buffer.
 
-use aabench::metrics;
+use aabench::measure::pixels;
 use aabench_renderer::adaptive::{self, MetricSet, WindowSample};
 use aabench_renderer::{AdaptiveSettings, Counts, DisplayImage, Metrics, Mode, Reconstruction, Technique};
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -30,18 +30,18 @@ const ADAPTIVE_4X4: Mode =
 fn quality(c: &mut Criterion) {
     let (a, b) = (image(0), image(1));
     c.bench_function("quality 1024x768 (MSE, PSNR, max diff)", |bench| {
-        bench.iter(|| metrics::quality(black_box(&a), black_box(&b), "reference"))
+        bench.iter(|| pixels::quality(black_box(&a), black_box(&b), "reference"))
     });
     // What each mode of a run adds against the truth: MSE, FLIP with its error map, SSIM and
     // ColorVideoVDP's JOD, the truth's share of SSIM prepared once per scene as a run prepares it.
-    let jod = aabench::perceptual::Jod::new(aabench_cvvdp::display::STANDARD_FHD).unwrap();
-    let truth = metrics::Truth::new(b.clone(), WIDTH as u32, HEIGHT as u32, jod);
+    let jod = aabench::measure::perceptual::Jod::new(aabench_cvvdp::display::STANDARD_FHD).unwrap();
+    let truth = pixels::Truth::new(b.clone(), WIDTH as u32, HEIGHT as u32, jod);
     c.bench_function("quality_vs_truth 1024x768 (MSE, PSNR, FLIP, SSIM, JOD)", |bench| {
-        bench.iter(|| metrics::quality_vs_truth(black_box(&a), &truth, "truth"))
+        bench.iter(|| pixels::quality_vs_truth(black_box(&a), &truth, "truth"))
     });
     let counts: Vec<u8> = (0..WIDTH * HEIGHT).map(|p| 1 + (p % 16) as u8).collect();
     c.bench_function("sample_stats 1024x768 at 4x4", |bench| {
-        bench.iter(|| metrics::sample_stats(black_box(&counts), ADAPTIVE_4X4, true).unwrap())
+        bench.iter(|| pixels::sample_stats(black_box(&counts), ADAPTIVE_4X4, true).unwrap())
     });
 }
 

@@ -18,7 +18,7 @@ fn poses(c: &mut Criterion) {
     for name in ["walker", "crossing"] {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../scenes/{name}.json"));
         let manifest = Manifest::load(&path).expect("a suite manifest");
-        let loaded = aabench::scenes::load(&manifest).expect("the scene loads");
+        let loaded = aabench::run::scenes::load(&manifest).expect("the scene loads");
         let poser = Poser::of(&loaded.scene).expect("its animation plays");
         let step = 1.0 / 60.0;
         c.bench_function(&format!("{name}: pose on the CPU"), |bench| {

@@ -6,7 +6,7 @@
 
 use std::time::Instant;
 
-use aabench::perceptual;
+use aabench::measure::perceptual;
 use aabench_renderer::DisplayImage;
 use anyhow::Context;
 

@@ -16,10 +16,10 @@ use std::path::Path;
 use std::sync::Arc;
 
 use aabench::manifest::Manifest;
+use aabench::measure::stats::Summary;
 use aabench::plan::Tier;
 use aabench::run::render_settings;
-use aabench::scenes;
-use aabench::stats::Summary;
+use aabench::run::scenes;
 use aabench_renderer::adaptive::sample_order;
 use aabench_renderer::{
     AdaptiveSettings, BACKGROUND_MATERIAL, ExtraSamples, GBufferImages, Gpu, PreparedMode, RenderSettings,

@@ -1,36 +1,18 @@
 //! aabench's runner: manifests, run plans, the GPU worker, timing, metrics and run records.
-//! The `aabench` binary (main.rs) is a thin CLI over this library.
+//! The `aabench` binary (main.rs) calls [`cli::main`].
 
+// The rooms, in the order the data of `aabench run` flows through them, then the commands that
+// read its record. Each room's `mod.rs` says what its files hold.
 pub mod baseline;
+pub mod cli;
 pub mod compare;
-pub mod flicker;
-pub mod front;
-pub mod fs;
-pub mod gate;
-pub mod images;
-pub mod inputs;
-pub mod json;
-pub mod machine;
+pub mod files;
 pub mod manifest;
-pub mod markup;
-pub mod merge;
-pub mod metrics;
-pub mod motion;
-pub mod moved;
-pub mod perceptual;
+pub mod measure;
 pub mod plan;
-pub mod progress;
 pub mod record;
-pub mod repetitions;
 pub mod report;
 pub mod run;
-pub mod scenes;
-pub mod spool;
-pub mod stats;
-pub mod temporal;
-pub mod truth;
-pub mod vocabulary;
-pub mod worker;
 
 /// Exit codes, one meaning each: 0 success; 1 `compare` found a regression; 2 the command could
 /// not do its work (bad arguments, as clap also reports them, unreadable input, no device); 3 a

@@ -19,7 +19,7 @@ fn scene_file(name: &str) -> PathBuf {
 /// The sample counts and HDR image of `mode` for a scene of scenes/, at the quick tier.
 fn render(gpu: &Arc<Gpu>, name: &str, mode: &str) -> (Vec<u8>, Vec<f32>) {
     let manifest = Manifest::load(&scene_file(name)).unwrap();
-    let loaded = aabench::scenes::load(&manifest).unwrap();
+    let loaded = aabench::run::scenes::load(&manifest).unwrap();
     let settings = aabench::run::render_settings(&manifest, Tier::Quick, ExtraSamples::Compact);
     let mut renderer =
         SceneRenderer::new(Arc::clone(gpu), &loaded.scene, &loaded.camera, &loaded.lighting, settings)

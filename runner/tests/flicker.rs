@@ -18,8 +18,8 @@
 
 mod support;
 
-use aabench::motion::MotionSpec;
-use aabench::temporal::{self, Flow, Geometry, PairError};
+use aabench::manifest::motion::MotionSpec;
+use aabench::measure::temporal::{self, Flow, Geometry, PairError};
 use aabench_renderer::scene::Camera;
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::{DisplayImage, PreparedMode, SceneRenderer};
@@ -131,7 +131,7 @@ fn measure(frames: &[DisplayImage], truth: &[DisplayImage], flows: &[Flow]) -> M
         mse += pairs.flat_map(|(a, t)| (0..3).map(move |c| (value(a[c]) - value(t[c])).powi(2))).sum::<f64>();
         if f > 0 {
             sums.add(&flows[f - 1].error([&frames[f], &truth[f]], [&frames[f - 1], &truth[f - 1]], &mut map));
-            let changes = aabench::temporal::pixel_changes_of_error(
+            let changes = aabench::measure::temporal::pixel_changes_of_error(
                 &frames[f].rgba,
                 &frames[f - 1].rgba,
                 &truth[f].rgba,

@@ -32,7 +32,7 @@ fn the_texture_scene_places_every_mode_on_or_behind_the_front_and_cells_recover_
     assert_eq!(modes.len(), 6);
 
     // Each mode has a place on the PSNR front and on the still's JOD front.
-    let psnr_margin = aabench::vocabulary::PSNR_MARGIN_DB;
+    let psnr_margin = aabench::record::vocabulary::PSNR_MARGIN_DB;
     let mut on_front = 0;
     for mode in modes {
         for key in ["psnr_vs_truth", "jod_vs_truth"] {
@@ -88,7 +88,7 @@ fn the_texture_scene_places_every_mode_on_or_behind_the_front_and_cells_recover_
     assert!(rows.len() >= 2, "{} levels", rows.len());
     let median = |m: &Value| m["frame_ms"]["median"].as_f64().unwrap();
     let jod = |m: &Value| m["vs_ground_truth"]["jod"].as_f64().unwrap();
-    let margin = aabench::vocabulary::JOD_MARGIN;
+    let margin = aabench::record::vocabulary::JOD_MARGIN;
     for pair in rows.windows(2) {
         assert!(pair[1].level > pair[0].level, "levels {} and {}", pair[0].level, pair[1].level);
         assert!(pair[1].ms > pair[0].ms, "times {} and {}", pair[0].ms, pair[1].ms);
@@ -128,9 +128,9 @@ fn the_best_adaptive_variant_at_4x4_is_within_a_decibel_of_the_reference_on_the_
 /// decided in both.
 #[test]
 fn the_blessed_processes_rounds_decide_the_same_fronts() {
-    use aabench::front::{FrontPoint, decide};
     use aabench::record::FrontVerdict;
-    use aabench::vocabulary::{Table, fronts};
+    use aabench::record::front::{FrontPoint, decide};
+    use aabench::record::vocabulary::{Table, fronts};
 
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../baselines");
     let files: Vec<std::path::PathBuf> = std::fs::read_dir(root)

@@ -30,7 +30,7 @@ use std::time::Duration;
 use aabench::manifest::Manifest;
 use aabench::plan::Tier;
 use aabench::run::render_settings;
-use aabench::scenes;
+use aabench::run::scenes;
 use aabench_renderer::ExtraSamples;
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::write::{GltfWriter, MaterialDesc, MeshData, glb};
@@ -687,7 +687,7 @@ fn check_manifest(manifest: &Manifest) -> Result<bool, String> {
     {
         return Err(format!("loaded, but a light is not finite: {light:?}"));
     }
-    aabench::inputs::SceneInputs::of(manifest)
+    aabench::plan::inputs::SceneInputs::of(manifest)
         .map_err(|e| format!("loaded, but the inputs cannot be hashed: {e:#}"))?;
     Ok(true)
 }

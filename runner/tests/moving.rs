@@ -13,7 +13,7 @@
 
 mod support;
 
-use aabench::temporal::{self, Flow, Geometry, PairError};
+use aabench::measure::temporal::{self, Flow, Geometry, PairError};
 use aabench_renderer::scene::Camera;
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::{DisplayImage, Mode, PreparedMode, SceneRenderer};

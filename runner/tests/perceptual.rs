@@ -3,7 +3,7 @@
 //! of images that both sides build the same way; identical images score perfectly and more
 //! blur scores worse.
 
-use aabench::perceptual::{FLIP_DEFAULT_PIXELS_PER_DEGREE as FLIP_PPD, flip, ssim};
+use aabench::measure::perceptual::{FLIP_DEFAULT_PIXELS_PER_DEGREE as FLIP_PPD, flip, ssim};
 use aabench_renderer::DisplayImage;
 
 const WIDTH: u32 = 64;

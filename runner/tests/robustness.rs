@@ -61,7 +61,7 @@ fn a_fifo_is_refused_rather_than_read_forever() {
         m["gltf"] = json!("pipe.glb");
         m["camera"] = json!({"position": [0, 0, 3], "target": [0, 0, 0], "fov_y_degrees": 40});
     });
-    let error = aabench::scenes::load(&Manifest::load(&manifest).unwrap()).unwrap_err();
+    let error = aabench::run::scenes::load(&Manifest::load(&manifest).unwrap()).unwrap_err();
     assert!(format!("{error:#}").contains("not a regular file"), "{error:#}");
 }
 
@@ -84,13 +84,13 @@ fn cameras_that_cannot_see_the_scene_fail_it_by_name() {
     // Valid, but looking away from everything: the frame would be background only.
     let away = ws.manifest("away", "edge", |m| m["camera"] = camera([0.0, 0.0, 3.0], [0.0, 0.0, 9.0], 40.0));
     let manifest = Manifest::load(&away).unwrap();
-    let error = format!("{:#}", aabench::scenes::load(&manifest).unwrap_err());
+    let error = format!("{:#}", aabench::run::scenes::load(&manifest).unwrap_err());
     assert!(error.contains("none of the scene's") && error.contains("\"empty\": true"), "{error}");
     let declared = ws.manifest("declared", "edge", |m| {
         m["camera"] = camera([0.0, 0.0, 3.0], [0.0, 0.0, 9.0], 40.0);
         m["empty"] = json!(true);
     });
-    aabench::scenes::load(&Manifest::load(&declared).unwrap()).expect("declared empty");
+    aabench::run::scenes::load(&Manifest::load(&declared).unwrap()).expect("declared empty");
 }
 
 /// `aabench modes` piped into `head -1` does not panic, and with its standard output closed

@@ -129,7 +129,7 @@ fn a_wire_under_a_slow_pan_flickers_at_one_sample_and_far_less_at_sixteen() {
     let animation = |id: &str| {
         let file =
             ws.run_dir().join(region["animations"][id].as_str().unwrap_or_else(|| panic!("{id}: {region}")));
-        let frames = aabench::images::read_apng(&file).unwrap();
+        let frames = aabench::files::images::read_apng(&file).unwrap();
         // Forwards, then back without the ends.
         assert_eq!(frames.len(), 10, "{id}");
         assert!(frames.iter().all(|f| f.dimensions() == (side, side)), "{id}");
@@ -417,7 +417,7 @@ fn taa_flickers_less_than_deferred_on_a_moving_thin_scene_and_reports_what_lag_c
     // than the background's nominal speed), the nominal beside it.
     let speed = scene["sequences"][0]["measured_speed"]["median"].as_f64().unwrap();
     assert!(speed > 0.0 && speed < 0.05, "{}", scene["sequences"][0]);
-    let label = format!("{} px a frame (median; 0.05 nominal)", aabench::motion::short(speed));
+    let label = format!("{} px a frame (median; 0.05 nominal)", aabench::manifest::motion::short(speed));
     assert!(
         markdown.contains(&format!("Along the camera path: orbit path at {label}, 8 of 8 frames")),
         "{markdown}"
@@ -440,7 +440,7 @@ fn taa_flickers_less_than_deferred_on_a_moving_thin_scene_and_reports_what_lag_c
     let still = markdown.lines().find(|l| l.starts_with("| thin | still | ")).expect("the still's row");
     assert!(!still.contains("taa"), "TAA is not ranked by its still: {still}");
     // The truth, deferred-1x1 and taa side by side at ×2, every frame forwards and back.
-    let animation = aabench::images::read_apng(&ws.dir.join("figures/thin-flicker.png")).unwrap();
+    let animation = aabench::files::images::read_apng(&ws.dir.join("figures/thin-flicker.png")).unwrap();
     assert_eq!(animation.len(), 14);
     assert_eq!(animation[0].dimensions(), (3 * 128 + 2 * 6, 128));
     assert_eq!(ws.run(&["report", run_dir]).status.code(), Some(0));

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use super::{Baseline, Blessing, load, parse, path, write};
-use crate::fs;
+use crate::files;
 use crate::plan::Tier;
 use crate::record::{RunRecord, RunSettings, SceneRecord, Status};
 
@@ -190,12 +190,12 @@ fn kept_files(dir: &Path, command: &str) -> Result<Vec<PathBuf>, String> {
 /// `notes.json`): bless keeps it, but compare reads every `*.json` there as a baseline and
 /// refuses the folder, naming it.
 fn strangers(dir: &Path, written: &[PathBuf]) -> Vec<String> {
-    let files = fs::files_in(dir).unwrap_or_default();
+    let files = files::files_in(dir).unwrap_or_default();
     files
         .into_iter()
         .filter(|file| !written.contains(file))
         .filter_map(|file| {
-            let error = parse(&fs::read_regular(&file).ok()?).err()?;
+            let error = parse(&files::read_regular(&file).ok()?).err()?;
             Some(format!(
                 "{}: is no baseline ({error}): compare reads every *.json of {} as one and will refuse \
                  the folder; rename it (notes.md) or move it out",
@@ -256,8 +256,12 @@ fn short_records(measured: &[&SceneRecord]) -> Option<String> {
     let frames = |id: &str| -> usize {
         measured.iter().filter_map(|scene| scene.mode(id)?.frame_ms.as_ref().map(|f| f.samples.len())).sum()
     };
-    let short: Vec<usize> =
-        first.modes.iter().map(|m| frames(&m.mode)).filter(|&n| n < crate::gate::MIN_FRAMES).collect();
+    let short: Vec<usize> = first
+        .modes
+        .iter()
+        .map(|m| frames(&m.mode))
+        .filter(|&n| n < crate::manifest::tolerances::MIN_FRAMES)
+        .collect();
     let fewest = short.iter().min()?;
     Some(format!(
         "{}: {} of {} modes have fewer than the {} timed frames a time verdict needs (the fewest {fewest}): \
@@ -265,7 +269,7 @@ fn short_records(measured: &[&SceneRecord]) -> Option<String> {
         first.name,
         short.len(),
         first.modes.len(),
-        crate::gate::MIN_FRAMES
+        crate::manifest::tolerances::MIN_FRAMES
     ))
 }
 
@@ -332,7 +336,7 @@ fn same_images(measured: &[&SceneRecord]) -> Result<(), String> {
 /// `--force`, if it must not; an error where nothing can be written there at all (a path
 /// through a file, a folder in the baseline's place).
 fn refusal(target: &Path, run: &RunRecord) -> Result<Option<String>, String> {
-    let text = match fs::read_regular(target) {
+    let text = match files::read_regular(target) {
         Ok(text) => text,
         Err(error) if error.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(error) => return Err(format!("cannot be read or written ({error})")),
@@ -393,11 +397,11 @@ pub fn upgrade(root: &Path) -> Result<Vec<PathBuf>, String> {
     let mut folders = Vec::new();
     for tier in tiers {
         let mut older = Vec::new();
-        for file in fs::files_in(&tier)? {
+        for file in files::files_in(&tier)? {
             let text =
-                fs::read_regular(&file).map_err(|e| format!("{}: cannot read: {e}", file.display()))?;
+                files::read_regular(&file).map_err(|e| format!("{}: cannot read: {e}", file.display()))?;
             let baseline = parse(&text).map_err(|e| format!("{}: {e}", file.display()))?;
-            if crate::json::schema_of(&text).ok().as_deref() != Some(super::BASELINE_SCHEMA) {
+            if crate::files::json::schema_of(&text).ok().as_deref() != Some(super::BASELINE_SCHEMA) {
                 older.push((file, baseline));
             }
         }

@@ -4,7 +4,7 @@
 use serde::Deserialize;
 
 use super::{Baseline, Blessing};
-use crate::json;
+use crate::files::json;
 use crate::plan::Tier;
 use crate::record::{Platform, RunSettings, SceneRecord};
 

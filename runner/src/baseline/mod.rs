@@ -6,7 +6,7 @@
 //! which platform, and every blessed process's frame times. The full run records stay in their run
 //! folders.
 //!
-//! Files are written by [`crate::json::reviewable`]: a fixed order, one value a line, what moves
+//! Files are written by [`crate::files::json::reviewable`]: a fixed order, one value a line, what moves
 //! with every measurement last, so that a bless's diff shows each moved value as its own line
 //! and a bless that moved nothing changes only the last two sections (who blessed it when, on
 //! which machine, and the times).
@@ -18,6 +18,7 @@
 
 mod bless;
 mod legacy;
+pub mod moved;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -25,14 +26,14 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 pub use self::bless::{Blessed, Consent, bless, replaced_by, upgrade};
-use crate::gate::Tolerances;
-use crate::inputs::SceneInputs;
-use crate::metrics::SampleStats;
+use crate::files::{self, json};
+use crate::manifest::tolerances::Tolerances;
+use crate::measure::pixels::SampleStats;
+use crate::measure::stats::Rounds;
 use crate::plan::Tier;
+use crate::plan::inputs::SceneInputs;
+use crate::record::vocabulary::{METRICS, Metric, PSNR_VS_TRUTH, Source};
 use crate::record::{FrontVerdict, ModeRecord, Platform, RunRecord, RunSettings, SceneRecord};
-use crate::stats::Rounds;
-use crate::vocabulary::{METRICS, Metric, PSNR_VS_TRUTH, Source};
-use crate::{fs, json};
 
 pub const BASELINE_SCHEMA: &str = "aabench.baseline/2";
 
@@ -337,7 +338,7 @@ pub fn path(root: &Path, platform_key: &str, tier: Tier, scene: &str) -> PathBuf
 /// Reads a baseline file, of this schema or converted from the one before; errors name the
 /// file and what is wrong with it.
 pub fn load(path: &Path) -> Result<Baseline, String> {
-    let text = fs::read_regular(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    let text = files::read_regular(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
     parse(&text).map_err(|e| format!("{}: {e}", path.display()))
 }
 
@@ -362,7 +363,7 @@ fn parse(text: &[u8]) -> Result<Baseline, String> {
 /// Writes `baseline` to `path` atomically, laid out for review.
 fn write(path: &Path, baseline: &Baseline) -> Result<(), String> {
     let text = json::reviewable(baseline).map_err(|e| format!("{}: {e}", path.display()))?;
-    fs::write(path, text.as_bytes())
+    files::write(path, text.as_bytes())
 }
 
 /// The baselines a run is compared with: one platform's folder for the run's tier.
@@ -422,7 +423,8 @@ impl BaselineSet {
         let Some((key, dir)) = chosen else {
             return Ok(none(format!("{} holds no baselines for the {tier} tier", root.display())));
         };
-        let baselines = fs::files_in(&dir)?.iter().map(|file| load(file)).collect::<Result<Vec<_>, _>>()?;
+        let baselines =
+            files::files_in(&dir)?.iter().map(|file| load(file)).collect::<Result<Vec<_>, _>>()?;
         let absent = baselines.is_empty().then(|| format!("{} holds no baseline files", dir.display()));
         Ok(BaselineSet {
             same_platform: key == run.platform.key,

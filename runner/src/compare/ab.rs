@@ -15,9 +15,9 @@
 //! fresh processes and it is decided once more ([`confirm`]).
 
 use crate::baseline::BaselineSet;
+use crate::measure::stats::Rounds;
+use crate::record::vocabulary::TimeMetric;
 use crate::record::{ModeRecord, RunRecord, SceneRecord, Status};
-use crate::stats::Rounds;
-use crate::vocabulary::TimeMetric;
 
 use super::pooled;
 use super::request::Confirmation;

@@ -37,8 +37,8 @@ pub use verdict::{
 };
 
 use crate::baseline::{Baseline, BaselineSet};
+use crate::record::vocabulary::{self, Source};
 use crate::record::{FrontVerdict, ModeRecord, RunRecord, SceneRecord, Status};
-use crate::vocabulary::{self, Source};
 use mode::ModeContext;
 use verdict::is_time_metric;
 
@@ -342,7 +342,7 @@ impl Hashes {
 }
 
 /// Whether the run's machine is the one that blessed the baselines: the same platform key, CPU
-/// identity and calibration (see [`crate::machine`]); otherwise why not.
+/// identity and calibration (see [`crate::measure::machine`]); otherwise why not.
 fn same_machine(run: &RunRecord, baselines: &BaselineSet) -> Result<(), String> {
     if !baselines.same_platform {
         return Err("another platform key".into());

@@ -3,7 +3,7 @@
 
 use super::verdict::{Check, Outcome};
 use crate::baseline::{BlessedMode, BlessedProcess};
-use crate::gate::Tolerances;
+use crate::manifest::tolerances::Tolerances;
 use crate::record::{ModeRecord, SceneRecord};
 
 /// One mode of the run and the same mode in the baseline.

@@ -6,19 +6,19 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 use super::verdict::{Against, Check, FailOn, Outcome, Verdict, is_time_metric};
-use crate::markup::escape as xml;
+use crate::files::markup::escape as xml;
 
 /// Writes summary.md, junit.xml, verdict.json and, when it names scenes, to-confirm.txt into
 /// `dir`, each atomically.
 pub fn write_all(verdict: &Verdict, dir: &Path) -> Result<Vec<PathBuf>, String> {
-    crate::fs::output_folder(dir).map_err(|e| format!("--out {e}"))?;
+    crate::files::output_folder(dir).map_err(|e| format!("--out {e}"))?;
     let write = |name: &str, text: &str| -> Result<PathBuf, String> {
         let path = dir.join(name);
-        crate::fs::write(&path, text.as_bytes())?;
+        crate::files::write(&path, text.as_bytes())?;
         Ok(path)
     };
     let json = dir.join("verdict.json");
-    crate::fs::write_json(&json, verdict)?;
+    crate::files::write_json(&json, verdict)?;
     let mut written =
         vec![write("summary.md", &summary(verdict))?, write("junit.xml", &junit(verdict))?, json];
     // The scenes to measure again, one manifest a line, for `ci/gate.sh`; none, no file (an

@@ -4,8 +4,8 @@
 
 use super::mode::{ModeContext, show_percent};
 use super::verdict::{Check, Outcome};
-use crate::gate::{QualityTolerances, Tolerance};
-use crate::vocabulary::{Gate, METRICS, Metric, Rule, Source};
+use crate::manifest::tolerances::{QualityTolerances, Tolerance};
+use crate::record::vocabulary::{Gate, METRICS, Metric, Rule, Source};
 
 impl ModeContext<'_> {
     /// The mode's quality checks, metric by metric in the table's order, then the sample

@@ -13,7 +13,7 @@ use std::collections::BTreeMap;
 
 use super::pooled::ALL_SCENES;
 use super::verdict::{Against, Check, Outcome, is_time_metric};
-use crate::vocabulary::TimeMetric;
+use crate::record::vocabulary::TimeMetric;
 
 /// The smallest slowdown a time check would have caught, as a relative change (0.18: 18 %
 /// slower); none for a check without an interval (too few frames).

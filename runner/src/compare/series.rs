@@ -4,7 +4,7 @@
 //! processes' values with its Moses interval. Both the per-scene checks ([`super::ab`]) and the
 //! checks pooled over the scenes ([`super::pooled`]) are decided here.
 
-use crate::stats::{Shift, Summary};
+use crate::measure::stats::{Shift, Summary};
 
 use super::time::decide;
 use super::verdict::{Against, CONFIDENCE, Check, MIN_PROCESSES, Outcome};

@@ -4,8 +4,8 @@
 
 use super::mode::{ModeContext, show_percent};
 use super::verdict::{CONFIDENCE, Check, MIN_FRAMES, Outcome};
-use crate::stats::{Rounds, Shift};
-use crate::vocabulary::TimeMetric;
+use crate::measure::stats::{Rounds, Shift};
+use crate::record::vocabulary::TimeMetric;
 
 impl ModeContext<'_> {
     pub(super) fn time_checks(&self) -> Vec<Check> {
@@ -202,7 +202,7 @@ fn show_time(value: f64, unit: &str) -> String {
 /// shift within this spread is no evidence of a change. The caller caps it, so that one
 /// disturbed blessed process cannot switch a mode's time gate off.
 pub(super) fn process_spread(per_process: &[Vec<f64>]) -> f64 {
-    let median = |logs: &[f64]| crate::stats::Summary::new(logs.to_vec()).map(|s| s.median);
+    let median = |logs: &[f64]| crate::measure::stats::Summary::new(logs.to_vec()).map(|s| s.median);
     match (per_process.len(), median(&per_process.concat())) {
         (2.., Some(pooled)) => {
             per_process.iter().filter_map(|p| median(p)).map(|m| (m - pooled).abs()).fold(0.0, f64::max)
@@ -213,7 +213,7 @@ pub(super) fn process_spread(per_process: &[Vec<f64>]) -> f64 {
 
 /// exp of the median of log values: the median ratio.
 fn median_exp(logs: &[f64]) -> f64 {
-    crate::stats::Summary::new(logs.to_vec()).map_or(f64::NAN, |s| s.median.exp())
+    crate::measure::stats::Summary::new(logs.to_vec()).map_or(f64::NAN, |s| s.median.exp())
 }
 
 /// Mode `id`'s frame times in each of `processes`, where every one has them.

@@ -92,10 +92,10 @@ pub enum FailOn {
 
 /// Whether `metric` is a time, decided on intervals and gated by `--fail-on`.
 pub(super) fn is_time_metric(metric: &str) -> bool {
-    crate::vocabulary::TimeMetric::of(metric).is_some()
+    crate::record::vocabulary::TimeMetric::of(metric).is_some()
 }
 
-pub use crate::gate::MIN_FRAMES;
+pub use crate::manifest::tolerances::MIN_FRAMES;
 
 /// The fewest processes on each side from which a time check against the base build is
 /// decided: four against four is the smallest design whose Moses interval reaches 95%

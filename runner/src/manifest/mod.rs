@@ -1,10 +1,13 @@
 //! Scene manifests: `scenes/*.json`, schema version 1. Parsing rejects unknown fields, and
 //! every error names the file and the field (`scenes/atrium.json: lights[2].range: must be > 0`).
-//! The sections of the scene itself are in `sections.rs`, the colour sections in `display.rs`.
+//! The sections of the scene itself are in `sections.rs`, the colour sections in `display.rs`,
+//! the camera path in `motion/` and the gate's tolerances in `tolerances.rs`.
 
 mod display;
+pub mod motion;
 mod narrow;
 mod sections;
+pub mod tolerances;
 
 pub use display::{
     DEFAULT_PEAK_NITS, DisplaySpec, DitherSpec, DynamicRange, TonemapSpec, TransferSpec, check_jod_display,
@@ -22,9 +25,9 @@ use aabench_renderer::scene::generate::{Generated, Placement};
 use aabench_renderer::scene::{MAX_LIGHTS, Shadow};
 use serde::Deserialize;
 
-use crate::gate::Tolerances;
-use crate::motion::MotionSpec;
 use display::MAX_EXPOSURE;
+use motion::MotionSpec;
+use tolerances::Tolerances;
 
 pub const SCHEMA_VERSION: u32 = 1;
 
@@ -134,7 +137,7 @@ impl Manifest {
             message: format!("cannot read: {message}"),
         };
         // A FIFO would block the run forever.
-        crate::fs::regular_file(path).map_err(unreadable)?;
+        crate::files::regular_file(path).map_err(unreadable)?;
         let text = std::fs::read_to_string(path).map_err(|e| unreadable(e.to_string()))?;
         Self::parse(path, &text)
     }

@@ -282,7 +282,7 @@ fn syntax_errors_give_the_line_and_column() {
 
 #[test]
 fn an_animation_is_picked_by_a_name_an_index_a_list_of_either_or_all() {
-    use crate::motion::Picked;
+    use crate::manifest::motion::Picked;
     let picked = |animation: serde_json::Value| {
         let mut json: serde_json::Value = serde_json::from_str(VALID).unwrap();
         json["motion"] = serde_json::json!({"path": "static", "animation": animation});

@@ -6,19 +6,21 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::gate::Tolerances;
-use crate::inputs::SceneInputs;
-use crate::machine::Machine;
-use crate::metrics::{FrameChecks, Quality, SampleStats};
+use crate::manifest::tolerances::Tolerances;
+use crate::measure::machine::Machine;
+use crate::measure::pixels::{FrameChecks, Quality, SampleStats};
+use crate::measure::stats::{Rounds, Summary};
 pub use crate::plan::Shard;
 use crate::plan::Tier;
-use crate::repetitions::{Confidence, Stop};
-use crate::stats::{Rounds, Summary};
-use crate::truth::TruthRecord;
+use crate::plan::inputs::SceneInputs;
+use crate::plan::repetitions::{Confidence, Stop};
 
-mod front;
+pub mod front;
+pub mod merge;
+mod place;
 mod sequence;
-pub use front::{FrontPlace, FrontVerdict, Rival};
+pub mod vocabulary;
+pub use place::{FrontPlace, FrontVerdict, Rival};
 pub use sequence::{FlickerRegion, GhostFrame, Ghosting, ModeSequence, SequenceRecord};
 
 /// Version 2: the ground truth is an 8×8 render of its own (`truth`), scenes record their
@@ -266,7 +268,7 @@ pub struct ModeRecord {
     #[serde(
         default,
         alias = "front",
-        deserialize_with = "front::keyed_or_legacy",
+        deserialize_with = "place::keyed_or_legacy",
         skip_serializing_if = "BTreeMap::is_empty"
     )]
     pub fronts: BTreeMap<String, FrontPlace>,
@@ -444,7 +446,7 @@ pub fn this_build() -> String {
     hasher.update(env!("AABENCH_BUILD_SHA256").as_bytes());
     for (name, embedded) in shaders::SOURCES {
         let text = match &dir {
-            Some(dir) => crate::fs::read_regular(&dir.join(name)).unwrap_or_default(),
+            Some(dir) => crate::files::read_regular(&dir.join(name)).unwrap_or_default(),
             None => embedded.as_bytes().to_vec(),
         };
         hasher.update(name.as_bytes());
@@ -471,7 +473,7 @@ pub fn different_builds(a: &RunRecord, b: &RunRecord) -> Option<String> {
 }
 
 pub fn load_run(path: &std::path::Path) -> Result<(RunRecord, std::path::PathBuf), String> {
-    let record = crate::json::read_versioned(&run_file(path), RUN_SCHEMA)?;
+    let record = crate::files::json::read_versioned(&run_file(path), RUN_SCHEMA)?;
     Ok((record, run_folder(path)))
 }
 
@@ -518,4 +520,29 @@ where
         Some(OneOrMany::One(value)) => vec![value],
         None => Vec::new(),
     })
+}
+
+/// How a scene's truth was obtained, in run.json.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TruthRecord {
+    /// `truth-8x8`.
+    pub id: String,
+    pub samples_per_pixel: u32,
+    /// SHA-256 of everything the image depends on (see [`crate::run::truth::cache_key`]).
+    pub key: String,
+    /// True when the image came from the cache and nothing was rendered.
+    pub cached: bool,
+    /// Wall-clock seconds of the render, read-back included (absent when cached).
+    pub render_s: Option<f64>,
+    pub tiles: Option<usize>,
+    /// The process's peak resident memory during the render (Linux; absent when cached).
+    pub peak_rss_bytes: Option<u64>,
+    /// The display image, relative to the run folder.
+    pub image: Option<String>,
+    /// FNV-1a 64 of the display image's code values: what `compare` looks at to say whether the
+    /// truth itself changed (its key changes with any edit of the rendering source).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub image_hash: Option<String>,
+    /// Why there is no truth, when there is none.
+    pub error: Option<String>,
 }

@@ -4,9 +4,9 @@
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-use crate::metrics::Decibels;
-use crate::stats::Summary;
-use crate::temporal::MeasuredSpeed;
+use crate::measure::pixels::Decibels;
+use crate::measure::stats::Summary;
+use crate::measure::temporal::MeasuredSpeed;
 
 /// What a scene's sequence rendered (`run/sequence.rs`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -95,7 +95,7 @@ impl SequenceRecord {
     /// median 5.77, p90 5.86 px a frame over 4.1 % of the frame`; else the nominal `3.7 px a
     /// frame` or the path's name; and the animation that plays (`…, animation crossing`).
     pub fn speed(&self) -> String {
-        use crate::motion::short;
+        use crate::manifest::motion::short;
         let path = match &self.animation {
             Some(animation) => format!("{}, animation {animation}", self.path),
             None => self.path.clone(),
@@ -117,7 +117,7 @@ impl SequenceRecord {
                     "{path}: median {}, p90 {} px a frame over {} % of the frame",
                     short(measured.median),
                     short(measured.p90),
-                    crate::motion::short(share * 100.0)
+                    crate::manifest::motion::short(share * 100.0)
                 ),
                 None => format!("{path}, content up to {} px a frame", short(measured.max)),
             },

@@ -13,9 +13,9 @@ use std::path::Path;
 use super::ZOOM;
 use super::html::escape;
 use super::images::figure;
+use crate::record::vocabulary::JOD_MARGIN;
 use crate::record::{ModeRecord, SceneRecord, SequenceRecord};
-use crate::truth::TRUTH_ID;
-use crate::vocabulary::JOD_MARGIN;
+use crate::run::truth::TRUTH_ID;
 
 /// The smallest differences that count as an order: [`JOD_MARGIN`] and a tenth of a decibel.
 const PSNR_MARGIN_DB: f64 = 0.1;
@@ -233,11 +233,11 @@ fn gaussian_blur(values: &[f64], width: usize, height: usize) -> Vec<f64> {
 fn coarse_shares(run_dir: &Path, sequence: &SequenceRecord, odds: AtOdds) -> Option<[f64; 2]> {
     let region = sequence.region.as_ref()?;
     let frames = |stream: &str| {
-        let mut all = crate::images::read_apng(&run_dir.join(region.animations.get(stream)?)).ok()?;
+        let mut all = crate::files::images::read_apng(&run_dir.join(region.animations.get(stream)?)).ok()?;
         all.truncate(sequence.frames_done as usize);
         Some(all)
     };
-    let truth = frames(crate::flicker::TRUTH_STREAM)?;
+    let truth = frames(crate::run::flicker::TRUTH_STREAM)?;
     let share = |pick: Scored| coarse_share(&truth, &frames(&pick.mode.mode)?);
     Some([share(odds.psnr_pick)?, share(odds.jod_pick)?])
 }
@@ -295,7 +295,7 @@ fn orders_table(page: &mut String, scored: &[Scored]) {
             escape(&j.mode.mode),
             j.jod,
             escape(&p.mode.mode),
-            crate::vocabulary::decibels(p.psnr_db)
+            crate::record::vocabulary::decibels(p.psnr_db)
         );
     }
     page.push_str("</tbody></table></details>\n");
@@ -379,8 +379,9 @@ fn error_animation(
     [truth, file]: [&str; 2],
     delay_s: f64,
 ) -> Result<String, String> {
-    let read =
-        |relative: &str| crate::images::read_apng(&run_dir.join(relative)).map_err(|e| format!("{e:#}"));
+    let read = |relative: &str| {
+        crate::files::images::read_apng(&run_dir.join(relative)).map_err(|e| format!("{e:#}"))
+    };
     let (truth_frames, frames) = (read(truth)?, read(file)?);
     let same = truth_frames.len() == frames.len()
         && truth_frames.first().map(image::RgbaImage::dimensions)
@@ -395,7 +396,7 @@ fn error_animation(
     if let Some(folder) = path.parent() {
         std::fs::create_dir_all(folder).map_err(|e| format!("{}: {e}", folder.display()))?;
     }
-    crate::images::write_apng(&path, width, height, &errors, delay_s).map_err(|e| format!("{e:#}"))?;
+    crate::files::images::write_apng(&path, width, height, &errors, delay_s).map_err(|e| format!("{e:#}"))?;
     Ok(relative.to_string_lossy().replace('\\', "/"))
 }
 
@@ -434,7 +435,7 @@ pub(super) fn markdown(out: &mut String, run_dir: &Path, scenes: &[SceneRecord],
                 cell(&scene.name),
                 cell(&sequence.speed()),
                 cell(&listed(&by_jod, |s| format!("{:.2}", s.jod))),
-                cell(&listed(&by_psnr, |s| crate::vocabulary::decibels(s.psnr_db))),
+                cell(&listed(&by_psnr, |s| crate::record::vocabulary::decibels(s.psnr_db))),
                 rank_correlation(&scored).map_or("–".into(), |r| format!("{r:.2}")),
                 cell(&odds)
             );

@@ -10,10 +10,10 @@
 use std::fmt::Write;
 
 use super::html::escape;
-use crate::front::FrontPoint;
+use crate::measure::stats::Summary;
+use crate::record::front::FrontPoint;
+use crate::record::vocabulary::{JOD_MARGIN, JOD_VS_TRUTH, METRICS, Metric, SEQUENCE_JOD_VS_TRUTH, Source};
 use crate::record::{ModeRecord, ModeSequence, RunRecord, SceneRecord};
-use crate::stats::Summary;
-use crate::vocabulary::{JOD_MARGIN, JOD_VS_TRUTH, METRICS, Metric, SEQUENCE_JOD_VS_TRUTH, Source};
 
 /// What a ranking measures a mode by.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -438,7 +438,7 @@ pub(super) fn technique_markdown(out: &mut String, run: &RunRecord, cell: fn(&st
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::metrics::{Decibels, Quality};
+    use crate::measure::pixels::{Decibels, Quality};
 
     /// The five rounds' drift of the machine's speed, which every mode of a round shares.
     const DRIFT: [f64; 5] = [1.0, 1.2, 0.8, 1.1, 0.9];

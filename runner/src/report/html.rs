@@ -1,6 +1,6 @@
 //! The page's inline style sheet, and escaping text for it.
 
-pub use crate::markup::escape;
+pub use crate::files::markup::escape;
 
 /// Everything the page needs to look right, inline: no fonts, no scripts, nothing fetched.
 pub const STYLE: &str = "\

@@ -9,7 +9,7 @@ use aabench_renderer::{Mode, Technique};
 use super::html::escape;
 use super::{CROP, ZOOM};
 use crate::record::{ModeRecord, RunRecord, SceneRecord};
-use crate::truth::TRUTH_ID;
+use crate::run::truth::TRUTH_ID;
 
 /// A copy of `run` without the images that are not files in its folder (a folder or nothing
 /// where an image should be), so that the page links only what opens, and a line for each.
@@ -215,7 +215,7 @@ fn crops(
     for (name, image) in opened {
         let crop = image::imageops::crop_imm(&image, x, y, side, side).to_image();
         let relative = folder.join(format!("crop-{m}x{m}-{name}.png"));
-        crate::images::write_png(&run_dir.join(&relative), side, side, crop.as_raw())
+        crate::files::images::write_png(&run_dir.join(&relative), side, side, crop.as_raw())
             .map_err(|e| format!("{e:#}"))?;
         let src = relative.to_string_lossy().replace('\\', "/");
         let _ = write!(
@@ -343,15 +343,15 @@ fn strip(
     animation: &str,
     frames: std::ops::Range<u32>,
 ) -> Result<(String, u32, u32), Strip> {
-    let all =
-        crate::images::read_apng(&run_dir.join(animation)).map_err(|e| Strip::LeftOut(format!("{e:#}")))?;
+    let all = crate::files::images::read_apng(&run_dir.join(animation))
+        .map_err(|e| Strip::LeftOut(format!("{e:#}")))?;
     if all.len() < frames.end as usize {
         let reason = format!("{animation} has {} frames, the strip needs {}", all.len(), frames.end);
         return Err(Strip::LeftOut(reason));
     }
     let strip = side_by_side(&all[frames.start as usize..frames.end as usize], 1, 1);
     let relative = folder.join(format!("strip-{id}.png"));
-    crate::images::write_png(&run_dir.join(&relative), strip.width(), strip.height(), strip.as_raw())
+    crate::files::images::write_png(&run_dir.join(&relative), strip.width(), strip.height(), strip.as_raw())
         .map_err(|e| Strip::Failed(format!("{e:#}")))?;
     Ok((relative.to_string_lossy().replace('\\', "/"), strip.width(), strip.height()))
 }
@@ -385,5 +385,5 @@ pub fn worst_window(a: &image::RgbaImage, b: &image::RgbaImage, side: u32) -> (u
         .zip(b.pixels())
         .map(|(p, q)| (0..3).map(|c| (f64::from(p[c]) - f64::from(q[c])).powi(2)).sum())
         .collect();
-    crate::images::largest_window(&errors, a.width(), a.height(), side)
+    crate::files::images::largest_window(&errors, a.width(), a.height(), side)
 }

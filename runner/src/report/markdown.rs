@@ -16,9 +16,9 @@ use super::{
     ErrorPlot, PAPER, competitors, decibels, error_points, mode_cells, mode_columns, open_rgba, plots,
     reconstructions, sequence_cells, sequence_columns, sequence_summary, side_by_side, worst_window,
 };
+use crate::record::vocabulary::PSNR_VS_TRUTH;
 use crate::record::{ModeRecord, RunRecord, SceneRecord};
-use crate::truth::TRUTH_ID;
-use crate::vocabulary::PSNR_VS_TRUTH;
+use crate::run::truth::TRUTH_ID;
 
 /// The modes of the overview table, where the run has them: the competitors, then M = 2 and
 /// M = 4 of the reference and the paper's adaptive mode, and the variant nearest the truth.
@@ -285,7 +285,7 @@ pub fn figures(run_dir: &Path, run: &RunRecord, dir: &Path) -> Result<(Vec<Strin
             let svg =
                 plots::error_against_time(&title, [error_plot.time_axis(), error_plot.axis()], &points)?;
             let path = dir.join(format!("{}-{}.svg", scene.name, error_plot.file()));
-            crate::fs::write(&path, standalone(&svg).as_bytes())?;
+            crate::files::write(&path, standalone(&svg).as_bytes())?;
             written.push(path.display().to_string());
         }
         // The strip crops where the still's error is: none without it.
@@ -295,7 +295,7 @@ pub fn figures(run_dir: &Path, run: &RunRecord, dir: &Path) -> Result<(Vec<Strin
         match strip(run_dir, scene) {
             Ok((image, shows)) => {
                 let path = dir.join(format!("{}-strip.png", scene.name));
-                crate::images::write_png(&path, image.width(), image.height(), image.as_raw())
+                crate::files::images::write_png(&path, image.width(), image.height(), image.as_raw())
                     .map_err(|e| format!("{e:#}"))?;
                 written.push(format!("{} ({shows})", path.display()));
             }
@@ -326,7 +326,7 @@ fn flicker_animation(run_dir: &Path, scene: &SceneRecord, path: &Path) -> Result
         ids.iter().filter_map(|id| Some((id.as_str(), region.animations.get(id)?))).collect();
     let mut animations = Vec::new();
     for (_, file) in &streams {
-        let frames = crate::images::read_apng(&run_dir.join(file)).map_err(|e| format!("{e:#}"))?;
+        let frames = crate::files::images::read_apng(&run_dir.join(file)).map_err(|e| format!("{e:#}"))?;
         if animations.first().is_some_and(|first: &Vec<RgbaImage>| first.len() != frames.len()) {
             return Err(format!("{file} has {} frames, the truth's {}", frames.len(), animations[0].len()));
         }
@@ -340,7 +340,7 @@ fn flicker_animation(run_dir: &Path, scene: &SceneRecord, path: &Path) -> Result
         .collect();
     let panel = region.side * FLICKER_ZOOM;
     let width = streams.len() as u32 * (panel + STRIP_GAP) - STRIP_GAP;
-    crate::images::write_apng(path, width, panel, &frames, sequence.time_step_s)
+    crate::files::images::write_apng(path, width, panel, &frames, sequence.time_step_s)
         .map_err(|e| format!("{e:#}"))?;
     let names: Vec<&str> = streams.iter().map(|(id, _)| *id).collect();
     Ok(format!(

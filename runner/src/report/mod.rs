@@ -86,7 +86,7 @@ pub fn write(
          peak-255 convention); the truth is the reference at 8×8 samples per pixel.</footer>\n</body>\n</html>\n",
     );
     let path = run_dir.join("index.html");
-    crate::fs::write(&path, page.as_bytes())?;
+    crate::files::write(&path, page.as_bytes())?;
     Ok((path, left_out))
 }
 

@@ -2,9 +2,9 @@
 //! truth (MSE, FLIP) or along the camera path (flicker) and a frame time.
 
 use super::plots::Point;
+use crate::measure::stats::Summary;
+use crate::record::vocabulary::{self, Front, METRICS, Metric, Plot, Source};
 use crate::record::{ModeRecord, SceneRecord};
-use crate::stats::Summary;
-use crate::vocabulary::{self, Front, METRICS, Metric, Plot, Source};
 
 /// One error-against-run-time plot of a scene: a metric of the vocabulary that has a
 /// [`Plot`], along the scene's sequence `sequence` where it is a sequence's.

@@ -6,8 +6,8 @@
 use std::path::Path;
 
 use super::choice::{Basis, answer, viewing_conditions};
+use crate::record::vocabulary::JOD_MARGIN;
 use crate::record::{RunRecord, SceneRecord, Status};
-use crate::vocabulary::JOD_MARGIN;
 
 /// The summary's lines, for the run whose record is at `run_json`.
 pub fn closing(run: &RunRecord, run_json: &Path) -> Vec<String> {

@@ -6,8 +6,8 @@ use std::fmt::Write;
 
 use super::html::escape;
 use crate::compare::{Check, Outcome};
+use crate::record::vocabulary::{self, Metric, Table};
 use crate::record::{ModeRecord, RunRecord, SceneRecord, SequenceRecord};
-use crate::vocabulary::{self, Metric, Table};
 
 /// The columns of a scene's mode table, in the HTML report and in Markdown alike: the mode and
 /// its time, then the metrics with a column in the still's table, then its place on each front
@@ -161,7 +161,7 @@ fn warmup_summary(sequence: &SequenceRecord) -> String {
 }
 
 /// A PSNR to two decimals, `∞` for identical images, `–` without a comparison.
-pub fn decibels(quality: Option<&crate::metrics::Quality>) -> String {
+pub fn decibels(quality: Option<&crate::measure::pixels::Quality>) -> String {
     quality.map_or("–".into(), |q| vocabulary::decibels(q.psnr_db.value()))
 }
 

@@ -2,10 +2,10 @@
 //! its camera path, then a table of its modes that fits 120 columns, with JOD (of the still
 //! and along the path) beside PSNR. The run's closing summary is `report::closing`.
 
-use crate::progress::Progress;
+use crate::record::TruthRecord;
+use crate::record::vocabulary::{JOD_VS_TRUTH, SEQUENCE_JOD_VS_TRUTH};
 use crate::record::{FrontPlace, ModeRecord, SceneRecord};
-use crate::truth::TruthRecord;
-use crate::vocabulary::{JOD_VS_TRUTH, SEQUENCE_JOD_VS_TRUTH};
+use crate::run::progress::Progress;
 
 /// The widest line the table is laid out for.
 const WIDTH: usize = 120;

@@ -9,12 +9,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use aabench_renderer::{FrameImages, FrameTiming};
 
 use crate::manifest::Manifest;
-use crate::metrics::FrameChecks;
+use crate::measure::pixels::FrameChecks;
 use crate::plan::RunPlan;
-use crate::progress::Progress;
+use crate::plan::repetitions::Stop;
 use crate::record::{GraphRecord, ModeSequence};
-use crate::repetitions::Stop;
-use crate::worker::Worker;
+use crate::run::progress::Progress;
+use crate::run::worker::Worker;
 
 /// One scene's run: what its phases read and the GPU worker they render on.
 pub(super) struct SceneRun<'a> {
@@ -35,7 +35,7 @@ pub(super) struct SceneRun<'a> {
     /// scene is loaded.
     pub animation: Option<String>,
     /// ColorVideoVDP on the scene's display model, where quality is measured.
-    pub jod: Option<crate::perceptual::Jod>,
+    pub jod: Option<crate::measure::perceptual::Jod>,
 }
 
 impl<'a> SceneRun<'a> {

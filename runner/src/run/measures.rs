@@ -27,11 +27,11 @@ use super::path_metrics::{
     Accumulate, CountChanges, Flicker, FlipAlong, FrameError, Instability, JodAlong, LagError, ModeFrame,
     OwnChange, PathPsnr, Shading, Step,
 };
-use crate::metrics::FrameChecks;
-use crate::perceptual::VideoJod;
+use crate::measure::perceptual::VideoJod;
+use crate::measure::pixels::FrameChecks;
+use crate::measure::temporal::{self, Flow, Geometry, per_value, squared_difference};
 use crate::record::{ModeSequence, SequenceRecord, fingerprint};
-use crate::spool::Spool;
-use crate::temporal::{self, Flow, Geometry, per_value, squared_difference};
+use crate::run::spool::Spool;
 
 /// What a mode's sequence gave: its record (absent where it failed or was cut short), the checks
 /// of its frames, and its error.
@@ -192,7 +192,9 @@ impl ModeState {
             change_ratio: self.own_change.conclude(last, pairs, truth_change),
             count_changes: self.count_changes.conclude(),
             shaded_percent: self.shading.conclude(),
-            frame_ms: crate::stats::Summary::new(self.frame_seconds.iter().map(|s| s * 1e3).collect()),
+            frame_ms: crate::measure::stats::Summary::new(
+                self.frame_seconds.iter().map(|s| s * 1e3).collect(),
+            ),
             frames_of: None,
             flicker: self.flicker.conclude(),
             ghosting: self.lag.conclude(),
@@ -237,7 +239,7 @@ pub(super) fn flip_along(
                 };
                 done.push((
                     *image,
-                    crate::perceptual::flip_rgba8(image, &truth, size, pixels_per_degree).mean(),
+                    crate::measure::perceptual::flip_rgba8(image, &truth, size, pixels_per_degree).mean(),
                 ));
             }
         };
@@ -265,7 +267,7 @@ pub(super) fn jod_along(
     spool: &Spool,
     frames: usize,
     fps: f64,
-    jod: &crate::perceptual::Jod,
+    jod: &crate::measure::perceptual::Jod,
     cancel: &AtomicBool,
 ) -> Result<Vec<Option<Arc<VideoJod>>>, String> {
     use std::hash::{Hash, Hasher};
@@ -329,11 +331,11 @@ pub(super) fn write_jod_maps(
         .map(|(stream, jod)| {
             let jod = jod.as_ref()?;
             let path = dir.join(format!("{}.jod.png", spool.name(stream)));
-            let written = crate::images::write_png(
+            let written = crate::files::images::write_png(
                 &path,
                 jod.width,
                 jod.height,
-                &crate::perceptual::magma_rgba(&jod.map),
+                &crate::measure::perceptual::magma_rgba(&jod.map),
             );
             Some(
                 // The write's error names the file already.

@@ -4,16 +4,27 @@
 //! rewritten after each. Timed frames run alone: nothing else is scheduled while one is on the
 //! device, and encoding and metrics wait until the scene's frames are done (lavapipe uses every
 //! core, so overlapping CPU work would corrupt timings).
+//!
+//! The run's own machinery sits beside the phases: the GPU worker thread (`worker.rs`), the
+//! scene from manifest to upload (`scenes.rs`), the cached ground truth (`truth.rs`), a
+//! sequence's frames on disk (`spool.rs`), its worst-flickering region (`flicker.rs`) and the
+//! progress line (`progress.rs`).
 
 mod console;
 mod context;
+pub mod flicker;
 mod measures;
 mod memory;
 mod path_metrics;
+pub mod progress;
 mod results;
 mod rounds;
 mod scene;
+pub mod scenes;
 mod sequence;
+pub mod spool;
+pub mod truth;
+pub mod worker;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -22,13 +33,13 @@ use std::time::SystemTime;
 
 use aabench_renderer::{AdaptiveSettings, ExtraSamples, RenderSettings};
 
-use crate::machine::Machine;
 use crate::manifest::Manifest;
+use crate::measure::machine::Machine;
 use crate::plan::{RunPlan, SceneEntry, Tier, fallback_name};
-use crate::progress::Progress;
 use crate::record::{Platform, RUN_SCHEMA, RunRecord, RunSettings, SceneRecord, Status};
-use crate::worker::Worker;
 use context::SceneRun;
+use progress::Progress;
+use worker::Worker;
 
 /// How a run ended.
 #[derive(Debug)]
@@ -124,7 +135,7 @@ fn now() -> String {
 }
 
 fn write_record(path: &Path, record: &RunRecord) -> anyhow::Result<()> {
-    crate::fs::write_json(path, record).map_err(anyhow::Error::msg)
+    crate::files::write_json(path, record).map_err(anyhow::Error::msg)
 }
 
 fn failed_scene(entry: &SceneEntry, error: String) -> SceneRecord {

@@ -8,9 +8,11 @@
 
 use aabench_renderer::{DisplayImage, Mode};
 
-use crate::metrics::{self, Decibels, FrameChecks};
+use crate::measure::pixels::{self, Decibels, FrameChecks};
+use crate::measure::temporal::{
+    self, Flow, PairError, change_of_error, mean_of, per_value, squared_difference,
+};
 use crate::record::{GhostFrame, Ghosting};
-use crate::temporal::{self, Flow, PairError, change_of_error, mean_of, per_value, squared_difference};
 
 /// A mode's frame: its time, display image, sample counts and checks.
 pub(super) struct ModeFrame {
@@ -55,7 +57,7 @@ pub(super) struct PathPsnr {
 
 impl Accumulate for FrameError {
     fn add(&mut self, step: &Step) {
-        self.mse.push(metrics::quality(&step.now.display, step.truth, "truth").mse);
+        self.mse.push(pixels::quality(&step.now.display, step.truth, "truth").mse);
     }
 }
 
@@ -217,7 +219,7 @@ impl Accumulate for Shading {
     fn add(&mut self, step: &Step) {
         // Counts outside the window are reported by the frame's checks.
         let counts = step.now.counts.as_deref();
-        if let Some(stats) = counts.and_then(|c| metrics::sample_stats(c, step.mode, step.textured).ok()) {
+        if let Some(stats) = counts.and_then(|c| pixels::sample_stats(c, step.mode, step.textured).ok()) {
             self.percents.push(stats.shaded_percent);
         }
     }

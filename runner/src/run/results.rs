@@ -10,13 +10,13 @@ use std::time::{Duration, Instant};
 use aabench_renderer::{DisplayImage, FrameImages, Mode, Technique};
 
 use super::context::{ModeRun, SceneRun};
-use crate::images;
-use crate::metrics::{self, Quality};
-use crate::perceptual::FlipMap;
+use crate::files::images;
+use crate::measure::perceptual::FlipMap;
+use crate::measure::pixels::{self, Quality};
+use crate::measure::stats::Summary;
 use crate::plan::RunPlan;
 use crate::record::{AdaptiveCost, ImageFiles, ModeRecord, PassRecord, SampleCost, Status};
-use crate::stats::Summary;
-use crate::truth::TRUTH_ID;
+use crate::run::truth::TRUTH_ID;
 
 /// Display differences of this many 8-bit steps reach the top of the difference heatmap.
 const DIFFERENCE_FULL_SCALE: f64 = 32.0;
@@ -48,7 +48,7 @@ pub(super) async fn finish_modes(
     // milliseconds at 1024×768).
     let [width, height] = scene.resolution;
     let jod = scene.jod.clone().expect("a scene that measures quality has its ColorVideoVDP");
-    let truth = truth.map(|image| Arc::new(metrics::Truth::new(image, width, height, jod)));
+    let truth = truth.map(|image| Arc::new(pixels::Truth::new(image, width, height, jod)));
     let tasks: Vec<_> = modes
         .iter()
         .enumerate()
@@ -86,7 +86,7 @@ pub(super) async fn finish_modes(
             }
         }
     }
-    crate::front::place(&mut records);
+    crate::record::front::place(&mut records);
     (records, perceptual_s, cut_short)
 }
 
@@ -144,7 +144,7 @@ struct ModeTask {
     /// The mode it is compared with, where that one ran ([`comparison_reference`]).
     reference: Option<(usize, Mode)>,
     images: Arc<Vec<Option<FrameImages>>>,
-    truth: Option<Arc<metrics::Truth>>,
+    truth: Option<Arc<pixels::Truth>>,
     scene_dir: std::path::PathBuf,
     scene_name: String,
     textured: bool,
@@ -155,13 +155,13 @@ impl ModeTask {
         let display = |i: usize| &self.images[i].as_ref().expect("images of a finished mode").display;
         let own = self.images[self.index].as_ref().expect("images of a finished mode");
         let vs_reference =
-            self.reference.map(|(i, m)| metrics::quality(&own.display, display(i), &m.to_string()));
+            self.reference.map(|(i, m)| pixels::quality(&own.display, display(i), &m.to_string()));
         // Thread CPU time: the tasks share the cores, so their wall times overlap.
         let perceptual_start = thread_cpu_seconds();
         let (vs_truth, flip_map) = self
             .truth
             .as_deref()
-            .map(|truth| metrics::quality_vs_truth(&own.display, truth, TRUTH_ID))
+            .map(|truth| pixels::quality_vs_truth(&own.display, truth, TRUTH_ID))
             .unzip();
         let perceptual_s = thread_cpu_seconds() - perceptual_start;
         let diff_against = match self.reference {
@@ -169,7 +169,7 @@ impl ModeTask {
             None => self.truth.as_deref().map(|truth| &truth.image),
         };
         let samples =
-            own.sample_counts.as_ref().map(|counts| metrics::sample_stats(counts, self.mode, self.textured));
+            own.sample_counts.as_ref().map(|counts| pixels::sample_stats(counts, self.mode, self.textured));
         let mut files = ImageFiles::default();
         let written = write_mode_images(
             &self.scene_dir,
@@ -187,7 +187,7 @@ impl ModeTask {
 /// What a mode's image task computed and wrote.
 struct ModeResults {
     files: ImageFiles,
-    samples: Option<Result<metrics::SampleStats, String>>,
+    samples: Option<Result<pixels::SampleStats, String>>,
     vs_reference: Option<Quality>,
     vs_truth: Option<Quality>,
     written: anyhow::Result<()>,
@@ -270,7 +270,7 @@ fn timing_record(
     // A run that times alone reads no still of a jittered mode: its frames alone decide.
     let read_back = run.images.is_some() || (!plan.quality && mode.is_jittered());
     let unstable = run.checks.problem(mode.m);
-    let blank = run.images.as_ref().filter(|_| !declared_empty).and_then(metrics::blank_frame);
+    let blank = run.images.as_ref().filter(|_| !declared_empty).and_then(pixels::blank_frame);
     let (status, error) = match (&run.error, read_back) {
         (Some(error), _) => (Status::Failed, Some(error.clone())),
         // Not a number is never a result: the display passes would hide it, so it fails here.
@@ -338,7 +338,7 @@ fn adaptive_cost(
     let reference_run = &runs[modes.iter().position(|m| *m == reference)?];
     let own = frame_median(run)?;
     let counts = run.images.as_ref()?.sample_counts.as_ref()?;
-    let stats = metrics::sample_stats(counts, mode, textured).ok()?;
+    let stats = pixels::sample_stats(counts, mode, textured).ok()?;
     // Shading work beyond S, as a fraction of the reference's.
     let pixels = counts.len() as f64;
     let extra_fraction = ((stats.shaded + stats.reshaded) as f64 - pixels) / stats.total as f64;

@@ -5,9 +5,9 @@
 use aabench_renderer::{FrameImages, FrameTiming, RenderError};
 
 use super::context::{ModeRun, SceneRun};
-use crate::metrics::FrameChecks;
+use crate::measure::pixels::FrameChecks;
 use crate::record::fingerprint;
-use crate::worker::WorkerError;
+use crate::run::worker::WorkerError;
 
 /// What one rendered frame gave: its timing, its fingerprint (timed frames), the checks of its
 /// HDR values and sample counts, and its images (the first timed frame).
@@ -22,7 +22,7 @@ impl SceneRun<'_> {
     /// Warm-up rounds (lavapipe compiles at the first draw), then timed rounds. Each round renders
     /// every mode still taking rounds once: A B C … A B C …, so drift over time hits every mode
     /// alike; after each, a mode whose rounds are enough by the plan's rule stops
-    /// ([`crate::repetitions::Repetitions::stop`]). Images are read back after the first timed frame
+    /// ([`crate::plan::repetitions::Repetitions::stop`]). Images are read back after the first timed frame
     /// (every later frame is checked to give the same display image), so an interrupted run
     /// still has them. A worker that stops (a timeout, a panic) ends the rounds of every mode.
     pub(super) async fn timed_rounds(&mut self, runs: &mut [ModeRun]) {

@@ -11,11 +11,12 @@ use aabench_renderer::{DisplayImage, color};
 use super::context::{ModeRun, SceneRun};
 use super::results::finish_modes;
 use super::{empty_scene, render_settings, sequence};
-use crate::images;
-use crate::inputs::SceneInputs;
+use crate::files::images;
+use crate::plan::inputs::SceneInputs;
+use crate::record::TruthRecord;
 use crate::record::{ExposureRecord, GraphRecord, SceneRecord, Status, fingerprint};
-use crate::scenes;
-use crate::truth::{self, TRUTH_ID, TRUTH_M, TruthRecord};
+use crate::run::scenes;
+use crate::run::truth::{self, TRUTH_ID, TRUTH_M};
 
 impl<'a> SceneRun<'a> {
     /// Why JOD goes unmeasured where quality is measured: a frame narrower or lower than
@@ -40,7 +41,7 @@ impl<'a> SceneRun<'a> {
         }
         if self.plan.quality {
             let judged = self.plan.jod_display(self.manifest);
-            match judged.and_then(|name| Ok((crate::perceptual::Jod::new(&name)?, name))) {
+            match judged.and_then(|name| Ok((crate::measure::perceptual::Jod::new(&name)?, name))) {
                 Ok((jod, name)) => {
                     record.pixels_per_degree = Some(jod.pixels_per_degree());
                     (self.jod, record.jod_display) = (Some(jod), Some(name));
@@ -129,13 +130,13 @@ impl<'a> SceneRun<'a> {
         let paces = self.plan.tier.paces(self.manifest, still_camera.fov_y);
         let frames = self.plan.tier.sequence_frames(motion);
         let window_s = f64::from(frames) * motion.time_step_s;
-        if window_s < crate::motion::MIN_WINDOW_S {
+        if window_s < crate::manifest::motion::MIN_WINDOW_S {
             let warning = format!(
                 "motion.frames.{}: the measured window of {frames} frames lasts {} ms, less than the \
                  {} ms ColorVideoVDP's temporal filters span: its JOD weighs the window's first frames most",
                 self.plan.tier.name(),
-                crate::motion::short(window_s * 1e3),
-                crate::motion::MIN_WINDOW_S * 1e3
+                crate::manifest::motion::short(window_s * 1e3),
+                crate::manifest::motion::MIN_WINDOW_S * 1e3
             );
             self.warn(&warning);
             record.warnings.push(warning);

@@ -30,13 +30,13 @@ use aabench_renderer::{DisplayImage, Mode};
 use super::context::{ModeRun, SceneRun};
 use super::measures::{ModeOutcome, ModeState, TruthPair, TruthTrack, flip_along, jod_along, write_jod_maps};
 use super::path_metrics::ModeFrame;
-use crate::flicker::{self, TRUTH_STREAM};
-use crate::metrics::{self, FrameChecks};
-use crate::motion::{MotionSpec, Pace, PathFrame, PathKind, Timeline};
+use crate::manifest::motion::{MotionSpec, Pace, PathFrame, PathKind, Timeline};
+use crate::measure::pixels::{self, FrameChecks};
+use crate::measure::temporal::{Flow, Geometry};
 use crate::record::SequenceRecord;
-use crate::spool::Spool;
-use crate::temporal::{Flow, Geometry};
-use crate::truth;
+use crate::run::flicker::{self, TRUTH_STREAM};
+use crate::run::spool::Spool;
+use crate::run::truth;
 
 /// What the sequence is measured along and against: the path and its frames in this tier, and
 /// the still frame's camera, truth and truth key.
@@ -128,7 +128,7 @@ pub(super) async fn run(
     let names = std::iter::once(TRUTH_STREAM.to_string()).chain(modes.iter().map(|m| m.mode.to_string()));
     let bits = scene.manifest.display_bits();
     let mut spool =
-        Spool::create(crate::spool::folder(&out_dir), size, bits, along.warmup(), names.collect());
+        Spool::create(crate::run::spool::folder(&out_dir), size, bits, along.warmup(), names.collect());
     let mut flicker = vec![0.0; size[0] as usize * size[1] as usize];
     let rendered = render_frames(scene, &along, modes, &mut record, &mut states, (&mut spool, &mut flicker));
     if let Err(error) = rendered.await {
@@ -356,7 +356,7 @@ struct AfterRender {
     /// The run's folder and the sequence's (`<scene>/path/`).
     dirs: [std::path::PathBuf; 2],
     frames_dir: Option<std::path::PathBuf>,
-    jod: crate::perceptual::Jod,
+    jod: crate::measure::perceptual::Jod,
     cancel: Arc<std::sync::atomic::AtomicBool>,
 }
 
@@ -365,7 +365,7 @@ struct AfterRender {
 struct Measured {
     flips: Vec<Vec<f64>>,
     flip_s: f64,
-    jods: Vec<Option<Arc<crate::perceptual::VideoJod>>>,
+    jods: Vec<Option<Arc<crate::measure::perceptual::VideoJod>>>,
     maps: Vec<Option<Result<String, String>>>,
     jod_s: f64,
     region: Result<crate::record::FlickerRegion, String>,
@@ -422,7 +422,7 @@ impl AfterRender {
             pixels_per_degree: display.pixels_per_degree,
             bits: spool.bits(),
         };
-        crate::fs::write_json(&dir.join("sequence.json"), &kept)
+        crate::files::write_json(&dir.join("sequence.json"), &kept)
     }
 }
 
@@ -507,7 +507,7 @@ async fn render(
             let counts = prepared.read_sample_counts()?;
             let hdr = prepared.read_hdr()?;
             let checks = FrameChecks::of(hdr.as_flattened(), counts.as_deref(), m);
-            let blank = metrics::blank_image(hdr.as_flattened(), &display).filter(|_| !declared_empty);
+            let blank = pixels::blank_image(hdr.as_flattened(), &display).filter(|_| !declared_empty);
             let seconds = timing.seconds();
             Ok::<_, aabench_renderer::RenderError>((ModeFrame { seconds, display, counts, checks }, blank))
         })

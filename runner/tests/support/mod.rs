@@ -185,7 +185,7 @@ pub fn plain_renderer(
 ) -> aabench_renderer::SceneRenderer {
     let gpu = std::sync::Arc::new(aabench_renderer::Gpu::new().expect("a Vulkan adapter (lavapipe)"));
     let lighting = aabench_renderer::scene::Lighting {
-        lights: aabench::scenes::default_rig(),
+        lights: aabench::run::scenes::default_rig(),
         ambient: glam::Vec3::splat(ambient),
         background: glam::Vec3::new(0.2, 0.3, 0.5),
         exposure: 1.0,

@@ -4,8 +4,8 @@
 use glam::{DMat3, DMat4, DVec3, Vec3};
 
 use super::Importer;
-use crate::scene::Vertex;
 use crate::scene::skin::Influence;
+use crate::scene::{DrawClass, Vertex};
 
 /// Where a primitive's vertices go from its mesh's space: all by its node's world transform,
 /// or each by the blend of its joints at rest, with the influences the skin keeps.
@@ -30,6 +30,12 @@ impl Placement<'_> {
             Placement::Node(_) => None,
             Placement::Skinned { influences, .. } => Some(influences[v]),
         }
+    }
+
+    /// Whether the placement mirrors the primitive, reversing its winding: a skin does as its
+    /// first vertex's blend does.
+    fn mirrors(&self) -> bool {
+        DMat3::from_mat4(self.matrix(0)).determinant() < 0.0
     }
 
     /// The transform that turns vertex `v`'s normal: the inverse transpose of its own.
@@ -60,9 +66,6 @@ impl Importer {
         let default_material = self.scene.materials.len() - 1;
         let material = primitive.material().index().unwrap_or(default_material);
         let class = self.scene.materials[material].draw_class();
-        // A skin mirrors a primitive as its first vertex's blend does.
-        let mirrored = DMat3::from_mat4(placement.matrix(0)).determinant() < 0.0;
-        let normal_matrix = DMat3::from_mat4(placement.matrix(0)).inverse().transpose();
         let world_positions = to_world(&positions, placement).map_err(|(i, p)| {
             format!(
                 "{}: vertex {i} lies at {} in world space, beyond ±{:e} (the node transforms multiply up)",
@@ -71,6 +74,26 @@ impl Importer {
                 crate::scene::MAX_COORDINATE
             )
         })?;
+        let first_vertex = self.scene.vertices.len();
+        let first_triangle = self.triangles.get(&class).map_or(0, Vec::len);
+        let geometry =
+            Geometry { world: &world_positions, normals: normals.as_deref(), uvs: &uvs, indices: &indices };
+        self.append(geometry, placement, material, class);
+        if self.scene.materials[material].normal_texture.is_some() {
+            let mirrored = placement.mirrors();
+            let file_tangents = file_tangents.map(|tangents| world_tangents(&tangents, placement, mirrored));
+            self.add_tangents(class, first_vertex, first_triangle, file_tangents);
+        }
+        Ok(())
+    }
+
+    /// Appends a primitive's vertices and triangles to the scene's, in world space: its normals
+    /// turned as its vertices are, or flat normals (three vertices a triangle) where the file
+    /// gives none; a mirroring transform reverses the winding.
+    fn append(&mut self, geometry: Geometry, placement: Placement, material: usize, class: DrawClass) {
+        let Geometry { world: world_positions, normals, uvs, indices } = geometry;
+        let mirrored = placement.mirrors();
+        let normal_matrix = DMat3::from_mat4(placement.matrix(0)).inverse().transpose();
         let vertex = |normal: Vec3, uv: [f32; 2]| Vertex {
             position: [0.0; 3],
             normal: normal.to_array(),
@@ -78,7 +101,6 @@ impl Importer {
             material: material as u32,
         };
         let first_vertex = self.scene.vertices.len();
-        let first_triangle = self.triangles.get(&class).map_or(0, Vec::len);
         if placement.influence(0).is_some() {
             self.influences.resize(first_vertex, Influence::default());
         }
@@ -90,7 +112,7 @@ impl Importer {
         match normals {
             Some(normals) => {
                 let base = vertices.len() as u32;
-                for (i, ((p, n), uv)) in world_positions.iter().zip(&normals).zip(&uvs).enumerate() {
+                for (i, ((p, n), uv)) in world_positions.iter().zip(normals).zip(uvs).enumerate() {
                     let turn = placement.normal_matrix(i, &normal_matrix);
                     let n = (turn * DVec3::from(n.map(f64::from))).normalize_or_zero();
                     vertices.push(vertex(n.as_vec3(), *uv));
@@ -105,7 +127,7 @@ impl Importer {
             }
             None => {
                 // Flat normals: every triangle gets its own three vertices.
-                for (normal, corners) in flat_triangles(&indices, &world_positions, &uvs, mirrored) {
+                for (normal, corners) in flat_triangles(indices, world_positions, uvs, mirrored) {
                     let base = vertices.len() as u32;
                     for (position, uv, source) in corners {
                         vertices.push(vertex(normal, uv));
@@ -116,12 +138,16 @@ impl Importer {
                 }
             }
         }
-        if self.scene.materials[material].normal_texture.is_some() {
-            let file_tangents = file_tangents.map(|tangents| world_tangents(&tangents, placement, mirrored));
-            self.add_tangents(class, first_vertex, first_triangle, file_tangents);
-        }
-        Ok(())
     }
+}
+
+/// A primitive's geometry as the scene takes it: world positions, the file's normals if any,
+/// texture coordinates, and three corners a triangle.
+struct Geometry<'a> {
+    world: &'a [DVec3],
+    normals: Option<&'a [[f32; 3]]>,
+    uvs: &'a [[f32; 2]],
+    indices: &'a [u32],
 }
 
 /// `meshes[2] (wall) primitives[0]`, as messages name a primitive.

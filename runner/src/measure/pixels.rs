@@ -9,7 +9,7 @@
 
 use aabench_renderer::{DisplayImage, FrameImages, Mode};
 
-use crate::perceptual::{self, FlipMap};
+use crate::measure::perceptual::{self, FlipMap};
 use serde::{Deserialize, Serialize, Serializer};
 
 /// 20·log10(255): the paper reports PSNR with peak 255 over an MSE taken on [0, 1] values.

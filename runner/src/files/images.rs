@@ -24,7 +24,7 @@ fn encode_png(
     let mut bytes = std::io::Cursor::new(Vec::new());
     image::write_buffer_with_format(&mut bytes, samples, width, height, color, image::ImageFormat::Png)
         .with_context(|| format!("{}: PNG encoding", path.display()))?;
-    crate::fs::write(path, bytes.get_ref()).map_err(anyhow::Error::msg)
+    crate::files::write(path, bytes.get_ref()).map_err(anyhow::Error::msg)
 }
 
 /// Writes a display image as PNG: 8-bit, or 16-bit for 10-bit code values (each scaled to
@@ -76,14 +76,14 @@ pub fn write_apng(
         }
         writer.finish().with_context(|| format!("{}: APNG encoding", path.display()))?;
     }
-    crate::fs::write(path, &bytes).map_err(anyhow::Error::msg)
+    crate::files::write(path, &bytes).map_err(anyhow::Error::msg)
 }
 
 /// The frames of an animated PNG as RGBA8 images (a still PNG: its one image). A path that is
 /// no regular file (a FIFO would block for ever) is an error naming it.
 pub fn read_apng(path: &Path) -> anyhow::Result<Vec<image::RgbaImage>> {
     use image::AnimationDecoder;
-    let bytes = crate::fs::read_regular(path).with_context(|| format!("{}", path.display()))?;
+    let bytes = crate::files::read_regular(path).with_context(|| format!("{}", path.display()))?;
     let file = std::io::Cursor::new(bytes);
     let decoder = image::codecs::png::PngDecoder::new(file).with_context(|| format!("{}", path.display()))?;
     let frames = if decoder.is_apng().with_context(|| format!("{}", path.display()))? {

@@ -28,7 +28,7 @@ pub fn merge(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecord, S
                 copy_folder(&dir.join(&scene.name), &staging.join(&scene.name))?;
             }
         }
-        crate::fs::write_json(&staging.join("run.json"), &merged)?;
+        crate::files::write_json(&staging.join("run.json"), &merged)?;
         // rename(2) replaces an empty folder, so an empty `out` is fine too.
         std::fs::rename(&staging, out)
             .map_err(|e| format!("{}: cannot move the merged run in: {e}", out.display()))
@@ -42,7 +42,7 @@ pub fn merge(shards: &[(RunRecord, PathBuf)], out: &Path) -> Result<RunRecord, S
 /// The merged record, or why the shards do not belong together.
 /// The shards' machine where they all ran on one (by the calibration `Machine::same_as`
 /// compares); none where they did not, so that no machine's times are taken for another's.
-fn common_machine(shards: &[(RunRecord, PathBuf)]) -> Option<crate::machine::Machine> {
+fn common_machine(shards: &[(RunRecord, PathBuf)]) -> Option<crate::measure::machine::Machine> {
     let first = shards.first()?.0.platform.machine.clone()?;
     let same = |run: &RunRecord| run.platform.machine.as_ref().is_some_and(|m| m.same_as(&first).is_ok());
     shards.iter().all(|(run, _)| same(run)).then_some(first)

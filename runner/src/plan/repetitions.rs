@@ -67,7 +67,7 @@ impl Repetitions {
             Repetitions::Confidence(rule) if taken >= rule.floor => rule,
             Repetitions::Confidence(_) => return None,
         };
-        let summary = crate::stats::Summary::new(frames_ms.to_vec())?;
+        let summary = crate::measure::stats::Summary::new(frames_ms.to_vec())?;
         if summary.ci_high - summary.ci_low <= rule.width * summary.median {
             Some(Stop::Interval)
         } else if spent_s >= rule.budget_s {

@@ -14,7 +14,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 pub const MIN_FRAMES: usize = 5;
 
 /// A quality tolerance: how far one kind of quality number may move, on the baselines' own
-/// platform and against another's. Each metric of [`crate::vocabulary::METRICS`] that the gate
+/// platform and against another's. Each metric of [`crate::record::vocabulary::METRICS`] that the gate
 /// decides names one; the sample histogram has its own.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Tolerance {

@@ -1,5 +1,10 @@
 //! Raw CLI arguments → a checked [`RunPlan`], before any GPU work: manifests found and parsed
 //! (a bad one becomes a failed scene, not a failed run), modes resolved, tier settings fixed.
+//! Beside it: how many timed rounds a mode takes (`repetitions.rs`) and the content hashes of
+//! what determines a scene's images (`inputs.rs`).
+
+pub mod inputs;
+pub mod repetitions;
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -8,7 +13,7 @@ use aabench_renderer::{ExtraSamples, Mode};
 use serde::{Deserialize, Serialize};
 
 use crate::manifest::{Manifest, ManifestError};
-use crate::repetitions::{Confidence, DECIDING_ROUNDS, Repetitions};
+use repetitions::{Confidence, DECIDING_ROUNDS, Repetitions};
 
 /// One slice of a run: scene k of the plan (in manifest order) belongs to shard k mod N + 1.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -208,7 +213,7 @@ impl Tier {
     }
 
     /// The speeds in pixels a frame that a camera path lists for this tier, if it lists any.
-    pub fn speeds(self, motion: &crate::motion::MotionSpec) -> Option<&[f64]> {
+    pub fn speeds(self, motion: &crate::manifest::motion::MotionSpec) -> Option<&[f64]> {
         let speeds = motion.pixels_per_frame.as_ref()?;
         Some(match self {
             Tier::Quick => &speeds.quick,
@@ -217,13 +222,17 @@ impl Tier {
     }
 
     /// The sequences of a camera path in this tier: one per speed it lists, or one at its rate.
-    pub fn paces(self, manifest: &crate::manifest::Manifest, fov_y: f64) -> Vec<crate::motion::Pace> {
+    pub fn paces(
+        self,
+        manifest: &crate::manifest::Manifest,
+        fov_y: f64,
+    ) -> Vec<crate::manifest::motion::Pace> {
         let Some(motion) = &manifest.motion else { return Vec::new() };
         motion.paces(self.speeds(motion), fov_y, self.resolution(manifest)[1])
     }
 
     /// The frames of a camera path's sequence in this tier.
-    pub fn sequence_frames(self, motion: &crate::motion::MotionSpec) -> u32 {
+    pub fn sequence_frames(self, motion: &crate::manifest::motion::MotionSpec) -> u32 {
         match self {
             Tier::Quick => motion.frames.quick,
             Tier::Nightly => motion.frames.nightly,
@@ -249,7 +258,7 @@ impl Tier {
     /// took 20 s (four of criterion's 5 s measurement times: most quick scenes time their 15
     /// rounds within it, the heaviest stop early), at least the 9 from which the rankings and
     /// fronts compare two modes past one round out of line ([`DECIDING_ROUNDS`]; the 5 a time
-    /// check needs, [`crate::gate::MIN_FRAMES`], decide only where every round agrees) and at
+    /// check needs, [`crate::manifest::tolerances::MIN_FRAMES`], decide only where every round agrees) and at
     /// most [`Tier::most_rounds`]. On the suite's own
     /// recorded rounds this keeps all but about 3 % of the front's memberships that 15 rounds
     /// decide (`docs/measuring.md`).
@@ -423,7 +432,7 @@ pub fn find_manifests(paths: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
     let mut found = Vec::new();
     for path in paths {
         if path.is_dir() {
-            let files = crate::fs::files_in(&path)?;
+            let files = crate::files::files_in(&path)?;
             if files.is_empty() {
                 return Err(format!("{}: no *.json manifests in this folder", path.display()));
             }
@@ -471,7 +480,7 @@ pub fn new_run_id(tier: Tier, shard: Option<Shard>) -> String {
 /// name: creation itself is the test, so two runs started in the same second never share one.
 /// Returns the id taken and the folder.
 pub fn create_run_dir(out: &Path, id: &str) -> Result<(String, PathBuf), String> {
-    crate::fs::output_folder(out).map_err(|e| format!("--out {e}"))?;
+    crate::files::output_folder(out).map_err(|e| format!("--out {e}"))?;
     for n in 1..10_000 {
         let candidate = if n == 1 { id.to_string() } else { format!("{id}-{n}") };
         let dir = out.join(&candidate);
@@ -566,7 +575,7 @@ mod tests {
         // A killed sequence's spool, three folders down: a folder named as a dead process's
         // temporary, untouched for a while.
         let path = dir_a.join("thin").join("path");
-        let spool = crate::spool::folder(&path).with_file_name(".spool.tmp-4294967295");
+        let spool = crate::run::spool::folder(&path).with_file_name(".spool.tmp-4294967295");
         std::fs::create_dir_all(&spool).unwrap();
         std::fs::write(spool.join("0.rgba"), "x").unwrap();
         std::fs::File::open(&spool)

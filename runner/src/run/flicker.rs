@@ -14,10 +14,10 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use crate::images;
+use crate::files::images;
+use crate::measure::temporal;
 use crate::record::FlickerRegion;
-use crate::spool::{Spool, Square};
-use crate::temporal;
+use crate::run::spool::{Spool, Square};
 
 /// The side of the region, in pixels (smaller frames: their side).
 pub const SIDE: u32 = 64;

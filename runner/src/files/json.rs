@@ -1,5 +1,5 @@
 //! Versioned JSON files: read with errors that name the file and the field (written through
-//! [`crate::fs::write_json`]).
+//! [`crate::files::write_json`]).
 
 use std::path::Path;
 
@@ -10,7 +10,8 @@ use serde::{Deserialize, Deserializer, Serialize};
 /// is wrong with it: unreadable, not JSON (with line and column), another schema, or a field
 /// out of place (with its path, e.g. `scenes[0].modes[3].frame_ms: missing field `median``).
 pub fn read_versioned<T: DeserializeOwned>(path: &Path, schema: &str) -> Result<T, String> {
-    let text = crate::fs::read_regular(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    let text =
+        crate::files::read_regular(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
     let found = schema_of(&text).map_err(|e| format!("{}: not an {schema} file: {e}", path.display()))?;
     if found != schema {
         return Err(format!("{}: schema is `{found}`, this aabench reads `{schema}`", path.display()));

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::fs::percent_decode;
+use crate::files::percent_decode;
 use anyhow::Context;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};

@@ -3,6 +3,13 @@
 //! whole files; every read takes a regular file only, so a FIFO is refused rather than read
 //! forever. The primitives they share with the glTF importer (which reads a user's files and
 //! writes generated scenes by the same rules) come from the renderer and are re-exported here.
+//!
+//! Its children are the file kinds a run writes: versioned JSON (`json.rs`), images
+//! (`images.rs`), and escaped HTML and XML text (`markup.rs`).
+
+pub mod images;
+pub mod json;
+pub mod markup;
 
 use std::path::{Path, PathBuf};
 

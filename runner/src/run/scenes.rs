@@ -14,9 +14,9 @@ use aabench_renderer::scene::{
 use anyhow::{Context, bail};
 use glam::{DVec3, DVec4, Vec3};
 
-use crate::fs::regular_file;
+use crate::files::regular_file;
+use crate::manifest::motion::{AnimationPick, MotionSpec, PathFrame, PathKind, Picked, Timeline};
 use crate::manifest::{FileLights, Manifest, check_shadows};
-use crate::motion::{AnimationPick, MotionSpec, PathFrame, PathKind, Picked, Timeline};
 
 #[derive(Debug)]
 pub struct LoadedScene {

@@ -6,7 +6,7 @@
 //! a camera path, also its accumulator in `run/path_metrics.rs`). The times, which the gate
 //! decides on intervals instead, are [`TimeMetric`].
 
-use crate::gate::{QualityTolerances, Tolerance};
+use crate::manifest::tolerances::{QualityTolerances, Tolerance};
 use crate::record::{ModeRecord, ModeSequence};
 
 /// The part of a mode's record a metric is read from. Each is present or absent as a whole: a
@@ -722,7 +722,7 @@ mod tests {
 
     #[test]
     fn the_psnr_margin_is_the_gates_tolerance_across_platforms() {
-        let across = crate::gate::Tolerances::default().quality(false).get(Tolerance::PsnrDb);
+        let across = crate::manifest::tolerances::Tolerances::default().quality(false).get(Tolerance::PsnrDb);
         assert_eq!(PSNR_MARGIN_DB, across);
     }
 

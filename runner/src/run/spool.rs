@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 
 use aabench_renderer::DisplayImage;
 
-use crate::images;
+use crate::files::images;
 
 /// One file of frames per stream, named, with how many frames each holds, of which the first
 /// `warmup` are the warm-up's.

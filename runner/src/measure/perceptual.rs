@@ -56,7 +56,7 @@ pub fn flip(
     [width, height]: [u32; 2],
     pixels_per_degree: f64,
 ) -> FlipMap {
-    let rgba8 = crate::images::display_rgba8;
+    let rgba8 = crate::files::images::display_rgba8;
     flip_rgba8(&rgba8(image), &rgba8(truth), [width, height], pixels_per_degree)
 }
 

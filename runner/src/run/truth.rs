@@ -10,12 +10,11 @@ use std::time::Duration;
 
 use aabench_renderer::scene::Camera;
 use aabench_renderer::{DisplayImage, PlatformInfo, Truth, shaders};
-use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use crate::images;
-use crate::inputs::{SceneInputs, hex};
-use crate::worker::Worker;
+use crate::files::images;
+use crate::plan::inputs::{SceneInputs, hex};
+use crate::run::worker::Worker;
 
 /// Samples per pixel side of the truth.
 pub const TRUTH_M: u32 = 8;
@@ -26,31 +25,6 @@ pub const TRUTH_ID: &str = "truth-8x8";
 /// (the shadowed room's take 1.7 s each at 1024×768 on 2 cores, about twice that beside
 /// another job); the quick tier's 256×192 is one piece.
 pub const TILE_BYTES: u64 = 128 << 20;
-
-/// How a scene's truth was obtained, in run.json.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct TruthRecord {
-    /// `truth-8x8`.
-    pub id: String,
-    pub samples_per_pixel: u32,
-    /// SHA-256 of everything the image depends on (see [`cache_key`]).
-    pub key: String,
-    /// True when the image came from the cache and nothing was rendered.
-    pub cached: bool,
-    /// Wall-clock seconds of the render, read-back included (absent when cached).
-    pub render_s: Option<f64>,
-    pub tiles: Option<usize>,
-    /// The process's peak resident memory during the render (Linux; absent when cached).
-    pub peak_rss_bytes: Option<u64>,
-    /// The display image, relative to the run folder.
-    pub image: Option<String>,
-    /// FNV-1a 64 of the display image's code values: what `compare` looks at to say whether the
-    /// truth itself changed (its key changes with any edit of the rendering source).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub image_hash: Option<String>,
-    /// Why there is no truth, when there is none.
-    pub error: Option<String>,
-}
 
 /// SHA-256 over what determines the truth image: the aabench version and the source code that
 /// renders (the renderer crate and the runner's scene set-up, fingerprinted by build.rs), the

@@ -7,7 +7,7 @@ use std::fmt::Write;
 
 use crate::baseline::{Baseline, BlessedMode, BlessedSamples};
 use crate::record::is_paper;
-use crate::vocabulary::METRICS;
+use crate::record::vocabulary::METRICS;
 
 /// One value of a mode that the bless changed.
 #[derive(Debug, Clone, PartialEq)]

@@ -24,6 +24,8 @@ const SEARCH: array<f32, 5> = array<f32, 5>(1.0, 1.5, 2.0, 4.0, 12.0);
 
 @group(2) @binding(0) var encoded: texture_2d<f32>;
 
+// FXAA's luma: the Rec. 601 weights of FXAA 3.11's luma pass, on the encoded colour, not the
+// renderer's Rec. 709 `luminance`, so that the edges it finds are its reference's.
 fn luma(c: vec3<f32>) -> f32 {
     return dot(c, vec3<f32>(0.299, 0.587, 0.114));
 }

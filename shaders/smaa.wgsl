@@ -127,7 +127,7 @@ fn bilinear_area(t: vec2<f32>) -> vec2<f32> {
 
 fn luma_at(p: vec2<i32>) -> f32 {
     let hi = vec2<i32>(i32(WIDTH), i32(HEIGHT)) - 1;
-    return dot(textureLoad(encoded, clamp(p, vec2<i32>(0), hi), 0).rgb, vec3<f32>(0.2126, 0.7152, 0.0722));
+    return luminance(textureLoad(encoded, clamp(p, vec2<i32>(0), hi), 0).rgb);
 }
 
 // The reference's luma edge detection at pixel `p`: bit 0 its left edge, bit 1 its top edge.

@@ -7,6 +7,13 @@
 //! tests hold the shaders to them, and they solve the constants that the shaders take as
 //! override constants (the tonemap's b and c, the dither's black and biggest step).
 
+/// Rec. 709 luminance of a linear colour (or the luma of an encoded one, with the same weights):
+/// the renderer's exposure meter, the shading metric's luma and the report's error maps weigh
+/// the channels so. FXAA keeps the Rec. 601 weights its reference's luma pass gives.
+pub fn luminance([r, g, b]: [f64; 3]) -> f64 {
+    0.2126 * r + 0.7152 * g + 0.0722 * b
+}
+
 /// The tonemapping curve and colour controls of an HDR scene. The curve acts on the largest
 /// channel: z = x^contrast, y = z / (z^shoulder · b + c), with b and c solved so that `mid_in`
 /// maps to `mid_out` and `hdr_max` to 1; the colour ratio rgb / max is kept and pushed towards
@@ -462,11 +469,8 @@ pub fn metered_exposure(
             100.0 * share
         ));
     }
-    let mut lit: Vec<f64> = metered
-        .iter()
-        .map(|[r, g, b]| 0.2126 * r + 0.7152 * g + 0.0722 * b)
-        .filter(|&luminance| luminance > 0.0)
-        .collect();
+    let mut lit: Vec<f64> =
+        metered.iter().copied().map(luminance).filter(|&luminance| luminance > 0.0).collect();
     if lit.is_empty() {
         return Ok(1.0);
     }

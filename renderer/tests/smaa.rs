@@ -41,7 +41,7 @@ fn edge_renderer(roll: f64, width: u32, height: u32) -> (SceneRenderer, std::syn
 /// The reference's luma of an 8-bit pixel (Rec. 709 weights on code values).
 fn luma(image: &DisplayImage, width: usize, x: usize, y: usize) -> f64 {
     let p = &image.rgba[4 * (y * width + x)..];
-    (0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])) / 255.0
+    aabench_renderer::color::luminance([p[0], p[1], p[2]].map(f64::from)) / 255.0
 }
 
 /// Sum of squared differences of the colour channels.

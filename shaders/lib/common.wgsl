@@ -37,7 +37,8 @@ fn fullscreen(@builtin(vertex_index) index: u32) -> @builtin(position) vec4<f32>
     return vec4<f32>(corner * 2.0 - 1.0, 0.0, 1.0);
 }
 
-// Rec. 709 luminance of a linear colour.
+// Rec. 709 luminance of a linear colour, or with the same weights the luma of an encoded one
+// (SMAA's edges). FXAA keeps the Rec. 601 weights of its reference.
 fn luminance(c: vec3<f32>) -> f32 {
     return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
 }

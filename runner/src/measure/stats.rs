@@ -169,6 +169,42 @@ pub trait Rounds {
     }
 }
 
+/// Spearman's rank correlation of two paired samples, ties ranked by their mean rank; `None`
+/// for fewer than three pairs or a sample without spread.
+pub fn spearman(a: &[f64], b: &[f64]) -> Option<f64> {
+    if a.len() != b.len() || a.len() < 3 {
+        return None;
+    }
+    let (ra, rb) = (ranks(a), ranks(b));
+    let mean = (a.len() as f64 + 1.0) / 2.0;
+    let (mut covariance, mut var_a, mut var_b) = (0.0, 0.0, 0.0);
+    for (x, y) in ra.iter().zip(&rb) {
+        covariance += (x - mean) * (y - mean);
+        var_a += (x - mean).powi(2);
+        var_b += (y - mean).powi(2);
+    }
+    (var_a > 0.0 && var_b > 0.0).then(|| covariance / (var_a * var_b).sqrt())
+}
+
+/// Each value's 1-based rank, ties given their mean rank.
+fn ranks(values: &[f64]) -> Vec<f64> {
+    let mut order: Vec<usize> = (0..values.len()).collect();
+    order.sort_by(|&i, &j| values[i].total_cmp(&values[j]));
+    let mut ranks = vec![0.0; values.len()];
+    let mut start = 0;
+    while start < order.len() {
+        // Ties by `total_cmp`, so that a NaN ties with itself and the loop always moves on.
+        let first = values[order[start]];
+        let tied = order[start..].iter().take_while(|&&i| values[i].total_cmp(&first).is_eq()).count();
+        let rank = start as f64 + (tied as f64 + 1.0) / 2.0;
+        for &i in &order[start..start + tied] {
+            ranks[i] = rank;
+        }
+        start += tied;
+    }
+    ranks
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -240,5 +276,21 @@ mod tests {
         assert_eq!(summary.samples, vec![5.0, 1.0, 9.0, 7.0, 3.0, 2.0, 8.0]);
         assert_eq!((summary.min, summary.median, summary.max), (1.0, 5.0, 9.0));
         assert_eq!((summary.ci_low, summary.ci_high), (1.0, 9.0));
+    }
+
+    #[test]
+    fn spearman_is_one_for_the_same_order_minus_one_reversed_and_averages_ties() {
+        let a = [1.0, 2.0, 3.0, 4.0];
+        assert_eq!(spearman(&a, &[10.0, 20.0, 30.0, 40.0]), Some(1.0));
+        assert_eq!(spearman(&a, &[4.0, 3.0, 2.0, 1.0]), Some(-1.0));
+        assert_eq!(ranks(&[5.0, 1.0, 5.0, 3.0]), vec![3.5, 1.0, 3.5, 2.0]);
+        // The textbook case: d = (0, 0, 1, −1, 0) gives 1 − 6·2 / (5·24) = 0.9.
+        let rho = spearman(&[1.0, 2.0, 3.0, 4.0, 5.0], &[1.0, 2.0, 4.0, 3.0, 5.0]).unwrap();
+        assert!((rho - 0.9).abs() < 1e-12, "{rho}");
+        assert_eq!(spearman(&a, &[1.0; 4]), None, "no spread, no correlation");
+        assert_eq!(spearman(&a[..2], &a[..2]), None);
+        // Identical images have an infinite PSNR, which ranks like any value; a NaN ends too.
+        assert_eq!(spearman(&a, &[1.0, 2.0, 3.0, f64::INFINITY]), Some(1.0));
+        assert_eq!(ranks(&[f64::NAN, 1.0, f64::NAN]), vec![2.5, 1.0, 2.5]);
     }
 }

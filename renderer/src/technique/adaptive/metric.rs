@@ -23,7 +23,7 @@ pub type LumaCross = [f64; 5];
 /// to [0, 1]. The colour is sanitized first ([`crate::color::sanitize`]), as on the GPU.
 pub fn metric_luma(rgb: [f64; 3], exposure: f64) -> f64 {
     let c = rgb.map(|v| (crate::color::sanitize(v) * exposure).clamp(0.0, 1.0));
-    (0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]).sqrt()
+    crate::color::luminance(c).sqrt()
 }
 
 /// The luma cross of pixel (x, y) of a `width`×`height` linear HDR image (the shade-first

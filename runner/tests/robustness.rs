@@ -374,7 +374,7 @@ fn a_full_disk_is_reported_and_leaves_only_whole_files() {
     assert!(err.contains("No space left on device"), "{err}");
     // A mode whose images could not be written keeps its measurements: its row in the table
     // still has its PSNR against the truth (the sixth column) and the front's column last
-    // (`-`: a failed mode has no place on it); the write error follows on a line of its own.
+    // (`–`: a failed mode has no place on it); the write error follows on a line of its own.
     let lines: Vec<&str> = err.lines().collect();
     let failed_writes: Vec<usize> = (1..lines.len())
         .filter(|&i| lines[i].starts_with("    deferred-1x1: ") && lines[i].contains("(os error 28)"))
@@ -383,7 +383,7 @@ fn a_full_disk_is_reported_and_leaves_only_whole_files() {
     for i in failed_writes {
         let columns: Vec<&str> = lines[i - 1].split_whitespace().collect();
         assert_eq!(columns[0], "deferred-1x1", "the error follows its mode's row: {}", lines[i - 1]);
-        assert_eq!(columns.last(), Some(&"-"), "a failed mode is off the front: {}", lines[i - 1]);
+        assert_eq!(columns.last(), Some(&"–"), "a failed mode is off the front: {}", lines[i - 1]);
         assert!(columns[5].parse::<f64>().is_ok(), "no PSNR kept: {}", lines[i - 1]);
     }
 

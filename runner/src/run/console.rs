@@ -3,12 +3,24 @@
 //! and along the path) beside PSNR. The run's closing summary is `report::closing`.
 
 use crate::record::TruthRecord;
-use crate::record::vocabulary::{JOD_VS_TRUTH, SEQUENCE_JOD_VS_TRUTH};
+use crate::record::vocabulary::{self, JOD_VS_TRUTH, SEQUENCE_JOD_VS_TRUTH};
 use crate::record::{FrontPlace, ModeRecord, SceneRecord};
 use crate::run::progress::Progress;
 
 /// The widest line the table is laid out for.
 const WIDTH: usize = 120;
+
+/// The table's quality columns, after the times: each a row of the vocabulary, its values
+/// written as the row writes them everywhere (a path's along the first speed), under a header
+/// short enough for the terminal, right-aligned in a width.
+const QUALITY_COLUMNS: [(&str, &str, usize); 6] = [
+    ("shaded_percent", "smp%", 5),
+    ("psnr_vs_truth", "PSNR", 6),
+    ("flip_vs_truth", "FLIP", 6),
+    ("jod_vs_truth", "JOD", 5),
+    ("sequence_jod_vs_truth", "pJOD", 5),
+    ("sequence_psnr_vs_truth", "pPSNR", 6),
+];
 
 /// Prints a scene's results: its line, then its table.
 pub(super) fn report_scene(progress: &Progress, scene: &SceneRecord) {
@@ -38,10 +50,8 @@ fn scene_lines(scene: &SceneRecord) -> Vec<String> {
     }
     // The mode column is as wide as the scene's longest id.
     let width = scene.modes.iter().map(|m| m.mode.chars().count()).max().unwrap_or(0).max(4);
-    lines.push(format!(
-        "  {:<width$} {:>7} {:>5} {:>5} {:>5} {:>6} {:>6} {:>5} {:>5} {:>6}  {}",
-        "mode", "ms", "±", "×1x1", "smp%", "PSNR", "FLIP", "JOD", "pJOD", "pPSNR", "front"
-    ));
+    let headers: String = QUALITY_COLUMNS.iter().map(|(_, header, w)| format!(" {header:>w$}")).collect();
+    lines.push(format!("  {:<width$} {:>7} {:>5} {:>5}{headers}  front", "mode", "ms", "±", "×1x1"));
     // The front the rankings read: JOD's, along the path where the scene has one.
     let front = if scene.sequences.is_empty() { JOD_VS_TRUTH.key(0) } else { SEQUENCE_JOD_VS_TRUTH.key(0) };
     lines.extend(scene.modes.iter().flat_map(|mode| mode_lines(mode, width, &front)));
@@ -62,27 +72,25 @@ fn mode_lines(mode: &ModeRecord, width: usize, front: &str) -> Vec<String> {
     let Some(frame) = &mode.frame_ms else {
         return vec![error.unwrap_or_else(|| format!("    {}: no frames", mode.mode))];
     };
-    let or_dash = |value: Option<String>| value.unwrap_or_else(|| "-".into());
-    let decibels = |db: f64| if db.is_finite() { format!("{db:.2}") } else { "∞".into() };
-    let truth = mode.vs_ground_truth.as_ref();
-    let path = mode.sequence();
     let spread = (frame.ci_high - frame.ci_low) / 2.0 / frame.median.max(f64::MIN_POSITIVE);
-    let front = mode.front(front).map(FrontPlace::brief);
+    let front = mode.front(front).map_or_else(|| "–".into(), FrontPlace::brief);
+    let ratio = mode.ratio_to_deferred.map_or_else(|| "–".into(), |r| format!("{r:.2}"));
+    let quality: String =
+        QUALITY_COLUMNS.iter().map(|&(id, _, w)| format!(" {:>w$}", quality_cell(id, mode))).collect();
     let row = format!(
-        "  {:<width$} {:>7.1} {:>4.0}% {:>5} {:>5} {:>6} {:>6} {:>5} {:>5} {:>6}  {}",
+        "  {:<width$} {:>7.1} {:>4.0}% {ratio:>5}{quality}  {front}",
         mode.mode,
         frame.median,
         spread * 100.0,
-        or_dash(mode.ratio_to_deferred.map(|r| format!("{r:.2}"))),
-        or_dash(mode.samples.as_ref().map(|s| format!("{:.1}", s.shaded_percent))),
-        or_dash(truth.map(|q| decibels(q.psnr_db.value()))),
-        or_dash(truth.and_then(|q| q.flip).map(|f| format!("{f:.4}"))),
-        or_dash(truth.and_then(|q| q.jod).map(|j| format!("{j:.2}"))),
-        or_dash(path.and_then(|s| s.jod).map(|j| format!("{j:.2}"))),
-        or_dash(path.map(|s| decibels(s.mean_psnr_db.value()))),
-        or_dash(front),
     );
     std::iter::once(clip(row)).chain(error).collect()
+}
+
+/// The cell of the vocabulary's metric `id` for `mode`, as the metric's column writes it.
+fn quality_cell(id: &str, mode: &ModeRecord) -> String {
+    let metric = vocabulary::metric(id).expect("the console's columns are rows of the vocabulary");
+    let column = metric.column.expect("the console's columns are columns of the report");
+    vocabulary::cell(metric, column, mode, 0)
 }
 
 /// A row cut to [`WIDTH`] characters, with `…` where it was cut.

@@ -6,10 +6,10 @@ use super::fail;
 use crate::baseline;
 use crate::exit;
 use crate::plan;
-use crate::record::RunRecord;
+use crate::record::{self, RunRecord};
 
 pub(super) fn bless(runs: &[PathBuf], root: &Path, consent: baseline::Consent) -> u8 {
-    let loaded: Result<Vec<_>, String> = runs.iter().map(|run| crate::record::load_run(run)).collect();
+    let loaded: Result<Vec<_>, String> = runs.iter().map(|run| record::load_run(run)).collect();
     let (records, folders): (Vec<_>, Vec<_>) = match loaded {
         Ok(loaded) => loaded.into_iter().unzip(),
         Err(message) => return fail(message),
@@ -56,7 +56,7 @@ fn say_what_moved(
 ) -> Result<(), String> {
     let Some(run) = records.first().filter(|_| !blessed.written.is_empty()) else { return Ok(()) };
     let written = blessed.written.iter().map(|path| baseline::load(path)).collect::<Result<Vec<_>, _>>()?;
-    let changes = crate::baseline::moved::between(replaced, &written);
+    let changes = baseline::moved::between(replaced, &written);
     let runs: Vec<&str> = records.iter().map(|r| r.run_id.as_str()).collect();
     let heading = format!(
         "{} scene(s) of `{}/{}` blessed from run(s) `{}`, against the baselines they replace.",
@@ -65,7 +65,7 @@ fn say_what_moved(
         run.tier.name(),
         runs.join("`, `")
     );
-    let text = crate::baseline::moved::markdown(&changes, &heading);
+    let text = baseline::moved::markdown(&changes, &heading);
     say!("{text}");
     let path = folder.join("bless.md");
     crate::files::write(&path, text.as_bytes())?;

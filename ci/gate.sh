@@ -23,10 +23,12 @@
 # `aabench compare` then decides time with the process as the unit, per scene and pooled over
 # the scenes. The scenes of a suspect time (regressed, or noisy with its interval above 0) are
 # measured again in as many fresh processes a side, once, and decided on all the processes
-# (`compare --confirm-runs`). When the code is the base's (only baselines,
-# docs or tests changed), time cannot have changed through the change: one run of 5 rounds is compared
-# with the baselines and its time is reported, not gated. Without a usable base (no git history), one
-# run is compared with the baselines and time is gated only on the machine that blessed them.
+# (`compare --confirm-runs`). Where the change cannot move a frame's time
+# (`gate_strategy` in ci/lib.sh: only baselines, docs or tests changed, or only code that works on
+# what the rounds left, such as the metric, compare or the report), no base is built and no time is
+# measured: one process measures quality and is compared with the baselines. Without a usable base
+# (no git history), one run is compared with the baselines and time is gated only on the machine
+# that blessed them.
 #
 # Writes summary.md, junit.xml, verdict.json and the HTML report into the first head run's
 # folder. Exits with compare's code: 0 nothing regressed, 1 a regression (or the run compared
@@ -173,30 +175,27 @@ finished_runs() {
     done
 }
 
-# What cannot change a time: the baselines themselves, the documentation, the CI workflows, and
-# the crates' tests and benchmarks (no part of the binary).
-code_paths=(. ':(exclude)baselines' ':(exclude)*.md' ':(exclude)docs' ':(exclude).github' ':(exclude)ci/lint'
-    ':(exclude)*/tests/*' ':(exclude)*/benches/*')
 began=$(date +%s)
 started=$began
-if [ -z "$base" ]; then
-    echo "ci/gate.sh: no base commit (no git history?): time is gated against the baselines only on the machine that blessed them" >&2
-    strategy=baselines
-elif git diff --quiet "$base" -- "${code_paths[@]}"; then
-    echo "ci/gate.sh: the code is the base's (${base:0:12}): time is reported against the baselines, not gated" >&2
-    strategy=unchanged
-else
-    strategy=ab
-fi
+strategy=$(gate_strategy "$base")
+case $strategy in
+    baselines) echo "ci/gate.sh: no base commit (no git history?): time is gated against the baselines only on the machine that blessed them" >&2 ;;
+    unchanged) echo "ci/gate.sh: the code is the base's (${base:0:12}): time cannot have moved and is not measured" >&2 ;;
+    untimed)
+        echo "ci/gate.sh: since the base (${base:0:12}) only code that cannot move a frame's time changed, so time is not measured:" >&2
+        git diff --name-only "$base" -- "${binary_paths[@]}" | sed 's/^/    /' >&2
+        ;;
+esac
 
 if [ "$strategy" != ab ]; then
-    # Where the code is the base's, its time cannot have changed and is only reported: the run
-    # times 5 rounds, the fewest whose time checks compare (gate::MIN_FRAMES). Without a base,
-    # one run's 25 rounds are gated against the baselines of the machine that blessed them.
+    # Without a base, one run's 25 rounds are gated against the baselines of the machine that
+    # blessed them. Where the change cannot have moved a frame's time, a timing gate could only
+    # find noise: one process measures quality and the sequences, in one round without a
+    # warm-up (as the A/B gate's quality process does), and compare compares no time.
     single_args=(--repetitions 25)
-    if [ "$strategy" = unchanged ]; then
+    if [ "$strategy" != baselines ]; then
         [ "$fail_on" = auto ] && fail_on=quality
-        single_args=(--repetitions 5)
+        single_args=(--repetitions 1 --warmup 0 --sequences on)
     fi
     "$head_bin" run --tier quick "${single_args[@]}" "${shard_args[@]}" --out "$gate_dir/head" "${run_args[@]}"
     run_code=$?

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Shared by ci/gate.sh and ci/nightly.sh: set up, build, and run aabench into a fresh folder.
+# Shared by ci/gate.sh and ci/nightly.sh: set up, build, and run aabench into a fresh folder; and
+# what of a change can move a frame's time, which decides how the gate measures it.
 
 # Sets up the machine and builds the release binary; exits 2 on failure.
 build_aabench() {
@@ -22,5 +23,44 @@ run_fresh() {
     if [ -z "$run_dir" ]; then
         echo "ci: the run wrote nothing (exit $run_code)" >&2
         exit 2
+    fi
+}
+
+# What cannot change the binary: the baselines themselves, the documentation, the CI workflows
+# and lint tools, and the crates' tests and benchmarks.
+binary_paths=(. ':(exclude)baselines' ':(exclude)*.md' ':(exclude)docs' ':(exclude).github' ':(exclude)ci/lint'
+    ':(exclude)*/tests/*' ':(exclude)*/tests.rs' ':(exclude)*/benches/*')
+# What is code but cannot change a frame's time: the metric crate; the runner's rooms that work
+# on what the rounds left (the measures of images, the record, the baselines, compare, the
+# report, the HTML markup) and its commands other than `run`; and the scripts that drive the
+# gate, the suite, the nightly and the tests. A change confined to them can move a score or a
+# verdict, which the quality checks and the tests see, but not what a mode costs. What renders
+# or times a frame stays: the renderer and its shaders, the scenes, the runner's manifest, plan,
+# run, files and `run` command, the manifests of the crates and the lock file, the build and
+# set-up scripts.
+timing_paths=("${binary_paths[@]}" ':(exclude)cvvdp' ':(exclude)runner/src/measure'
+    ':(exclude)runner/src/record' ':(exclude)runner/src/baseline' ':(exclude)runner/src/compare'
+    ':(exclude)runner/src/report' ':(exclude)runner/src/files/markup.rs'
+    ':(exclude)runner/src/cli/bless.rs' ':(exclude)runner/src/cli/compare.rs' ':(exclude)runner/src/cli/inspect.rs'
+    ':(exclude)runner/src/cli/merge.rs' ':(exclude)runner/src/cli/report.rs'
+    ':(exclude)ci/gate.sh' ':(exclude)ci/suite.sh' ':(exclude)ci/nightly.sh' ':(exclude)ci/test.sh'
+    ':(exclude)ci/injections' ':(exclude).ci')
+
+# gate_strategy BASE: how the gate measures time against the commit BASE (empty where there is
+# no history), from what the working tree changed since it:
+#   baselines  no base: one run is gated against the baselines, time only on the machine that
+#              blessed them;
+#   unchanged  the binary is the base's: time cannot have moved;
+#   untimed    code changed, none of it code that can move a frame's time;
+#   ab         the head and the base are built and timed against each other.
+gate_strategy() {
+    if [ -z "$1" ]; then
+        echo baselines
+    elif git diff --quiet "$1" -- "${binary_paths[@]}"; then
+        echo unchanged
+    elif git diff --quiet "$1" -- "${timing_paths[@]}"; then
+        echo untimed
+    else
+        echo ab
     fi
 }

@@ -82,6 +82,96 @@ fn the_gate_refuses_a_malformed_shard_before_it_builds() {
     }
 }
 
+/// What the gate makes of a change, from the files it touched since the base: nothing that
+/// reaches the binary, or only code that works on what the rounds left (the metric, compare,
+/// the report, the scripts), measures no time; anything that renders or times a frame, or a file
+/// the lists do not know, is timed against the base build.
+#[test]
+fn the_gate_times_a_change_only_where_it_can_move_a_frames_time() {
+    let ws = Workspace::new("strategy");
+    let repo = ws.dir.join("repo");
+    let git = |args: &[&str]| {
+        let output = Command::new("git").current_dir(&repo).args(args).output().unwrap();
+        assert!(output.status.success(), "git {args:?}: {}", stderr(&output));
+        String::from_utf8(output.stdout).unwrap()
+    };
+    let files = [
+        "renderer/src/lib.rs",
+        "shaders/fxaa.wgsl",
+        "scenes/edge.json",
+        "Cargo.lock",
+        "ci/lib.sh",
+        "runner/src/run/rounds.rs",
+        "runner/src/cli/run.rs",
+        "runner/src/report/mod.rs",
+        "runner/src/compare/time.rs",
+        "runner/src/cli/bless.rs",
+        "runner/src/manifest/tests.rs",
+        "cvvdp/src/lib.rs",
+        "ci/gate.sh",
+        "runner/tests/cli.rs",
+        "docs/gate.md",
+        "baselines/p/quick/edge.json",
+        "tools/new.rs",
+    ];
+    for file in files {
+        let path = repo.join(file);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, "0\n").unwrap();
+    }
+    git(&["init", "-q"]);
+    git(&["add", "."]);
+    git(&["-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "base"]);
+    let lib = repository().join("ci/lib.sh");
+    let strategy = |changed: &[&str]| {
+        for file in changed {
+            std::fs::write(repo.join(file), "1\n").unwrap();
+        }
+        let script = format!("source '{}' && gate_strategy HEAD", lib.display());
+        let output = Command::new("bash").current_dir(&repo).args(["-c", &script]).output().unwrap();
+        git(&["checkout", "-q", "--", "."]);
+        assert!(output.status.success(), "{changed:?}: {}", stderr(&output));
+        String::from_utf8(output.stdout).unwrap().trim().to_string()
+    };
+    assert_eq!(strategy(&[]), "unchanged");
+    assert_eq!(
+        strategy(&["docs/gate.md", "runner/tests/cli.rs", "baselines/p/quick/edge.json"]),
+        "unchanged"
+    );
+    assert_eq!(
+        strategy(&["runner/src/manifest/tests.rs"]),
+        "unchanged",
+        "a unit-test file is no part of the binary"
+    );
+    for untimed in [
+        "runner/src/report/mod.rs",
+        "runner/src/compare/time.rs",
+        "runner/src/cli/bless.rs",
+        "cvvdp/src/lib.rs",
+        "ci/gate.sh",
+    ] {
+        assert_eq!(strategy(&[untimed, "docs/gate.md"]), "untimed", "{untimed}");
+    }
+    for timed in [
+        "renderer/src/lib.rs",
+        "shaders/fxaa.wgsl",
+        "scenes/edge.json",
+        "Cargo.lock",
+        "ci/lib.sh",
+        "runner/src/run/rounds.rs",
+        "runner/src/cli/run.rs",
+        "tools/new.rs",
+    ] {
+        assert_eq!(strategy(&[timed, "runner/src/report/mod.rs"]), "ab", "{timed}");
+    }
+    let output = Command::new("bash")
+        .current_dir(&repo)
+        .args(["-c", &format!("source '{}' && gate_strategy ''", lib.display())])
+        .output()
+        .unwrap();
+    assert_eq!(String::from_utf8_lossy(&output.stdout).trim(), "baselines");
+}
+
 fn arg(path: &Path) -> &str {
     path.to_str().unwrap()
 }

@@ -28,6 +28,16 @@ use super::verdict::{Against, Check, Outcome};
 /// a millisecond a pass is mostly submission and timer, and its slowdown cannot hide much.
 pub const PASS_MIN_MS: f64 = 0.5;
 
+/// Passes shorter than this in the base build are decided pooled over the scenes, not in each
+/// scene on its own (where no pooled check of the pass exists, its scene decides it). A pass of
+/// a few tenths of a millisecond lands in one of two states per process and scene: the adaptive
+/// `compact` pass of walker (0.7 ms) took 0.043–0.06 or 0.08–0.086 of the rest of its frame,
+/// the same build, process by process. Four processes a side that happen to split so read as a
+/// 30 % slowdown, and did in a gate of unchanged code, found again by the fresh processes;
+/// pooled, the scenes' states average out. One scene's check of such a pass catches a slowdown
+/// only past about +50 % anyway, the pooled check past about +20 %.
+pub const PASS_ALONE_MIN_MS: f64 = 1.0;
+
 /// Passes that take more than this share of their frame in the base build are not checked on
 /// their own: the frame's check sees their slowdown (a quarter more in half the frame moves it
 /// by an eighth), and the rest of their frame is too short to divide by steadily.
@@ -36,7 +46,7 @@ pub const PASS_MAX_SHARE: f64 = 0.5;
 /// The checks of every mode that ran ok in the first process of `runs` and in the base's
 /// processes: per scene `relative_time`, `time_vs_reference` (adaptive modes), `frame_time` and
 /// `pass_time:<pass>`, each against the time-ratio tolerance of the scene's baseline (its run's
-/// when it has none), then each of them pooled over the scenes. The run's processes that did
+/// when it has none), then each of them pooled over the scenes ([`pooled::decide`]). The run's processes that did
 /// other work than the base's between their rounds (quality measured where the base timed
 /// alone) give no time: [`timing_processes`].
 pub(super) fn checks(
@@ -45,10 +55,7 @@ pub(super) fn checks(
     baselines: &BaselineSet,
     notes: &mut Vec<String>,
 ) -> Vec<Check> {
-    let series = all_series(runs, base, baselines, notes);
-    let mut checks: Vec<Check> = series.iter().filter_map(Series::check).collect();
-    checks.extend(pooled::checks(&series));
-    checks
+    pooled::decide(&all_series(runs, base, baselines, notes))
 }
 
 /// Every time of every mode of every scene that `runs` (its first process giving the scenes and
@@ -115,23 +122,24 @@ fn pass_and_rest(record: &SceneRecord, id: &str, pass: &str) -> Option<Vec<(f64,
 /// that lands slow or fast lands so in every pass of a frame, and the ratio cancels that, while
 /// a slower pass moves it by its whole slowdown (docs/gate.md has the false alarms and the
 /// slowdowns found on recorded gates).
-fn checked_passes(side: &Side, id: &str) -> Vec<String> {
+/// Each comes with whether its scene decides it alone (at least [`PASS_ALONE_MIN_MS`]).
+fn checked_passes(side: &Side, id: &str) -> Vec<(String, bool)> {
     let Some(first) = side.present(&side.head).first().and_then(|s| s.mode(id)) else { return Vec::new() };
     first
         .passes
         .iter()
-        .filter(|pass| {
+        .filter_map(|pass| {
             let base: Vec<(f64, f64)> = side
                 .present(&side.base)
                 .iter()
                 .filter_map(|record| pass_and_rest(record, id, &pass.name))
                 .flatten()
                 .collect();
-            let ms = median(base.iter().map(|&(pass, _)| pass).collect());
-            let share = median(base.iter().map(|&(pass, rest)| pass / (pass + rest)).collect());
-            ms.is_some_and(|ms| ms >= PASS_MIN_MS) && share.is_some_and(|share| share <= PASS_MAX_SHARE)
+            let ms = median(base.iter().map(|&(pass, _)| pass).collect())?;
+            let share = median(base.iter().map(|&(pass, rest)| pass / (pass + rest)).collect())?;
+            (ms >= PASS_MIN_MS && share <= PASS_MAX_SHARE)
+                .then(|| (pass.name.clone(), ms >= PASS_ALONE_MIN_MS))
         })
-        .map(|pass| pass.name.clone())
         .collect()
 }
 
@@ -260,7 +268,7 @@ fn mode_series(scene: &str, side: &Side, anchors: &[&str], bound: f64, mode: &Mo
     let mut series = Vec::new();
     let mut add = |metric: String,
                    what: String,
-                   unit: &'static str,
+                   (unit, alone): (&'static str, bool),
                    per_process: &dyn Fn(&SceneRecord) -> Option<f64>| {
         series.push(Series {
             scene: scene.to_string(),
@@ -271,6 +279,7 @@ fn mode_series(scene: &str, side: &Side, anchors: &[&str], bound: f64, mode: &Mo
             bound,
             head: side.head.iter().map(|r| r.and_then(per_process)).collect(),
             base: side.base.iter().map(|r| r.and_then(per_process)).collect(),
+            alone,
         });
     };
     let relative = |record: &SceneRecord| {
@@ -279,26 +288,26 @@ fn mode_series(scene: &str, side: &Side, anchors: &[&str], bound: f64, mode: &Mo
         median(samples.iter().zip(&anchor).map(|(s, a)| s.ln() - a).collect())
     };
     let what = "frame time over the geometric mean of the round's other unstalled modes";
-    add(TimeMetric::Relative.id().into(), what.into(), "×", &relative);
+    add(TimeMetric::Relative.id().into(), what.into(), ("×", true), &relative);
     if let Some(cost) = &mode.adaptive {
         let reference = cost.reference.as_str();
         let ratio = |record: &SceneRecord| {
             median(record.paired_ratios(id, reference)?.iter().map(|r| r.ln()).collect())
         };
         let what = format!("frame time over {reference}'s in the same round");
-        add(TimeMetric::VsReference.id().into(), what, "×", &ratio);
+        add(TimeMetric::VsReference.id().into(), what, ("×", true), &ratio);
     }
     let frame = |record: &SceneRecord| {
         median(record.mode(id)?.frame_ms.as_ref()?.samples.iter().map(|s| s.ln()).collect())
     };
-    add(TimeMetric::Frame.id().into(), "frame time".into(), "ms", &frame);
-    for pass in checked_passes(side, id) {
+    add(TimeMetric::Frame.id().into(), "frame time".into(), ("ms", true), &frame);
+    for (pass, alone) in checked_passes(side, id) {
         let per_process = |record: &SceneRecord| {
             let ratios = pass_and_rest(record, id, &pass)?.into_iter().filter(|&(_, rest)| rest > 0.0);
             median(ratios.map(|(pass, rest)| pass.ln() - rest.ln()).collect())
         };
         let what = format!("{pass} pass time over the rest of its frame");
-        add(format!("{}{pass}", TimeMetric::Pass.id()), what, "×", &per_process);
+        add(format!("{}{pass}", TimeMetric::Pass.id()), what, ("×", alone), &per_process);
     }
     series
 }

@@ -66,6 +66,17 @@ fn baseline_time_gated(request: &Request, machine: &Result<(), String>, notes: &
 fn scene_checks(runs: &[RunRecord], baselines: &BaselineSet, notes: &mut Vec<String>) -> Vec<Check> {
     let run = &runs[0];
     let mut checks = Vec::new();
+    // A run that timed fewer rounds in all its processes than a time verdict needs (the gate's
+    // quality process renders one, without a warm-up) is compared in quality alone: a row of
+    // `insufficient` per mode and time metric would only bury what it found.
+    let rounds: u32 = runs.iter().map(|r| r.settings.repetitions).sum();
+    let timed = rounds as usize >= MIN_FRAMES;
+    if !timed && !baselines.baselines.is_empty() {
+        notes.push(format!(
+            "time not compared: the run timed {rounds} round{} of each mode, fewer than the {MIN_FRAMES} a time verdict needs",
+            if rounds == 1 { "" } else { "s" }
+        ));
+    }
     for scene in &run.scenes {
         // A scene that failed (to load, to render its truth, in a mode) or was interrupted
         // fails the gate, baseline or not.
@@ -82,7 +93,7 @@ fn scene_checks(runs: &[RunRecord], baselines: &BaselineSet, notes: &mut Vec<Str
             Some(baseline) => {
                 notes.extend(input_notes(scene, baseline));
                 notes.extend(front_notes(scene, baseline));
-                checks.extend(compare_scene(&processes, baseline, baselines.same_platform, notes));
+                checks.extend(compare_scene(&processes, baseline, (baselines.same_platform, timed), notes));
             }
             None => checks.extend(scene.modes.iter().map(|mode| {
                 let outcome = if mode.status == Status::Ok { Outcome::New } else { Outcome::Failed };
@@ -482,11 +493,12 @@ fn status_check(scene: &str, mode: &str, outcome: Outcome, detail: &str) -> Chec
 }
 
 /// The checks of one scene: `processes` are its records in each process of the run (the
-/// first gives the quality numbers), `baseline` its committed baseline.
+/// first gives the quality numbers), `baseline` its committed baseline; time is compared only
+/// where the run is `timed`.
 fn compare_scene(
     processes: &[&SceneRecord],
     baseline: &Baseline,
-    same_platform: bool,
+    (same_platform, timed): (bool, bool),
     notes: &mut Vec<String>,
 ) -> Vec<Check> {
     let (scene, then) = (processes[0], baseline);
@@ -541,7 +553,9 @@ fn compare_scene(
             anchor_modes: &anchor_modes,
         };
         checks.extend(context.quality_checks());
-        checks.extend(context.time_checks());
+        if timed {
+            checks.extend(context.time_checks());
+        }
     }
     // Green means compared in full: a run without the sequence its baseline holds compared less.
     if !then.sequences.is_empty() && scene.sequence().is_none() {

@@ -27,6 +27,17 @@ pub(super) const ALL_SCENES: &str = "*";
 /// The fewest scenes a pooled check draws on: with one, it is that scene's own check.
 pub const MIN_SCENES: usize = 2;
 
+/// Every check of `series`: each scene's, where the scene decides its time alone or no pooled
+/// check of that time exists, then the pooled ones.
+pub(super) fn decide(series: &[Series]) -> Vec<Check> {
+    let pooled = checks(series);
+    let pooled_over = |s: &&Series| pooled.iter().any(|c| c.mode == s.mode && c.metric == s.metric);
+    let mut decided: Vec<Check> =
+        series.iter().filter(|s| s.alone || !pooled_over(s)).filter_map(Series::check).collect();
+    decided.extend(pooled);
+    decided
+}
+
 /// One check per mode and time across the scenes of `series`, where at least [`MIN_SCENES`]
 /// scenes were timed by every process that timed the mode's time in any: scene `*`, decided
 /// against the largest of the scenes' tolerances.
@@ -114,6 +125,7 @@ mod tests {
                     .map(|p| Some(-1.5 + shift(s) + process_effect(p) + amplitude * noise(s, p, 0)))
                     .collect(),
                 base: (0..4).map(|p| Some(-1.5 + amplitude * noise(s, p, 1))).collect(),
+                alone: true,
             })
             .collect()
     }
@@ -162,6 +174,34 @@ mod tests {
         let positive = unlucky.iter().filter_map(Series::check).filter(|c| c.change.unwrap() > 0.0).count();
         assert_eq!(positive, 17, "every scene alone points up");
         assert_ne!(outcome_of(&unlucky), Outcome::Regressed);
+    }
+
+    /// The false alarm a short pass raises alone: no change, but in one scene the base's four
+    /// processes landed in the pass's fast state and the run's in its slow one, 35 % apart (as
+    /// walker's `compact` pass did, found again by fresh processes). That scene alone regresses;
+    /// a pass its scenes do not decide alone is decided pooled, where the other scenes' states
+    /// average it out, and where there is no pool (one scene) its scene decides after all.
+    #[test]
+    fn a_short_pass_split_between_states_in_one_scene_is_decided_pooled() {
+        let mut split = series(17, 0.03, |_| 0.0, |_| 0.0);
+        for (p, value) in split[15].head.iter_mut().enumerate() {
+            *value = Some(-1.5 + 1.35f64.ln() + 0.01 * p as f64);
+        }
+        assert_eq!(split[15].check().unwrap().outcome, Outcome::Regressed, "alone, walker regresses");
+        let outcomes = |series: &[Series]| -> Vec<(String, Outcome)> {
+            decide(series).into_iter().map(|c| (c.scene, c.outcome)).collect()
+        };
+        assert!(outcomes(&split).iter().any(|(_, o)| *o == Outcome::Regressed), "decided alone, it fails");
+        for one in &mut split {
+            one.alone = false;
+        }
+        let pooled = outcomes(&split);
+        assert_eq!(pooled, [(ALL_SCENES.to_string(), Outcome::Unchanged)], "only the pool decides");
+        assert_eq!(
+            outcomes(&split[15..16]),
+            [("scene-15".to_string(), Outcome::Regressed)],
+            "without a pool its scene decides"
+        );
     }
 
     /// No change anywhere: unchanged.

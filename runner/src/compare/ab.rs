@@ -28,25 +28,16 @@ use super::verdict::{Against, Check, Outcome};
 /// a millisecond a pass is mostly submission and timer, and its slowdown cannot hide much.
 pub const PASS_MIN_MS: f64 = 0.5;
 
-/// Passes shorter than this in the base build are decided pooled over the scenes, not in each
-/// scene on its own (where no pooled check of the pass exists, its scene decides it). A pass of
-/// a few tenths of a millisecond lands in one of two states per process and scene: the adaptive
-/// `compact` pass of walker (0.7 ms) took 0.043–0.06 or 0.08–0.086 of the rest of its frame,
-/// the same build, process by process. Four processes a side that happen to split so read as a
-/// 30 % slowdown, and did in a gate of unchanged code, found again by the fresh processes;
-/// pooled, the scenes' states average out. One scene's check of such a pass catches a slowdown
-/// only past about +50 % anyway, the pooled check past about +20 %.
-pub const PASS_ALONE_MIN_MS: f64 = 1.0;
-
 /// Passes that take more than this share of their frame in the base build are not checked on
 /// their own: the frame's check sees their slowdown (a quarter more in half the frame moves it
 /// by an eighth), and the rest of their frame is too short to divide by steadily.
 pub const PASS_MAX_SHARE: f64 = 0.5;
 
 /// The checks of every mode that ran ok in the first process of `runs` and in the base's
-/// processes: per scene `relative_time`, `time_vs_reference` (adaptive modes), `frame_time` and
-/// `pass_time:<pass>`, each against the time-ratio tolerance of the scene's baseline (its run's
-/// when it has none), then each of them pooled over the scenes ([`pooled::decide`]). The run's processes that did
+/// processes: per scene `relative_time`, `time_vs_reference` (adaptive modes) and `frame_time`,
+/// each against the time-ratio tolerance of the scene's baseline (its run's when it has none),
+/// then each of them and each `pass_time:<pass>` pooled over the scenes ([`pooled::decide`]; a
+/// pass that runs in one scene only is decided in it). The run's processes that did
 /// other work than the base's between their rounds (quality measured where the base timed
 /// alone) give no time: [`timing_processes`].
 pub(super) fn checks(
@@ -122,8 +113,7 @@ fn pass_and_rest(record: &SceneRecord, id: &str, pass: &str) -> Option<Vec<(f64,
 /// that lands slow or fast lands so in every pass of a frame, and the ratio cancels that, while
 /// a slower pass moves it by its whole slowdown (docs/gate.md has the false alarms and the
 /// slowdowns found on recorded gates).
-/// Each comes with whether its scene decides it alone (at least [`PASS_ALONE_MIN_MS`]).
-fn checked_passes(side: &Side, id: &str) -> Vec<(String, bool)> {
+fn checked_passes(side: &Side, id: &str) -> Vec<String> {
     let Some(first) = side.present(&side.head).first().and_then(|s| s.mode(id)) else { return Vec::new() };
     first
         .passes
@@ -137,8 +127,7 @@ fn checked_passes(side: &Side, id: &str) -> Vec<(String, bool)> {
                 .collect();
             let ms = median(base.iter().map(|&(pass, _)| pass).collect())?;
             let share = median(base.iter().map(|&(pass, rest)| pass / (pass + rest)).collect())?;
-            (ms >= PASS_MIN_MS && share <= PASS_MAX_SHARE)
-                .then(|| (pass.name.clone(), ms >= PASS_ALONE_MIN_MS))
+            (ms >= PASS_MIN_MS && share <= PASS_MAX_SHARE).then(|| pass.name.clone())
         })
         .collect()
 }
@@ -156,18 +145,20 @@ pub(super) fn is_suspect(check: &Check) -> bool {
 }
 
 /// The manifests of the scenes to measure again in fresh processes: each suspect's scene, and
-/// every scene a suspect pooled over the scenes drew on; each once, in the run's order.
+/// every scene a suspect pooled over the scenes may draw on (where its mode ran ok, with the
+/// pass for a pass's time); each once, in the run's order.
 pub(super) fn manifests_to_confirm(checks: &[Check], run: &RunRecord) -> Vec<String> {
     let suspects: Vec<&Check> = checks.iter().filter(|c| is_suspect(c)).collect();
-    let pooled_over = |scene: &str, check: &Check| {
-        checks.iter().any(|c| {
-            c.scene == scene && c.against == Against::Base && c.mode == check.mode && c.metric == check.metric
+    let draws_on = |scene: &SceneRecord, check: &Check| {
+        let pass = check.metric.strip_prefix(TimeMetric::Pass.id());
+        scene.mode(&check.mode).is_some_and(|mode| {
+            mode.status == Status::Ok && pass.is_none_or(|pass| mode.passes.iter().any(|p| p.name == pass))
         })
     };
     let wanted = |scene: &SceneRecord| {
         suspects
             .iter()
-            .any(|s| s.scene == scene.name || (s.scene == pooled::ALL_SCENES && pooled_over(&scene.name, s)))
+            .any(|s| s.scene == scene.name || (s.scene == pooled::ALL_SCENES && draws_on(scene, s)))
     };
     run.scenes.iter().filter(|s| wanted(s)).map(|s| s.manifest.clone()).collect()
 }
@@ -176,7 +167,8 @@ pub(super) fn manifests_to_confirm(checks: &[Check], run: &RunRecord) -> Vec<Str
 /// its scenes: on the first processes and the fresh ones together, so that the interval
 /// narrows, and against the fresh ones alone, so that the first cannot carry the verdict by
 /// themselves. A suspect is regressed when, taken together, its whole interval lies past the
-/// tolerance and the fresh processes' own estimate lies past it too. A first-pass regression
+/// tolerance and the fresh processes' own estimate lies past it too, with their own interval
+/// wholly above 0 (a slowdown they show, not one they only lean to). A first-pass regression
 /// that is not found again becomes `noisy`; a noisy suspect takes the outcome of all its
 /// processes together (never `regressed` without the fresh estimate). A first-pass regression
 /// that the fresh processes did not measure, or could not decide, stands. Other checks are left
@@ -208,8 +200,7 @@ pub(super) fn confirm(
             continue;
         };
         let bound = check.threshold.map_or(f64::INFINITY, f64::ln_1p);
-        let fresh_past = again.change.is_some_and(|change| change.ln_1p() > bound);
-        let outcome = reconsidered(check.outcome, together.outcome, fresh_past);
+        let outcome = reconsidered(check.outcome, past_together(together, bound), shows_past(again, bound));
         let verb = if outcome == Outcome::Regressed { "found again" } else { "not found again" };
         let numbers = |c: &Check| c.detail.split_once(": ").map_or(c.detail.clone(), |(_, n)| n.to_string());
         let fresh_change = again.change.map_or("?".into(), |c| format!("{:+.1}%", c * 100.0));
@@ -226,8 +217,29 @@ pub(super) fn confirm(
     }
 }
 
+/// The outcome of a suspect decided on all its processes together (`together`), as
+/// [`reconsidered`] takes it. Pooled over the scenes, a slowdown that all the processes show
+/// (their interval above 0) and estimate past the tolerance counts as past it: the pool asks
+/// the question a change to a pass poses, with the narrowest interval the gate has, and the
+/// fresh processes must show it too.
+fn past_together(together: &Check, bound: f64) -> Outcome {
+    match together.outcome {
+        Outcome::Noisy if together.scene == pooled::ALL_SCENES && shows_past(together, bound) => {
+            Outcome::Regressed
+        }
+        outcome => outcome,
+    }
+}
+
+/// Whether `check` shows a slowdown past the tolerance `bound`: its estimate past it and its
+/// interval wholly above 0.
+fn shows_past(check: &Check, bound: f64) -> bool {
+    check.change.is_some_and(|change| change.ln_1p() > bound)
+        && check.interval.is_some_and(|[low, _]| low > 0.0)
+}
+
 /// What a suspect whose first outcome was `first` becomes once all its processes together
-/// decided `together`, the fresh ones alone estimating it past the tolerance or not
+/// decided `together`, the fresh ones alone showing it past the tolerance or not
 /// (`fresh_past`): regressed where both say so; else a first-pass regression is noisy, and a
 /// noisy suspect takes the outcome of all its processes, short of regressed.
 fn reconsidered(first: Outcome, together: Outcome, fresh_past: bool) -> Outcome {
@@ -301,13 +313,15 @@ fn mode_series(scene: &str, side: &Side, anchors: &[&str], bound: f64, mode: &Mo
         median(record.mode(id)?.frame_ms.as_ref()?.samples.iter().map(|s| s.ln()).collect())
     };
     add(TimeMetric::Frame.id().into(), "frame time".into(), ("ms", true), &frame);
-    for (pass, alone) in checked_passes(side, id) {
+    // A pass is decided pooled over the scenes: one scene's processes cannot judge it (the
+    // module documentation of `pooled` says why).
+    for pass in checked_passes(side, id) {
         let per_process = |record: &SceneRecord| {
             let ratios = pass_and_rest(record, id, &pass)?.into_iter().filter(|&(_, rest)| rest > 0.0);
             median(ratios.map(|(pass, rest)| pass.ln() - rest.ln()).collect())
         };
         let what = format!("{pass} pass time over the rest of its frame");
-        add(format!("{}{pass}", TimeMetric::Pass.id()), what, ("×", alone), &per_process);
+        add(format!("{}{pass}", TimeMetric::Pass.id()), what, ("×", false), &per_process);
     }
     series
 }
@@ -359,5 +373,24 @@ mod tests {
         }
         assert_eq!(reconsidered(Regressed, Unchanged, false), Noisy, "a first regression stays in view");
         assert_eq!(reconsidered(Noisy, Unchanged, false), Unchanged, "more processes settle a noisy one");
+    }
+
+    /// All the processes together showing a pooled pass 13 % slower (interval +4 … +22 %, across
+    /// the 10 % tolerance) count as past it; one scene's check so, or a pooled one whose interval
+    /// reaches below 0 or whose estimate is within the tolerance, does not.
+    #[test]
+    fn a_pooled_slowdown_shown_past_the_tolerance_counts_as_past_it() {
+        let bound = 0.1f64.ln_1p();
+        let noisy = |scene: &str, change: f64, low: f64| Check {
+            change: Some(change),
+            interval: Some([low, 0.22]),
+            ..Check::new(scene, "fxaa", "pass_time:fxaa", Outcome::Noisy, String::new())
+        };
+        assert_eq!(past_together(&noisy(pooled::ALL_SCENES, 0.13, 0.04), bound), Outcome::Regressed);
+        assert_eq!(past_together(&noisy("wire", 0.13, 0.04), bound), Outcome::Noisy, "one scene");
+        assert_eq!(past_together(&noisy(pooled::ALL_SCENES, 0.13, -0.01), bound), Outcome::Noisy, "0 inside");
+        assert_eq!(past_together(&noisy(pooled::ALL_SCENES, 0.08, 0.01), bound), Outcome::Noisy, "within");
+        assert!(shows_past(&noisy("wire", 0.13, 0.04), bound));
+        assert!(!shows_past(&noisy("wire", 0.13, -0.01), bound), "the fresh must show it, not lean to it");
     }
 }

@@ -182,7 +182,7 @@ case $strategy in
     baselines) echo "ci/gate.sh: no base commit (no git history?): time is gated against the baselines only on the machine that blessed them" >&2 ;;
     unchanged) echo "ci/gate.sh: the code is the base's (${base:0:12}): time cannot have moved and is not measured" >&2 ;;
     untimed)
-        echo "ci/gate.sh: since the base (${base:0:12}) only code that cannot move a frame's time changed, so time is not measured:" >&2
+        echo "ci/gate.sh: no code that can move a frame's time changed since the base (${base:0:12}), so time is not measured; what changed:" >&2
         git diff --name-only "$base" -- "${binary_paths[@]}" | sed 's/^/    /' >&2
         ;;
 esac

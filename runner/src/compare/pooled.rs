@@ -25,8 +25,8 @@
 //! a confirmed regression in two (walker's `compact`, 0.7 ms, took 0.043–0.06 or 0.08–0.086 of
 //! the rest of its frame process by process in both builds; degenerate's `gbuffer` moved by
 //! −57 … +142 % from mode to mode of one gate), and decided with another gate's processes as the
-//! fresh ones, 3 of 12 pairings failed; pooled, none did, while a pass 15 % slower still fails
-//! the gate (docs/gate.md has the table).
+//! fresh ones, 5 of 12 pairings failed (3 with passes under 1 ms pooled); pooled, none did,
+//! while a pass 15 % slower still fails the gate (docs/gate.md has the table).
 
 use super::series::{Series, decide_processes};
 use super::verdict::{Against, Check, Outcome};

@@ -26,7 +26,7 @@ pub(super) struct Series {
     pub head: Vec<Option<f64>>,
     pub base: Vec<Option<f64>>,
     /// Whether its scene decides it on its own, or only the check pooled over the scenes does
-    /// (a pass too short for one scene's processes to judge: [`super::ab::PASS_ALONE_MIN_MS`]).
+    /// (a pass's time, which one scene's processes cannot judge: see [`super::pooled`]).
     pub alone: bool,
 }
 

@@ -406,6 +406,12 @@ fn taa_flickers_less_than_deferred_on_a_moving_thin_scene_and_reports_what_lag_c
     }
     assert_eq!(deferred["ghosting"]["disoccluded"], ghosting["disoccluded"], "{deferred}");
     assert!(scene["sequences"][0]["blank_flicker"].as_f64().unwrap() > 0.0);
+    // How coarse each mode's error is at the square where the modes flicker most is taken by
+    // the run, not by the report (the stalled twin's, equal to taa's above, is taa's).
+    for along in [taa, deferred] {
+        let share = along["coarse_share"].as_f64().expect("a coarse share");
+        assert!(share > 0.0 && share < 1.0, "{share}");
+    }
 
     // The report shows the path: a table of every mode along it, and flicker against time.
     let run_dir = ws.run_dir();
@@ -422,9 +428,23 @@ fn taa_flickers_less_than_deferred_on_a_moving_thin_scene_and_reports_what_lag_c
         markdown.contains(&format!("Along the camera path: orbit path at {label}, 8 of 8 frames")),
         "{markdown}"
     );
-    let row = markdown.lines().find(|l| l.starts_with("| taa | ") && l.contains(" · ")).expect("taa's row");
+    // A mode's row of the path's table: as many cells as its columns, the lag's among them.
+    let columns = aabench::report::sequence_columns();
+    let path_row = |mode: &str| {
+        let cells = |line: &str| line.trim().trim_matches('|').split(" | ").count();
+        let row =
+            markdown.lines().find(|l| l.starts_with(&format!("| {mode} | ")) && cells(l) == columns.len());
+        row.unwrap_or_else(|| panic!("{mode}'s row along the path: {markdown}"))
+    };
+    let row = path_row("taa");
     assert!(row.contains(&format!("{:.3}", flicker(taa) * 1e4)), "{row}");
-    let row = markdown.lines().find(|l| l.starts_with("| taa-stalled | ") && l.contains(" · ")).unwrap();
+    let disoccluded = columns.iter().position(|c| c == "disoccluded %").expect("a column of the lag's rows");
+    let share = ghosting["disoccluded"].as_f64().unwrap() * 100.0;
+    assert_eq!(
+        row.trim().trim_matches('|').split(" | ").nth(disoccluded),
+        Some(format!("{share:.2}").as_str())
+    );
+    let row = path_row("taa-stalled");
     assert!(row.starts_with("| taa-stalled | taa's frames | "), "{row}");
     let plot = std::fs::read_to_string(ws.dir.join("figures/thin-front-flicker.svg")).unwrap();
     assert!(plot.contains("flicker against run time") && plot.contains("taa"), "{plot}");

@@ -29,7 +29,7 @@ pub(super) fn markdown_report(runs: &[PathBuf], figures: Option<&Path>) -> u8 {
             Err(message) => return fail(message),
         }
     }
-    say!("{}", crate::report::markdown::document(&dir, &record).trim_end());
+    say!("{}", crate::report::markdown::document(&record).trim_end());
     exit::OK
 }
 

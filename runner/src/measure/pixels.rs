@@ -7,6 +7,7 @@
 //! dither turns quantization into unbiased noise instead of banding that would shift with
 //! the anti-aliasing.
 
+use aabench_renderer::color::luminance;
 use aabench_renderer::{DisplayImage, FrameImages, Mode};
 
 use crate::measure::perceptual::{self, FlipMap};
@@ -198,11 +199,85 @@ pub fn sample_stats(counts: &[u8], mode: Mode, textured: bool) -> Result<SampleS
     })
 }
 
+/// The blur that separates coarse error from fine: σ 2 px passes periods of about 8 px and
+/// more, near the eye's peak sensitivity at the standard display's 38 pixels per degree, and
+/// takes out the pixel-scale detail it barely sees.
+pub const COARSE_SIGMA_PX: f64 = 2.0;
+
+/// The share of the error's energy (luma of the code values' difference, over the frames)
+/// that a Gaussian blur of σ [`COARSE_SIGMA_PX`] keeps: near 1 for a smooth error (a blob, a
+/// lag), near 0 for one that alternates pixel by pixel. The frames are RGBA8 rows `width`
+/// pixels wide (the flicker region's crops). `None` without error or frames, or where the
+/// two disagree in size.
+pub fn coarse_share(truth: &[Vec<u8>], mode: &[Vec<u8>], width: usize) -> Option<f64> {
+    let (mut coarse, mut total) = (0.0, 0.0);
+    for (t, m) in truth.iter().zip(mode) {
+        if m.len() != t.len() || width == 0 || t.len() % (4 * width) != 0 {
+            return None;
+        }
+        let luma = |p: &[u8]| luminance([p[0], p[1], p[2]].map(f64::from));
+        let error: Vec<f64> =
+            t.chunks_exact(4).zip(m.chunks_exact(4)).map(|(p, q)| (luma(q) - luma(p)) / 255.0).collect();
+        total += error.iter().map(|e| e * e).sum::<f64>();
+        coarse += gaussian_blur(&error, width, error.len() / width).iter().map(|e| e * e).sum::<f64>();
+    }
+    (total > 0.0).then(|| coarse / total)
+}
+
+/// A separable Gaussian blur of σ [`COARSE_SIGMA_PX`], edges clamped.
+fn gaussian_blur(values: &[f64], width: usize, height: usize) -> Vec<f64> {
+    let radius = (3.0 * COARSE_SIGMA_PX).ceil() as isize;
+    let weights: Vec<f64> =
+        (-radius..=radius).map(|i| (-((i * i) as f64) / (2.0 * COARSE_SIGMA_PX.powi(2))).exp()).collect();
+    let sum: f64 = weights.iter().sum();
+    let blur_line = |line: &[f64]| -> Vec<f64> {
+        let last = line.len() as isize - 1;
+        (0..=last)
+            .map(|i| {
+                let taps = (-radius..=radius).zip(&weights);
+                taps.map(|(o, w)| w * line[(i + o).clamp(0, last) as usize]).sum::<f64>() / sum
+            })
+            .collect()
+    };
+    let rows: Vec<f64> = values.chunks(width).flat_map(blur_line).collect();
+    let mut out = vec![0.0; values.len()];
+    for x in 0..width {
+        let column: Vec<f64> = (0..height).map(|y| rows[y * width + x]).collect();
+        for (y, value) in blur_line(&column).into_iter().enumerate() {
+            out[y * width + x] = value;
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use aabench_renderer::{Counts, Metrics, Reconstruction, Technique};
     use proptest::prelude::*;
+
+    fn frames(pixel: impl Fn(usize, usize) -> u8) -> Vec<Vec<u8>> {
+        let frame: Vec<u8> = (0..32 * 32).flat_map(|i| [pixel(i % 32, i / 32); 4]).collect();
+        vec![frame.clone(), frame]
+    }
+
+    #[test]
+    fn a_smooth_error_is_coarse_and_a_pixel_checkerboard_is_not() {
+        let truth = frames(|_, _| 100);
+        let blob = coarse_share(
+            &truth,
+            &frames(|x, y| if (8..24).contains(&x) && (8..24).contains(&y) { 160 } else { 100 }),
+            32,
+        );
+        let checker = coarse_share(&truth, &frames(|x, y| if (x + y) % 2 == 0 { 160 } else { 40 }), 32);
+        let (blob, checker) = (blob.unwrap(), checker.unwrap());
+        assert!(blob > 0.6, "a 16-px square's error is mostly coarse: {blob}");
+        assert!(checker < 0.01, "a checkerboard's error is all fine: {checker}");
+        assert_eq!(coarse_share(&truth, &truth, 32), None, "no error, no share");
+        let constant = coarse_share(&truth, &frames(|_, _| 110), 32).unwrap();
+        assert!((constant - 1.0).abs() < 1e-9, "a constant error survives any blur: {constant}");
+        assert_eq!(coarse_share(&truth, &frames(|_, _| 110), 31), None, "rows of another width");
+    }
 
     #[test]
     fn a_black_frame_is_told_it_may_be_unlit_and_a_coloured_one_is_not() {

@@ -86,6 +86,14 @@ impl<'a> FrontPoint<'a> {
         self.pace(other).0 == Pace::Faster
     }
 
+    /// Whether `self` is faster than `other` with confidence and saves at least `margin` of its
+    /// time (the median of their ratios at most 1 − `margin`): statistically and practically
+    /// cheaper, as the gate calls a slowdown only past its tolerance.
+    pub fn cheaper_by(&self, other: &FrontPoint, margin: f64) -> bool {
+        let (pace, ratio) = self.pace(other);
+        pace == Pace::Faster && ratio <= 1.0 - margin + 1e-9
+    }
+
     /// Whether `self` is faster or slower than `other` with confidence, and the median of the
     /// ratios of their times.
     fn pace(&self, other: &FrontPoint) -> (Pace, f64) {

@@ -203,6 +203,12 @@ pub struct ModeSequence {
     /// silhouettes and elsewhere, by the truth's motion (`temporal.rs`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ghosting: Option<Ghosting>,
+    /// The share of the error's energy that a blur of σ 2 px keeps, over the path's frames at
+    /// the square where the modes flicker most (`measure::pixels::coarse_share`): near 1 for a
+    /// smooth error, near 0 for pixel-scale aliasing. Absent where the square was not cut, and
+    /// in runs from before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coarse_share: Option<f64>,
     /// FNV-1a 64 of each frame's display image and sample counts, as `output_hash`.
     pub hashes: Vec<String>,
 }

@@ -10,13 +10,12 @@
 use std::fmt::Write;
 use std::path::Path;
 
-use aabench_renderer::color::luminance;
-
 use super::ZOOM;
 use super::html::escape;
 use super::images::figure;
+use crate::measure::pixels::COARSE_SIGMA_PX;
 use crate::measure::stats::spearman;
-use crate::record::vocabulary::JOD_MARGIN;
+use crate::record::vocabulary::{self, JOD_MARGIN, SEQUENCE_JOD_VS_TRUTH, SEQUENCE_PSNR_VS_TRUTH};
 use crate::record::{ModeRecord, SceneRecord, SequenceRecord};
 use crate::run::truth::TRUTH_ID;
 
@@ -90,20 +89,27 @@ pub fn most_at_odds<'a>(scored: &[Scored<'a>]) -> Option<AtOdds<'a>> {
 }
 
 impl AtOdds<'_> {
-    /// The disagreement and its likely causes, from the measures: whether the error PSNR
-    /// prefers changes more along the motion (flicker), and whether it is coarser (`coarse`:
-    /// each pick's [`coarse_share`], PSNR's first, where the animations could be read).
-    pub fn explanation(&self, index: usize, coarse: Option<[f64; 2]>) -> String {
+    /// The disagreement and its likely causes, from the measures along sequence `index`:
+    /// whether the error PSNR prefers changes more along the motion (flicker), and whether it is
+    /// coarser where the modes flicker most (the `coarse_share` row). Numbers read as their
+    /// rows write them.
+    pub fn explanation(&self, index: usize) -> String {
         let (a, b) = (self.psnr_pick, self.jod_pick);
         let (name_a, name_b) = (&a.mode.mode, &b.mode.mode);
+        let [db, jod] = [&SEQUENCE_PSNR_VS_TRUTH, &SEQUENCE_JOD_VS_TRUTH];
         let mut text = format!(
-            "PSNR prefers {name_a} ({:.2} dB against {:.2}); a viewer, by ColorVideoVDP, {name_b} ({:.2} JOD \
-             against {:.2}).",
-            a.psnr_db, b.psnr_db, b.jod, a.jod
+            "PSNR prefers {name_a} ({} dB against {}); a viewer, by ColorVideoVDP, {name_b} ({} JOD against {}).",
+            db.written(a.psnr_db),
+            db.written(b.psnr_db),
+            jod.written(b.jod),
+            jod.written(a.jod)
         );
-        let flicker = |s: &Scored| s.mode.sequence_at(index).and_then(|q| q.flicker);
+        let along = |s: &Scored, id: &str| {
+            let metric = vocabulary::metric(id).expect("a row of the vocabulary");
+            metric.value_at(s.mode, index).map(|value| (value, metric))
+        };
         let mut explained = false;
-        if let (Some(fa), Some(fb)) = (flicker(&a), flicker(&b))
+        if let (Some((fa, flicker)), Some((fb, _))) = (along(&a, "flicker"), along(&b, "flicker"))
             && fa > 1.1 * fb
         {
             let how_much = if fb > 0.0 {
@@ -113,24 +119,25 @@ impl AtOdds<'_> {
             };
             let _ = write!(
                 text,
-                " {name_a}'s error changes along the motion {how_much} (flicker {:.2} against {:.2} ×1e-4): \
-                 the eye sees an error that shimmers more than a steady one of the same energy, and squared \
-                 error weighs them alike.",
-                fa * 1e4,
-                fb * 1e4
+                " {name_a}'s error changes along the motion {how_much} ({}: {} against {}): the eye sees an \
+                 error that shimmers more than a steady one of the same energy, and squared error weighs them \
+                 alike.",
+                flicker.column.map_or(flicker.label, |column| column.header),
+                flicker.written(fa),
+                flicker.written(fb)
             );
             explained = true;
         }
-        if let Some([ca, cb]) = coarse
+        if let (Some((ca, coarse)), Some((cb, _))) = (along(&a, "coarse_share"), along(&b, "coarse_share"))
             && ca > 1.25 * cb
         {
             let _ = write!(
                 text,
-                " {name_a}'s error is coarser where the modes flicker most: {:.0} % of its energy survives a \
-                 blur of σ {COARSE_SIGMA_PX} px, against {:.0} % of {name_b}'s, and the eye sees coarse error \
+                " {name_a}'s error is coarser where the modes flicker most: {} % of its energy survives a \
+                 blur of σ {COARSE_SIGMA_PX} px, against {} % of {name_b}'s, and the eye sees coarse error \
                  far better than the pixel-scale error that squared error weighs alike.",
-                ca * 100.0,
-                cb * 100.0
+                coarse.written(ca),
+                coarse.written(cb)
             );
             explained = true;
         }
@@ -142,69 +149,6 @@ impl AtOdds<'_> {
         }
         text
     }
-}
-
-/// The blur that separates coarse error from fine: σ 2 px passes periods of about 8 px and
-/// more, near the eye's peak sensitivity at the standard display's 38 pixels per degree, and
-/// takes out the pixel-scale detail it barely sees.
-const COARSE_SIGMA_PX: f64 = 2.0;
-
-/// The share of the error's energy (luma of the code values' difference, over the frames)
-/// that a Gaussian blur of σ [`COARSE_SIGMA_PX`] keeps: near 1 for a smooth error (a blob, a
-/// lag), near 0 for one that alternates pixel by pixel. `None` without error or frames.
-pub fn coarse_share(truth: &[image::RgbaImage], mode: &[image::RgbaImage]) -> Option<f64> {
-    let (mut coarse, mut total) = (0.0, 0.0);
-    for (t, m) in truth.iter().zip(mode) {
-        let (width, height) = t.dimensions();
-        if m.dimensions() != (width, height) {
-            return None;
-        }
-        let luma = |p: &image::Rgba<u8>| luminance([p[0], p[1], p[2]].map(f64::from));
-        let error: Vec<f64> = t.pixels().zip(m.pixels()).map(|(p, q)| (luma(q) - luma(p)) / 255.0).collect();
-        total += error.iter().map(|e| e * e).sum::<f64>();
-        coarse += gaussian_blur(&error, width as usize, height as usize).iter().map(|e| e * e).sum::<f64>();
-    }
-    (total > 0.0).then(|| coarse / total)
-}
-
-/// A separable Gaussian blur of σ [`COARSE_SIGMA_PX`], edges clamped.
-fn gaussian_blur(values: &[f64], width: usize, height: usize) -> Vec<f64> {
-    let radius = (3.0 * COARSE_SIGMA_PX).ceil() as isize;
-    let weights: Vec<f64> =
-        (-radius..=radius).map(|i| (-((i * i) as f64) / (2.0 * COARSE_SIGMA_PX.powi(2))).exp()).collect();
-    let sum: f64 = weights.iter().sum();
-    let blur_line = |line: &[f64]| -> Vec<f64> {
-        let last = line.len() as isize - 1;
-        (0..=last)
-            .map(|i| {
-                let taps = (-radius..=radius).zip(&weights);
-                taps.map(|(o, w)| w * line[(i + o).clamp(0, last) as usize]).sum::<f64>() / sum
-            })
-            .collect()
-    };
-    let rows: Vec<f64> = values.chunks(width).flat_map(blur_line).collect();
-    let mut out = vec![0.0; values.len()];
-    for x in 0..width {
-        let column: Vec<f64> = (0..height).map(|y| rows[y * width + x]).collect();
-        for (y, value) in blur_line(&column).into_iter().enumerate() {
-            out[y * width + x] = value;
-        }
-    }
-    out
-}
-
-/// Each pick's [`coarse_share`] at the sequence's flicker square, PSNR's first, over the
-/// path's frames of their animations; `None` where the run has no such animations.
-fn coarse_shares(run_dir: &Path, sequence: &SequenceRecord, odds: AtOdds) -> Option<[f64; 2]> {
-    let region = sequence.region.as_ref()?;
-    let frames = |stream: &str| {
-        let mut all = crate::files::images::read_apng(&run_dir.join(region.animations.get(stream)?)).ok()?;
-        all.truncate(sequence.frames_done as usize);
-        Some(all)
-    };
-    let truth = frames(crate::run::flicker::TRUTH_STREAM)?;
-    let share = |pick: Scored| coarse_share(&truth, &frames(&pick.mode.mode)?);
-    Some([share(odds.psnr_pick)?, share(odds.jod_pick)?])
 }
 
 /// Per path, the two orders side by side with their rank correlation, and where they differ,
@@ -229,11 +173,7 @@ pub(super) fn section(
         match most_at_odds(&scored) {
             None => page.push_str("<p class=\"meta\">JOD and PSNR order these modes alike.</p>\n"),
             Some(odds) => {
-                let _ = writeln!(
-                    page,
-                    "<p>{}</p>",
-                    escape(&odds.explanation(index, coarse_shares(run_dir, sequence, odds)))
-                );
+                let _ = writeln!(page, "<p>{}</p>", escape(&odds.explanation(index)));
                 evidence(page, run_dir, scene, sequence, index, odds, left_out)?;
             }
         }
@@ -255,12 +195,12 @@ fn orders_table(page: &mut String, scored: &[Scored]) {
     for (rank, (j, p)) in by_jod.iter().zip(&by_psnr).enumerate() {
         let _ = writeln!(
             page,
-            "<tr><td>{}</td><td>{}</td><td>{:.2}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
             rank + 1,
             escape(&j.mode.mode),
-            j.jod,
+            SEQUENCE_JOD_VS_TRUTH.written(j.jod),
             escape(&p.mode.mode),
-            crate::record::vocabulary::decibels(p.psnr_db)
+            SEQUENCE_PSNR_VS_TRUTH.written(p.psnr_db)
         );
     }
     page.push_str("</tbody></table></details>\n");
@@ -379,7 +319,7 @@ fn amplified_error(truth: &image::RgbaImage, mode: &image::RgbaImage) -> Vec<u8>
 
 /// Per scene and path, as Markdown rows: the two orders, their correlation, and the pair most
 /// at odds with the sentence that explains it; `cell` escapes a cell's text.
-pub(super) fn markdown(out: &mut String, run_dir: &Path, scenes: &[SceneRecord], cell: fn(&str) -> String) {
+pub(super) fn markdown(out: &mut String, scenes: &[SceneRecord], cell: fn(&str) -> String) {
     let mut rows = String::new();
     for scene in scenes {
         for (index, sequence) in scene.sequences.iter().enumerate() {
@@ -391,16 +331,14 @@ pub(super) fn markdown(out: &mut String, run_dir: &Path, scenes: &[SceneRecord],
             let listed = |order: &[Scored], value: fn(&Scored) -> String| {
                 order.iter().map(|s| format!("{} {}", s.mode.mode, value(s))).collect::<Vec<_>>().join(", ")
             };
-            let odds = most_at_odds(&scored).map_or("they agree".into(), |odds| {
-                odds.explanation(index, coarse_shares(run_dir, sequence, odds))
-            });
+            let odds = most_at_odds(&scored).map_or("they agree".into(), |odds| odds.explanation(index));
             let _ = writeln!(
                 rows,
                 "| {} | {} | {} | {} | {} | {} |",
                 cell(&scene.name),
                 cell(&sequence.speed()),
-                cell(&listed(&by_jod, |s| format!("{:.2}", s.jod))),
-                cell(&listed(&by_psnr, |s| crate::record::vocabulary::decibels(s.psnr_db))),
+                cell(&listed(&by_jod, |s| SEQUENCE_JOD_VS_TRUTH.written(s.jod))),
+                cell(&listed(&by_psnr, |s| SEQUENCE_PSNR_VS_TRUTH.written(s.psnr_db))),
                 rank_correlation(&scored).map_or("–".into(), |r| format!("{r:.2}")),
                 cell(&odds)
             );
@@ -430,35 +368,22 @@ mod tests {
         assert_eq!(amplified_error(&truth, &mode), vec![8, 40, 0, 255, 255, 0, 0, 255]);
     }
 
-    fn frames(pixel: impl Fn(u32, u32) -> u8) -> Vec<image::RgbaImage> {
-        let frame = image::RgbaImage::from_fn(32, 32, |x, y| image::Rgba([pixel(x, y); 4]));
-        vec![frame.clone(), frame]
-    }
-
-    #[test]
-    fn a_smooth_error_is_coarse_and_a_pixel_checkerboard_is_not() {
-        let truth = frames(|_, _| 100);
-        let blob = coarse_share(
-            &truth,
-            &frames(|x, y| if (8..24).contains(&x) && (8..24).contains(&y) { 160 } else { 100 }),
-        );
-        let checker = coarse_share(&truth, &frames(|x, y| if (x + y) % 2 == 0 { 160 } else { 40 }));
-        let (blob, checker) = (blob.unwrap(), checker.unwrap());
-        assert!(blob > 0.6, "a 16-px square's error is mostly coarse: {blob}");
-        assert!(checker < 0.01, "a checkerboard's error is all fine: {checker}");
-        assert_eq!(coarse_share(&truth, &truth), None, "no error, no share");
-        let constant = coarse_share(&truth, &frames(|_, _| 110)).unwrap();
-        assert!((constant - 1.0).abs() < 1e-9, "a constant error survives any blur: {constant}");
-    }
-
-    fn record(id: &str) -> ModeRecord {
-        let json = serde_json::json!({ "mode": id, "m": 1, "stalled": false, "status": "ok", "passes": [], "images": {} });
+    /// A mode with one path along which its error has the flicker and the coarse share given.
+    fn record(id: &str, flicker: f64, coarse_share: f64) -> ModeRecord {
+        let along = serde_json::json!({
+            "mse": [], "psnr_db": [], "mean_psnr_db": 30.0, "instability": 0.0, "hashes": [],
+            "flicker": flicker, "coarse_share": coarse_share
+        });
+        let json = serde_json::json!({
+            "mode": id, "m": 1, "stalled": false, "status": "ok", "passes": [], "images": {}, "sequences": [along]
+        });
         serde_json::from_value(json).unwrap()
     }
 
     #[test]
     fn the_pair_most_at_odds_is_the_widest_opposite_one_beyond_both_margins() {
-        let [sharp, blurred, near_sharp, best] = ["sharp", "blurred", "near-sharp", "best"].map(record);
+        let [sharp, blurred, near_sharp, best] =
+            ["sharp", "blurred", "near-sharp", "best"].map(|id| record(id, 1e-4, 0.3));
         let scored = |mode, jod, psnr_db| Scored { mode, jod, psnr_db };
         let modes = [
             scored(&sharp, 5.0, 30.0),
@@ -475,15 +400,35 @@ mod tests {
         assert!(most_at_odds(&[modes[0], modes[3]]).is_none());
         assert!(most_at_odds(&[modes[0], modes[2]]).is_none(), "0.05 dB and 0.05 JOD apart");
         assert!(most_at_odds(&[scored(&sharp, 5.0, 30.0), scored(&blurred, 5.05, 28.0)]).is_none());
-        let text = odds.explanation(0, None);
-        let said = "PSNR prefers sharp (30.00 dB against 28.00); a viewer, by ColorVideoVDP, blurred (6.50 JOD against 5.00).";
+        let text = odds.explanation(0);
+        let said = "PSNR prefers sharp (30.00 dB against 28.00); a viewer, by ColorVideoVDP, blurred (6.500 JOD against 5.000).";
         assert!(text.starts_with(said), "{text}");
         assert!(text.contains("Neither flicker nor"), "{text}");
-        let coarser = odds.explanation(0, Some([0.6, 0.2]));
-        assert!(coarser.contains("sharp's error is coarser") && coarser.contains("60 %"), "{coarser}");
+    }
+
+    #[test]
+    fn the_explanation_reads_flicker_and_coarseness_from_the_record_as_their_rows_write_them() {
+        let explain = |[flicker_a, coarse_a]: [f64; 2], [flicker_b, coarse_b]: [f64; 2]| {
+            let (sharp, blurred) =
+                (record("sharp", flicker_a, coarse_a), record("blurred", flicker_b, coarse_b));
+            let odds = AtOdds {
+                psnr_pick: Scored { mode: &sharp, jod: 5.0, psnr_db: 30.0 },
+                jod_pick: Scored { mode: &blurred, jod: 6.5, psnr_db: 28.0 },
+            };
+            odds.explanation(0)
+        };
+        let coarser = explain([1e-4, 0.6], [1e-4, 0.2]);
         assert!(
-            !odds.explanation(0, Some([0.2, 0.6])).contains("coarser"),
+            coarser.contains("sharp's error is coarser") && coarser.contains("60 % of its energy"),
+            "{coarser}"
+        );
+        assert!(coarser.contains("against 20 % of blurred's"), "{coarser}");
+        assert!(
+            !explain([1e-4, 0.2], [1e-4, 0.6]).contains("coarser"),
             "the JOD pick's coarser error explains nothing"
         );
+        let shimmers = explain([3e-4, 0.2], [1e-4, 0.2]);
+        let said = "sharp's error changes along the motion 3.0× as much as blurred's (flicker ×1e-4: 3.000 against 1.000)";
+        assert!(shimmers.contains(said), "{shimmers}");
     }
 }

@@ -1,7 +1,9 @@
 //! Which technique for this scene, by what people see: ColorVideoVDP's JOD against the truth.
 //! Modes within [`JOD_MARGIN`] of the best are one quality: the answer is its cheapest mode,
 //! and the ranking under it names the cheapest mode of each quality below, among the modes
-//! cheaper than the row above. Where the scene has a camera path,
+//! cheaper than the row above. Cheaper means faster with confidence by at least
+//! [`TIME_MARGIN`]: a viewer's 0.1 JOD and the machine's 10 % are the smallest differences a
+//! ranking claims, so that a second run on the same machine gives the same rows. Where the scene has a camera path,
 //! the rankings are the path's, one per speed (JOD of the frames as a video), with PSNR, FLIP,
 //! flicker and ghosting one click away; the still's is labelled as the still's. A temporal mode
 //! (TAA) is never ranked by its still: that is 16 frames accumulated at one camera, its best
@@ -12,7 +14,9 @@ use std::fmt::Write;
 use super::html::escape;
 use crate::measure::stats::Summary;
 use crate::record::front::FrontPoint;
-use crate::record::vocabulary::{JOD_MARGIN, JOD_VS_TRUTH, METRICS, Metric, SEQUENCE_JOD_VS_TRUTH, Source};
+use crate::record::vocabulary::{
+    JOD_MARGIN, JOD_VS_TRUTH, METRICS, Metric, SEQUENCE_JOD_VS_TRUTH, Source, TIME_MARGIN,
+};
 use crate::record::{ModeRecord, ModeSequence, RunRecord, SceneRecord};
 
 /// What a ranking measures a mode by.
@@ -108,6 +112,14 @@ struct Candidate<'a> {
     point: FrontPoint<'a>,
 }
 
+impl Candidate<'_> {
+    /// Whether this mode is cheaper than `other`: faster with confidence, round by round (or
+    /// frame by frame along the path), and by at least [`TIME_MARGIN`] of its time.
+    fn cheaper_than(&self, other: &Candidate) -> bool {
+        self.point.cheaper_by(&other.point, TIME_MARGIN)
+    }
+}
+
 /// The unstalled modes measured on `basis`, in the plan's order.
 fn candidates(scene: &SceneRecord, basis: Basis) -> Vec<Candidate<'_>> {
     (scene.modes.iter())
@@ -122,26 +134,27 @@ fn candidates(scene: &SceneRecord, basis: Basis) -> Vec<Candidate<'_>> {
 
 /// The ranking on `basis`, cheapest first, built from the top: every unstalled mode within
 /// [`JOD_MARGIN`] of the best is one quality, named by its cheapest mode (the answer); then the
-/// same among the modes that are faster than that one with confidence and below that quality;
-/// and so on. Times are compared round by round, as the fronts compare them (`front.rs`): the
-/// cheapest of a quality are the modes none of it is faster than, and where the rounds cannot
-/// tell several apart, the first in the plan's order (the simpler technique: a reference
-/// before adaptive, the paper's adaptive before its variants) names the row and the others
-/// stand beside it as `≈`. From row to row the level and the time rise, and a mode 1 % faster
-/// and 0.001 JOD worse than another makes no row of its own; the last row is the answer.
+/// same among the modes below that quality that are cheaper than that one; and so on. Times
+/// are compared round by round, as the fronts compare them (`front.rs`), and a mode is cheaper
+/// than another only where it is faster with confidence by at least [`TIME_MARGIN`]: the
+/// cheapest of a quality are the modes none of it is cheaper than, and where several are, the
+/// first in the plan's order (the simpler technique: a reference before adaptive, the paper's
+/// adaptive before its variants) names the row and the others stand beside it as `≈`. From row
+/// to row the level and the time rise, and a mode 5 % faster and 0.05 JOD worse than another
+/// makes no row of its own; the last row is the answer.
 pub fn ranking(scene: &SceneRecord, basis: Basis) -> Vec<Row<'_>> {
     let mut left = candidates(scene, basis);
     let mut rows = Vec::new();
     while let Some(top) = left.iter().map(|c| c.level).max_by(f64::total_cmp) {
         let class: Vec<Candidate> = left.iter().filter(|c| within_margin(c.level, top)).copied().collect();
-        let beaten = |c: &Candidate| class.iter().any(|other| other.point.faster_than(&c.point));
+        let beaten = |c: &Candidate| class.iter().any(|other| other.cheaper_than(c));
         let cheapest: Vec<Candidate> = class.iter().filter(|c| !beaten(c)).copied().collect();
         // Paired comparisons need not be transitive: should every mode of the class be beaten
         // (a cycle), its first names the row.
         let Some(named) = cheapest.first().or(class.first()).copied() else { break };
         let as_fast = cheapest.iter().skip(1).map(|c| c.mode).collect();
         rows.push(Row { level: named.level, mode: named.mode, ms: named.ms, as_fast });
-        left.retain(|c| !within_margin(c.level, top) && c.point.faster_than(&named.point));
+        left.retain(|c| !within_margin(c.level, top) && c.cheaper_than(&named));
     }
     rows.reverse();
     rows
@@ -167,15 +180,15 @@ pub struct Answer<'a> {
 }
 
 impl Answer<'_> {
-    /// `msaa-4x 9.66 JOD, 30.2 ms (2.04× deferred-1x1); the best, reference-4x4, 9.70`.
+    /// `msaa-4x 9.660 JOD, 30.2 ms (2.04× deferred-1x1); the best, reference-4x4, 9.700`.
     pub fn describe(&self) -> String {
         let cost = self.vs_deferred.map_or_else(String::new, |r| format!(" ({r:.2}× deferred-1x1)"));
         let best = if self.best_level <= self.level {
             "the best".to_string()
         } else {
-            format!("the best, {}, {:.2}", self.best.mode, self.best_level)
+            format!("the best, {}, {}", self.best.mode, jod(self.best_level))
         };
-        format!("{} {:.2} JOD, {:.1} ms{cost}; {best}", self.mode.mode, self.level, self.ms)
+        format!("{} {} JOD, {:.1} ms{cost}; {best}", self.mode.mode, jod(self.level), self.ms)
     }
 }
 
@@ -206,15 +219,20 @@ impl<'a> Answer<'a> {
     }
 }
 
-/// `reference-2x2 9.21 JOD, 40.1 ms`: a row's recommendation, with the modes as fast as it
-/// (`msaa-4x (≈ adaptive-2x2) 9.62 JOD, 20.0 ms`).
+/// `reference-2x2 9.210 JOD, 40.1 ms`: a row's recommendation, with the modes as cheap as it
+/// (`msaa-4x (≈ adaptive-2x2) 9.620 JOD, 20.0 ms`).
 fn recommendation(row: &Row) -> String {
     let names: Vec<&str> = row.as_fast.iter().map(|m| m.mode.as_str()).collect();
     let ties = if names.is_empty() { String::new() } else { format!(" (≈ {})", names.join(", ")) };
-    format!("{}{ties} {:.2} JOD, {:.1} ms", row.mode.mode, row.level, row.ms)
+    format!("{}{ties} {} JOD, {:.1} ms", row.mode.mode, jod(row.level), row.ms)
 }
 
-/// `reference-2x2: 9.21 JOD, 40.1 ms, PSNR 36.00 dB, FLIP 0.0196`: the row's recommendation,
+/// A level of JOD as the JOD's row writes it.
+fn jod(level: f64) -> String {
+    JOD_VS_TRUTH.written(level)
+}
+
+/// `reference-2x2: 9.210 JOD, 40.1 ms, PSNR 36.00 dB, FLIP 0.0196`: the row's recommendation,
 /// then each metric of the basis's part of the record that reads among a row's details
 /// (`Metric::brief`): along the path its flicker and its error where the frame before had the
 /// surface hidden too.
@@ -270,13 +288,15 @@ fn caption(run: &RunRecord) -> String {
          best are one quality (of two modes {JOD_MARGIN} JOD apart, about 53 % of viewers prefer the \
          better). The answer is its cheapest unstalled mode, with its time against deferred-1x1; each \
          line names, from the cheapest up, the cheapest mode of each quality below, among the modes \
-         faster than the one above with confidence (round by round), with its own JOD and frame time \
-         (≈: modes whose time its rounds cannot tell from its own; the first in the plan's order \
-         names the step); the chart draws them, JOD across and time up. The details \
+         faster than the one above by at least {margin:.0} % with confidence (round by round), with \
+         its own JOD and frame time (≈: modes of its quality that no mode of it is that much faster \
+         than; the first in the plan's order names the step); the chart draws them, JOD across and \
+         time up. The details \
          add PSNR, mean FLIP, flicker (the change of the error along the truth's motion) and the MSE \
          where the frame before had the surface hidden. The still's ranking leaves TAA out: its still \
          is 16 frames accumulated at one camera.",
-        viewing_conditions(run)
+        viewing_conditions(run),
+        margin = TIME_MARGIN * 100.0
     )
 }
 
@@ -495,7 +515,7 @@ mod tests {
         let rows = ranking(&ranked, Basis::Still);
         let named: Vec<(&str, f64)> = rows.iter().map(|row| (row.mode.mode.as_str(), row.level)).collect();
         assert_eq!(named, [("deferred-1x1", 8.0), ("msaa-4x", 9.62)], "the answer tops the ranking");
-        assert_eq!(recommendation(&rows[1]), "msaa-4x (≈ smaa) 9.62 JOD, 20.0 ms");
+        assert_eq!(recommendation(&rows[1]), "msaa-4x (≈ smaa) 9.620 JOD, 20.0 ms");
         // A mode 4 times cheaper than the answer and 0.09 JOD below it is not hidden: it is the
         // next quality down.
         let cheap = scene(vec![
@@ -515,7 +535,7 @@ mod tests {
         );
         assert_eq!(
             found.describe(),
-            "msaa-4x 9.62 JOD, 20.0 ms (2.00× deferred-1x1); the best, reference-4x4, 9.70"
+            "msaa-4x 9.620 JOD, 20.0 ms (2.00× deferred-1x1); the best, reference-4x4, 9.700"
         );
         // Beyond the margin, the best answers for itself.
         let far = scene(vec![timed("deferred-1x1", 10.0, 8.0), timed("reference-4x4", 90.0, 9.70)]);
@@ -545,6 +565,32 @@ mod tests {
         ];
         let atrium = scene(modes);
         let rows = ranking(&atrium, Basis::Still);
-        assert_eq!(recommendation(&rows[0]), "adaptive-4x4 (≈ adaptive-4x4-area) 9.30 JOD, 40.0 ms");
+        assert_eq!(recommendation(&rows[0]), "adaptive-4x4 (≈ adaptive-4x4-area) 9.300 JOD, 40.0 ms");
+    }
+
+    #[test]
+    fn a_saving_under_the_time_margin_makes_no_step_and_names_no_row_however_sure() {
+        // smaa is 5 % faster than msaa-4x in every round, 0.2 JOD below it: faster with
+        // confidence, but too small a saving to be a step; fxaa, 20 % faster, is one.
+        let modes = vec![
+            timed("deferred-1x1", 10.0, 8.0),
+            timed("fxaa", 16.0, 9.2),
+            timed("smaa", 19.0, 9.4),
+            timed("msaa-4x", 20.0, 9.6),
+        ];
+        let steps = scene(modes);
+        let named: Vec<&str> =
+            ranking(&steps, Basis::Still).iter().map(|row| row.mode.mode.as_str()).collect();
+        assert_eq!(named, ["deferred-1x1", "fxaa", "msaa-4x"]);
+        // Within a quality, a mode 5 % faster in every round stands beside the plan's first; one
+        // 15 % faster names the row alone.
+        let quality = |adaptive_ms: f64| {
+            let modes = vec![timed("reference-2x2", 30.0, 9.65), timed("adaptive-2x2", adaptive_ms, 9.64)];
+            recommendation(&ranking(&scene(modes), Basis::Still)[0])
+        };
+        assert_eq!(quality(28.5), "reference-2x2 (≈ adaptive-2x2) 9.650 JOD, 30.0 ms");
+        assert_eq!(quality(25.5), "adaptive-2x2 9.640 JOD, 25.5 ms");
+        let gate = crate::manifest::tolerances::Tolerances::default();
+        assert_eq!(TIME_MARGIN, gate.time_ratio, "the margin is the gate's tolerance for time ratios");
     }
 }

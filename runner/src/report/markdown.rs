@@ -54,15 +54,14 @@ fn flicker_modes() -> Vec<Mode> {
 /// How much the flicker animation enlarges the square.
 const FLICKER_ZOOM: u32 = 2;
 
-/// The whole document: where the run came from, the overview, then one table per scene;
-/// `run_dir` is the run's folder, whose animations explain where JOD and PSNR disagree.
-pub fn document(run_dir: &Path, run: &RunRecord) -> String {
+/// The whole document: where the run came from, the overview, then one table per scene.
+pub fn document(run: &RunRecord) -> String {
     let mut out = String::new();
     provenance(&mut out, run);
     out.push_str("\n### Overview\n\n");
     overview(&mut out, run);
     super::choice::technique_markdown(&mut out, run, cell_text);
-    super::agreement::markdown(&mut out, run_dir, &run.scenes, cell_text);
+    super::agreement::markdown(&mut out, &run.scenes, cell_text);
     variants(&mut out, run);
     passes(&mut out, run);
     for scene in &run.scenes {

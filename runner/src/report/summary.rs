@@ -54,7 +54,7 @@ fn modes_at_fault(scene: &SceneRecord) -> String {
     )
 }
 
-/// `path   msaa-4x 9.66 JOD, 30.2 ms (2.04× deferred-1x1); the best, reference-4x4, 9.70`, or
+/// `path   msaa-4x 9.660 JOD, 30.2 ms (2.04× deferred-1x1); the best, reference-4x4, 9.700`, or
 /// why the scene has no answer.
 fn scene_answer(scene: &SceneRecord) -> String {
     if scene.status != Status::Ok {

@@ -54,16 +54,14 @@ pub fn mode_cells(mode: &ModeRecord) -> Vec<String> {
 }
 
 /// The columns of a scene's table along its camera path ([`sequence_cells`]): the mode and its
-/// time per frame, the metrics with a column in the path's table, what lag costs, and its place
-/// on each front of the path.
+/// time per frame, the metrics with a column in the path's table (what lag costs among them),
+/// and its place on each front of the path.
 pub fn sequence_columns() -> Vec<String> {
     let metrics = vocabulary::columns(Table::Path).map(|(_, column)| column.header.to_string());
-    let lag = "disoccluded % · entered % · MSE entered / at moving edges / elsewhere ×1e-3";
     ["mode", "ms per frame along the path"]
         .map(String::from)
         .into_iter()
         .chain(metrics)
-        .chain([lag.to_string()])
         .chain(vocabulary::fronts(Table::Path).map(Metric::front_header))
         .collect()
 }
@@ -72,11 +70,6 @@ pub fn sequence_columns() -> Vec<String> {
 pub fn sequence_cells(mode: &ModeRecord, index: usize) -> Option<Vec<String>> {
     let sequence = mode.sequence_at(index)?;
     let cell = |v: Option<String>| v.unwrap_or_else(|| "–".into());
-    let ghosting = sequence.ghosting.as_ref().map(|g| {
-        let mse = |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.2}", v * 1e3));
-        let mses = [g.mse_entered, g.mse_edges, g.mse_elsewhere].map(mse).join(" / ");
-        format!("{:.2} · {:.2} · {mses}", g.disoccluded * 100.0, g.entered * 100.0)
-    });
     let metrics = vocabulary::columns(Table::Path)
         .map(|(metric, column)| vocabulary::cell(metric, column, mode, index));
     // A stalled mode that took its twin's frames has no time of its own along the path.
@@ -85,14 +78,7 @@ pub fn sequence_cells(mode: &ModeRecord, index: usize) -> Option<Vec<String>> {
         (None, twin) => twin.as_ref().map(|twin| format!("{twin}'s frames")),
     };
     let fronts = vocabulary::fronts(Table::Path).map(|metric| front_cell(mode, metric, index));
-    Some(
-        [mode.mode.clone(), cell(frame)]
-            .into_iter()
-            .chain(metrics)
-            .chain([cell(ghosting)])
-            .chain(fronts)
-            .collect(),
-    )
+    Some([mode.mode.clone(), cell(frame)].into_iter().chain(metrics).chain(fronts).collect())
 }
 
 /// The scene's modes along its sequence `index`.

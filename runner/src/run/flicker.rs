@@ -15,7 +15,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use crate::files::images;
-use crate::measure::temporal;
+use crate::measure::{pixels, temporal};
 use crate::record::FlickerRegion;
 use crate::run::spool::{Spool, Square};
 
@@ -29,6 +29,14 @@ pub const STRIP_FRAMES: u32 = 8;
 /// The name of the truth's stream, and so of its animation.
 pub const TRUTH_STREAM: &str = "truth";
 
+/// The worst-flickering square, and per animated stream (by its index in the spool) the share
+/// of its error there that is coarse (`pixels::coarse_share`; `None` where it has no error).
+#[derive(Debug)]
+pub struct Cut {
+    pub region: FlickerRegion,
+    pub coarse_shares: Vec<(usize, Option<f64>)>,
+}
+
 /// Chooses the square with the most flicker in `map` (per pixel of the spool's frames) over the
 /// first `frames` frames, and writes the animation of it of the truth's stream (the spool's
 /// first) and of each of the `animated` streams that holds as many frames (a mode that failed on
@@ -40,7 +48,7 @@ pub fn region(
     frames: usize,
     delay_s: f64,
     [run_dir, out_dir]: [&Path; 2],
-) -> Result<FlickerRegion, String> {
+) -> Result<Cut, String> {
     if frames < 2 {
         return Err("fewer than two frames: nothing flickers".into());
     }
@@ -55,8 +63,11 @@ pub fn region(
         |stream: usize| (0..frames).map(|f| spool.crop(stream, f, square)).collect::<Result<Vec<_>, _>>();
     let truth = crops(0)?;
     let mut modes = Vec::new();
+    let mut coarse_shares = Vec::new();
     for &stream in animated.iter().filter(|&&s| spool.frames(s) >= frames) {
-        modes.push((spool.name(stream), crops(stream)?));
+        let mode = crops(stream)?;
+        coarse_shares.push((stream, pixels::coarse_share(&truth, &mode, side as usize)));
+        modes.push((spool.name(stream), mode));
     }
     let strip_frames = STRIP_FRAMES.min(frames as u32);
     let strip_first = strip_start(&truth, modes.iter().map(|(_, crops)| crops.as_slice()), strip_frames);
@@ -70,7 +81,8 @@ pub fn region(
         let relative = path.strip_prefix(run_dir).unwrap_or(&path);
         animations.insert(name.to_string(), relative.to_string_lossy().replace('\\', "/"));
     }
-    Ok(FlickerRegion { x, y, side, strip_first, strip_frames, animations })
+    let region = FlickerRegion { x, y, side, strip_first, strip_frames, animations };
+    Ok(Cut { region, coarse_shares })
 }
 
 /// The first of the `length` consecutive frames within which the modes' crops flicker most
@@ -136,7 +148,8 @@ mod tests {
             spool.append(1, &frame(f + 10)).unwrap();
         }
         spool.append(2, &frame(0)).unwrap();
-        let region = region(&spool, &map, &[1, 2], 3, 1.0 / 60.0, [&dir, &dir.join("path")]).unwrap();
+        let Cut { region, coarse_shares } =
+            region(&spool, &map, &[1, 2], 3, 1.0 / 60.0, [&dir, &dir.join("path")]).unwrap();
         assert_eq!((region.x, region.y, region.side), (width - SIDE, height - SIDE, SIDE));
         assert_eq!((region.strip_first, region.strip_frames), (0, 3));
         assert_eq!(region.animations.keys().collect::<Vec<_>>(), ["a", "truth"], "b has one frame of three");
@@ -146,6 +159,17 @@ mod tests {
         assert_eq!(greens, [10, 11, 12, 11], "forwards, then backwards without the ends");
         let first_red = ((height - SIDE) * width + width - SIDE) % 256;
         assert_eq!(u32::from(played[0].get_pixel(0, 0)[0]), first_red, "the crop's corner");
+        // a's error is a constant +10 of green: all of it coarse, as its animation reads.
+        let [(stream, Some(share))] = coarse_shares[..] else { panic!("one share, of a: {coarse_shares:?}") };
+        assert_eq!(stream, 1);
+        assert!((share - 1.0).abs() < 1e-9, "{share}");
+        let read = |path: &str| -> Vec<Vec<u8>> {
+            let frames = images::read_apng(&dir.join(path)).unwrap().into_iter().take(3);
+            frames.map(image::RgbaImage::into_raw).collect()
+        };
+        let from_animations =
+            pixels::coarse_share(&read("path/truth.png"), &read("path/a.png"), SIDE as usize);
+        assert_eq!(from_animations, Some(share), "the animations give the same share");
         drop(spool);
         assert!(!dir.join("spool").exists(), "the spool is removed");
         std::fs::remove_dir_all(&dir).unwrap();

@@ -79,6 +79,9 @@ pub(super) struct ModeState {
     /// FLIP and ColorVideoVDP along the path: filled in once the path is rendered.
     pub flip: FlipAlong,
     pub jod: JodAlong,
+    /// The share of its error that is coarse where the modes flicker most: filled in with the
+    /// flicker region.
+    pub coarse_share: Option<f64>,
     hashes: Vec<String>,
     frame_seconds: Vec<f64>,
     checks: FrameChecks,
@@ -198,6 +201,7 @@ impl ModeState {
             frames_of: None,
             flicker: self.flicker.conclude(),
             ghosting: self.lag.conclude(),
+            coarse_share: self.coarse_share,
             hashes: self.hashes,
         };
         ModeOutcome { sequence: Some(sequence), checks: self.checks, error: None }

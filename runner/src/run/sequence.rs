@@ -368,7 +368,7 @@ struct Measured {
     jods: Vec<Option<Arc<crate::measure::perceptual::VideoJod>>>,
     maps: Vec<Option<Result<String, String>>>,
     jod_s: f64,
-    region: Result<crate::record::FlickerRegion, String>,
+    region: Result<flicker::Cut, String>,
     region_s: f64,
     kept: Option<Result<(), String>>,
 }
@@ -444,7 +444,12 @@ impl Measured {
         }
         (record.flip_s, record.jod_s, record.region_s) = (self.flip_s, self.jod_s, self.region_s);
         match self.region {
-            Ok(region) => record.region = Some(region),
+            Ok(cut) => {
+                for (stream, share) in cut.coarse_shares {
+                    states[stream - 1].coarse_share = share;
+                }
+                record.region = Some(cut.region);
+            }
             Err(error) => record.region_error = Some(error),
         }
     }

@@ -2,12 +2,15 @@
 //! record it is read, how the gate decides it and with which tolerance, which way is better,
 //! its column in the report's tables and its error-against-run-time plot. `compare`, the
 //! console, the report (HTML and Markdown), its plots and its rankings loop over [`METRICS`] or
-//! name a row; a new metric is its function, one row here, one record field and its test (along
-//! a camera path, also its accumulator in `run/path_metrics.rs`). The times, which the gate
+//! name a row; a new metric is its function, one row in `rows.rs`, one record field and its test
+//! (along a camera path, also its accumulator in `run/path_metrics.rs`). The times, which the gate
 //! decides on intervals instead, are [`TimeMetric`].
 
 use crate::manifest::tolerances::{QualityTolerances, Tolerance};
 use crate::record::{ModeRecord, ModeSequence};
+
+mod rows;
+pub use rows::*;
 
 /// The part of a mode's record a metric is read from. Each is present or absent as a whole: a
 /// run whose mode lacks what its baseline has fails one check for it, not one per metric.
@@ -119,6 +122,13 @@ pub const JOD_MARGIN: f64 = 0.1;
 /// frames (6 % of the MSE). Modes closer than this are one quality, as [`JOD_MARGIN`] argues.
 pub const PSNR_MARGIN_DB: f64 = 0.25;
 
+/// The smallest saving of time that a ranking reads as cheaper: one mode is cheaper than
+/// another where it is faster with confidence, round by round, *and* the median of their
+/// ratios saves at least this share of the other's time. It is the gate's tolerance for time
+/// ratios: on a 2-core VM one frame's time varies by 10–15 % from round to round, so a
+/// difference of a few percent decides one way in one run and the other way in the next.
+pub const TIME_MARGIN: f64 = 0.1;
+
 /// How the gate compares a metric with its baseline.
 #[derive(Debug, Clone, Copy)]
 pub struct Gate {
@@ -212,275 +222,17 @@ pub struct Metric {
     pub front_margin: Option<f64>,
 }
 
-/// The still's PSNR against the truth: what the still's ranking orders modes by.
-pub const PSNR_VS_TRUTH: Metric = Metric {
-    id: "psnr_vs_truth",
-    label: "PSNR against the truth",
-    source: Source::Truth,
-    read: Read::Mode(|mode| Some(mode.vs_ground_truth.as_ref()?.psnr_db.value())),
-    gate: Some(Gate { rule: DECIBELS, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
-    column: Some(Column { table: Table::Still, header: "PSNR vs truth", cell: decibels }),
-    plot: None,
-    brief: Some(|db| format!("PSNR {} dB", decibels(db))),
-    front_margin: Some(PSNR_MARGIN_DB),
-};
-
-/// The still's FLIP against the truth.
-pub const FLIP_VS_TRUTH: Metric = Metric {
-    id: "flip_vs_truth",
-    label: "FLIP against the truth",
-    source: Source::Truth,
-    read: Read::Mode(|mode| mode.vs_ground_truth.as_ref()?.flip),
-    gate: Some(Gate { rule: ERROR, tolerance: Tolerance::FlipRelative, show: five_decimals }),
-    column: Some(Column { table: Table::Still, header: "FLIP vs truth", cell: four_decimals }),
-    plot: Some(Plot {
-        title: "FLIP against run time",
-        axis: "mean FLIP against the truth (log)",
-        axis_value: |v| v,
-        file: "front-flip",
-        front: Front::Medians,
-    }),
-    brief: Some(|flip| format!("FLIP {flip:.4}")),
-    front_margin: None,
-};
-
-/// The still's ColorVideoVDP score against the truth, in JOD: what the still's ranking orders
-/// modes by where there is no path.
-pub const JOD_VS_TRUTH: Metric = Metric {
-    id: "jod_vs_truth",
-    label: "JOD against the truth",
-    source: Source::Truth,
-    read: Read::Mode(|mode| mode.vs_ground_truth.as_ref()?.jod),
-    gate: Some(Gate { rule: JOD, tolerance: Tolerance::Jod, show: jod }),
-    column: Some(Column { table: Table::Still, header: "JOD vs truth", cell: jod }),
-    plot: Some(Plot {
-        title: "JOD against run time",
-        axis: "JOD below 10 against the truth (log)",
-        axis_value: jod_loss,
-        file: "front-jod",
-        front: Front::Recorded("jod_vs_truth"),
-    }),
-    brief: None,
-    front_margin: Some(JOD_MARGIN),
-};
-
-/// ColorVideoVDP along a camera path against the truth's frames: what a path's ranking orders
-/// modes by.
-pub const SEQUENCE_JOD_VS_TRUTH: Metric = Metric {
-    id: "sequence_jod_vs_truth",
-    label: "JOD against the truth's frames",
-    source: Source::Sequence,
-    read: Read::Along(|sequence| sequence.jod),
-    gate: Some(Gate { rule: JOD, tolerance: Tolerance::Jod, show: jod }),
-    column: Some(Column { table: Table::Path, header: "JOD along the path", cell: jod }),
-    plot: Some(Plot {
-        title: "JOD in motion against run time",
-        axis: "JOD below 10 along the camera path (log)",
-        axis_value: jod_loss,
-        file: "front-jod-path",
-        front: Front::Recorded("sequence_jod_vs_truth"),
-    }),
-    brief: None,
-    front_margin: Some(JOD_MARGIN),
-};
-
-/// The mean PSNR along a camera path.
-pub const SEQUENCE_PSNR_VS_TRUTH: Metric = Metric {
-    id: "sequence_psnr_vs_truth",
-    label: "mean PSNR against the truth's frames",
-    source: Source::Sequence,
-    read: Read::Along(|sequence| Some(sequence.mean_psnr_db.value())),
-    gate: Some(Gate { rule: DECIBELS, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
-    column: Some(Column { table: Table::Path, header: "PSNR along the path", cell: decibels }),
-    plot: None,
-    brief: Some(|db| format!("PSNR {} dB", decibels(db))),
-    front_margin: None,
-};
-
-/// Every metric, in the order of the report's columns within each table (the gate checks them
-/// in this order too).
-pub const METRICS: [Metric; 17] = [
-    Metric {
-        id: "shaded_percent",
-        label: "samples shaded",
-        source: Source::Samples,
-        read: Read::Mode(|mode| Some(mode.samples.as_ref()?.shaded_percent)),
-        gate: Some(Gate { rule: Rule::Points, tolerance: Tolerance::ShadedPercent, show: percent }),
-        column: Some(Column { table: Table::Still, header: "samples %", cell: one_decimal }),
-        plot: None,
-        brief: None,
-        front_margin: None,
-    },
-    Metric {
-        id: "mse_vs_truth",
-        label: "MSE against the truth",
-        source: Source::Truth,
-        read: Read::Mode(|mode| Some(mode.vs_ground_truth.as_ref()?.mse)),
-        gate: Some(Gate { rule: ERROR, tolerance: Tolerance::MseRelative, show: mse_e5 }),
-        column: Some(Column {
-            table: Table::Still,
-            header: "MSE ×1e-5 vs truth",
-            cell: |v| format!("{:.3}", v * 1e5),
-        }),
-        plot: Some(Plot {
-            title: "error against run time",
-            axis: "MSE against the truth ×1e-5 (log)",
-            axis_value: |v| v * 1e5,
-            file: "front",
-            // PSNR is MSE's on a log scale: one order, one front.
-            front: Front::Recorded("psnr_vs_truth"),
-        }),
-        brief: None,
-        front_margin: None,
-    },
-    Metric {
-        id: "psnr_vs_reference",
-        label: "PSNR against the reference",
-        source: Source::Reference,
-        read: Read::Mode(|mode| Some(mode.vs_reference.as_ref()?.psnr_db.value())),
-        gate: Some(Gate { rule: DECIBELS, tolerance: Tolerance::PsnrDb, show: decibels_3 }),
-        column: Some(Column { table: Table::Still, header: "PSNR vs ref", cell: decibels }),
-        plot: None,
-        brief: None,
-        front_margin: None,
-    },
-    PSNR_VS_TRUTH,
-    JOD_VS_TRUTH,
-    FLIP_VS_TRUTH,
-    Metric {
-        id: "ssim_vs_truth",
-        label: "SSIM against the truth",
-        source: Source::Truth,
-        read: Read::Mode(|mode| mode.vs_ground_truth.as_ref()?.ssim),
-        gate: Some(Gate {
-            rule: Rule::Relative { perfect: 1.0 },
-            tolerance: Tolerance::SsimRelative,
-            show: five_decimals,
-        }),
-        column: Some(Column { table: Table::Still, header: "SSIM vs truth", cell: four_decimals }),
-        plot: None,
-        brief: None,
-        front_margin: None,
-    },
-    Metric {
-        id: "mse_vs_reference",
-        label: "MSE against the reference",
-        source: Source::Reference,
-        read: Read::Mode(|mode| Some(mode.vs_reference.as_ref()?.mse)),
-        gate: Some(Gate { rule: ERROR, tolerance: Tolerance::MseRelative, show: mse_e5 }),
-        column: None,
-        plot: None,
-        brief: None,
-        front_margin: None,
-    },
-    Metric {
-        id: "sequence_shaded_percent",
-        label: "samples shaded along the path",
-        source: Source::Sequence,
-        read: Read::Along(|sequence| sequence.shaded_percent),
-        gate: Some(Gate { rule: Rule::Points, tolerance: Tolerance::ShadedPercent, show: percent }),
-        column: Some(Column { table: Table::Path, header: "samples %", cell: one_decimal }),
-        plot: None,
-        brief: None,
-        front_margin: None,
-    },
-    SEQUENCE_JOD_VS_TRUTH,
-    SEQUENCE_PSNR_VS_TRUTH,
-    Metric {
-        id: "sequence_flip_vs_truth",
-        label: "mean FLIP against the truth's frames",
-        source: Source::Sequence,
-        read: Read::Along(|sequence| sequence.mean_flip),
-        gate: Some(Gate { rule: ERROR, tolerance: Tolerance::FlipRelative, show: five_decimals }),
-        column: Some(Column { table: Table::Path, header: "FLIP along the path", cell: four_decimals }),
-        plot: None,
-        brief: Some(|flip| format!("FLIP {flip:.4}")),
-        front_margin: None,
-    },
-    Metric {
-        // An error of squared code values, as MSE is: the MSE tolerance.
-        id: "flicker",
-        label: "flicker along the truth's motion",
-        source: Source::Sequence,
-        read: Read::Along(|sequence| sequence.flicker),
-        gate: Some(Gate { rule: ERROR, tolerance: Tolerance::MseRelative, show: |v| format!("{v:.4e}") }),
-        column: Some(Column {
-            table: Table::Path,
-            header: "flicker ×1e-4",
-            cell: |v| format!("{:.3}", v * 1e4),
-        }),
-        plot: Some(Plot {
-            title: "flicker against run time",
-            axis: "flicker along the camera path (log)",
-            axis_value: |v| v,
-            file: "front-flicker",
-            // A front of flicker against time promotes blur and lag, which flicker little.
-            front: Front::None,
-        }),
-        brief: Some(|v| format!("flicker {:.2}e-4", v * 1e4)),
-        front_margin: None,
-    },
-    Metric {
-        // What lag costs where history cannot help: an error of squared code values, as MSE is.
-        id: "disoccluded_mse",
-        label: "MSE where the frame before had the surface hidden",
-        source: Source::Sequence,
-        read: Read::Along(|sequence| sequence.ghosting.as_ref()?.mse),
-        gate: Some(Gate { rule: ERROR, tolerance: Tolerance::MseRelative, show: |v| format!("{v:.4e}") }),
-        column: Some(Column {
-            table: Table::Path,
-            header: "MSE disoccluded ×1e-3",
-            cell: |v| format!("{:.2}", v * 1e3),
-        }),
-        plot: None,
-        brief: Some(|v| format!("disoccluded MSE {:.2}e-3", v * 1e3)),
-        front_margin: None,
-    },
-    Metric {
-        // Without motion compensation it rewards lag and blur: gated, not shown.
-        id: "instability",
-        label: "uncompensated change of error",
-        source: Source::Sequence,
-        read: Read::Along(|sequence| Some(sequence.instability)),
-        gate: Some(Gate { rule: ERROR, tolerance: Tolerance::MseRelative, show: |v| format!("{v:.4e}") }),
-        column: None,
-        plot: None,
-        brief: None,
-        front_margin: None,
-    },
-    Metric {
-        id: "change_ratio",
-        label: "the mode's own change from frame to frame over the truth's",
-        source: Source::Sequence,
-        read: Read::Along(|sequence| sequence.change_ratio),
-        gate: None,
-        column: Some(Column { table: Table::Path, header: "change ratio", cell: two_decimals }),
-        plot: None,
-        brief: None,
-        front_margin: None,
-    },
-    Metric {
-        id: "count_changes",
-        label: "the share of pixels whose sample count changes from frame to frame",
-        source: Source::Sequence,
-        read: Read::Along(|sequence| sequence.count_changes),
-        gate: None,
-        column: Some(Column {
-            table: Table::Path,
-            header: "count changes %",
-            cell: |v| format!("{:.2}", v * 100.0),
-        }),
-        plot: None,
-        brief: None,
-        front_margin: None,
-    },
-];
-
 impl Metric {
     /// Its value in `mode`'s record, where the record has it; a sequence's metric along the
     /// scene's first sequence (the gate's).
     pub fn value(&self, mode: &ModeRecord) -> Option<f64> {
         self.value_at(mode, 0)
+    }
+
+    /// `value` as the metric's column writes it (JOD to three decimals, PSNR to two, `∞` for
+    /// an image equal to the truth); a metric without a column writes it as Rust does.
+    pub fn written(&self, value: f64) -> String {
+        self.column.map_or_else(|| value.to_string(), |column| (column.cell)(value))
     }
 
     /// The unit its values are in (`dB`, `JOD`, `relative` for an error), as its gate's rule

@@ -81,13 +81,8 @@ impl<'a> FrontPoint<'a> {
     }
 
     /// Whether `self` is faster than `other` with confidence, pair by pair (see
-    /// [`Self::log_ratios`]).
-    pub fn faster_than(&self, other: &FrontPoint) -> bool {
-        self.pace(other).0 == Pace::Faster
-    }
-
-    /// Whether `self` is faster than `other` with confidence and saves at least `margin` of its
-    /// time (the median of their ratios at most 1 − `margin`): statistically and practically
+    /// [`Self::log_ratios`]), and saves at least `margin` of the other's time (the median of
+    /// their ratios at most 1 − `margin`): statistically and practically
     /// cheaper, as the gate calls a slowdown only past its tolerance.
     pub fn cheaper_by(&self, other: &FrontPoint, margin: f64) -> bool {
         let (pace, ratio) = self.pace(other);

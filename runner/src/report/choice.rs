@@ -93,13 +93,14 @@ impl Basis {
 
 /// A row of a ranking: the cheapest mode of a class of modes that a viewer could hardly tell
 /// apart, with its own level and median frame time, and the modes of the class that are as
-/// cheap (no mode of the class is faster than them with confidence).
+/// cheap (no mode of the class is cheaper than them: faster with confidence by at least
+/// [`TIME_MARGIN`] of their time).
 #[derive(Debug, Clone)]
 pub struct Row<'a> {
     pub level: f64,
     pub mode: &'a ModeRecord,
     pub ms: f64,
-    pub as_fast: Vec<&'a ModeRecord>,
+    pub as_cheap: Vec<&'a ModeRecord>,
 }
 
 /// A mode a ranking may list: its level and time on the basis, and its point for comparing
@@ -114,7 +115,7 @@ struct Candidate<'a> {
 
 impl Candidate<'_> {
     /// Whether this mode is cheaper than `other`: faster with confidence, round by round (or
-    /// frame by frame along the path), and by at least [`TIME_MARGIN`] of its time.
+    /// frame by frame along the path), and by at least [`TIME_MARGIN`] of the other's time.
     fn cheaper_than(&self, other: &Candidate) -> bool {
         self.point.cheaper_by(&other.point, TIME_MARGIN)
     }
@@ -152,8 +153,8 @@ pub fn ranking(scene: &SceneRecord, basis: Basis) -> Vec<Row<'_>> {
         // Paired comparisons need not be transitive: should every mode of the class be beaten
         // (a cycle), its first names the row.
         let Some(named) = cheapest.first().or(class.first()).copied() else { break };
-        let as_fast = cheapest.iter().skip(1).map(|c| c.mode).collect();
-        rows.push(Row { level: named.level, mode: named.mode, ms: named.ms, as_fast });
+        let as_cheap = cheapest.iter().skip(1).map(|c| c.mode).collect();
+        rows.push(Row { level: named.level, mode: named.mode, ms: named.ms, as_cheap });
         left.retain(|c| !within_margin(c.level, top) && c.cheaper_than(&named));
     }
     rows.reverse();
@@ -222,7 +223,7 @@ impl<'a> Answer<'a> {
 /// `reference-2x2 9.210 JOD, 40.1 ms`: a row's recommendation, with the modes as cheap as it
 /// (`msaa-4x (≈ adaptive-2x2) 9.620 JOD, 20.0 ms`).
 fn recommendation(row: &Row) -> String {
-    let names: Vec<&str> = row.as_fast.iter().map(|m| m.mode.as_str()).collect();
+    let names: Vec<&str> = row.as_cheap.iter().map(|m| m.mode.as_str()).collect();
     let ties = if names.is_empty() { String::new() } else { format!(" (≈ {})", names.join(", ")) };
     format!("{}{ties} {} JOD, {:.1} ms", row.mode.mode, jod(row.level), row.ms)
 }

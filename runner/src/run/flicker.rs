@@ -40,7 +40,8 @@ pub struct Cut {
 /// Chooses the square with the most flicker in `map` (per pixel of the spool's frames) over the
 /// first `frames` frames, and writes the animation of it of the truth's stream (the spool's
 /// first) and of each of the `animated` streams that holds as many frames (a mode that failed on
-/// the way holds fewer) to `<out_dir>/<stream>.png`, paths in the record relative to `run_dir`.
+/// the way holds fewer) to `<out_dir>/<stream>.png`, paths in the record relative to `run_dir`;
+/// and takes each such stream's coarse share of its error over the square's frames.
 pub fn region(
     spool: &Spool,
     map: &[f64],

@@ -427,8 +427,8 @@ impl AfterRender {
 }
 
 impl Measured {
-    /// Hands each mode its FLIP and JOD (stream `i + 1` is mode `i`'s) and the sequence its
-    /// seconds and region; what could not be written is a warning.
+    /// Hands each mode its FLIP, JOD and coarse share (stream `i + 1` is mode `i`'s) and the
+    /// sequence its seconds and region; what could not be written is a warning.
     fn record_into(self, scene: &SceneRun, record: &mut SequenceRecord, states: &mut [ModeState]) {
         if let Some(Err(error)) = self.kept {
             scene.warn(&format!("--keep-frames: {error}"));

@@ -125,7 +125,7 @@ pub const PSNR_MARGIN_DB: f64 = 0.25;
 /// The smallest saving of time that a ranking reads as cheaper: one mode is cheaper than
 /// another where it is faster with confidence, round by round, *and* the median of their
 /// ratios saves at least this share of the other's time. It is the gate's tolerance for time
-/// ratios: on a 2-core VM one frame's time varies by 10–15 % from round to round, so a
+/// ratios: on a 2-core VM one frame's time varies by 10–17 % from round to round, so a
 /// difference of a few percent decides one way in one run and the other way in the next.
 pub const TIME_MARGIN: f64 = 0.1;
 

@@ -8,7 +8,7 @@
 //! connection, passes ordered (dependencies first, ties in insertion order, so the submission
 //! order that a benchmark measures is the one the recipe wrote), usage flags derived from the
 //! accesses, lifetimes computed, and resources with equal descriptors and disjoint lifetimes
-//! sharing one allocation (§6; see [`allocate`]). Retained outputs, which are read back after
+//! sharing one allocation (§6; see `allocate`). Retained outputs, which are read back after
 //! the frame, live to its end and never share. A *carried* connection reads in the next frame
 //! what a pass wrote in this one (a temporal mode's history): its resource spans every frame and
 //! never shares, and its writer runs after its reader. Nothing is culled: a pass whose outputs nobody

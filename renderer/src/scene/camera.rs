@@ -94,7 +94,7 @@ impl Camera {
 
     /// Checks that the renderer can draw through this camera: finite coordinates within
     /// ±[`MAX_COORDINATE`], a view direction that is neither zero (a target on top of the
-    /// position) nor parallel to `up`, a field of view within [`FOV_Y_DEGREES`], and
+    /// position) nor parallel to `up`, a field of view within `FOV_Y_DEGREES`, and
     /// 1e-6 ≤ near < far ≤ 1e12 (they reach the GPU as f32). An infinite far plane passes: the
     /// caller replaces it from the scene's bounds.
     pub fn validate(&self) -> Result<(), CameraError> {

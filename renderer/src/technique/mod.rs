@@ -5,8 +5,8 @@
 //!
 //! This file registers them: a technique is a variant of [`Technique`], its facts are the arms
 //! of the `impl Technique` below (the compiler names every one a new variant lacks), and its
-//! passes join a frame in [`add_shading`] (between the G-buffer and the HDR image) or
-//! [`add_post_process`] (on the display image).
+//! passes join a frame in `add_shading` (between the G-buffer and the HDR image) or
+//! `add_post_process` (on the display image).
 
 pub mod adaptive;
 pub(crate) mod fxaa;

@@ -165,7 +165,7 @@ pub struct BlessedSamples {
     pub full_pixels: u64,
     pub reshaded: u64,
     pub work_percent: f64,
-    /// histogram[i]: pixels that shaded i + 1 samples.
+    /// `histogram[i]`: pixels that shaded i + 1 samples.
     pub histogram: Vec<u64>,
 }
 

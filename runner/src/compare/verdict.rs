@@ -189,7 +189,7 @@ pub struct Verdict {
     #[serde(default)]
     pub base_run_ids: Vec<String>,
     /// Fresh processes of the run's build and of the base build that measured again the scenes
-    /// whose time regressed against the base (see [`Confirmation`]), if any.
+    /// whose time regressed against the base (see [`Confirmation`](super::request::Confirmation)), if any.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub confirm_run_ids: Vec<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

@@ -195,7 +195,7 @@ const MAX_SHADOW_CUBE_BYTES: u64 = 512 << 20;
 const SHADOW_RESOLUTIONS: std::ops::RangeInclusive<u32> = 16..=4096;
 
 /// Checks the shadows of a scene's lights, each named by its settings' field: every setting in
-/// range, at most [`MAX_SHADOW_LIGHTS`], within [`MAX_SHADOW_CUBE_BYTES`], one resolution
+/// range, at most [`MAX_SHADOW_LIGHTS`], within `MAX_SHADOW_CUBE_BYTES`, one resolution
 /// for all (their cubes are layers of one array). On failure, the field and why.
 pub fn check_shadows(shadows: &[(String, Shadow)]) -> Result<(), (String, String)> {
     for (field, shadow) in shadows {

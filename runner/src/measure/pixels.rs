@@ -163,7 +163,7 @@ pub struct SampleStats {
     pub reshaded: u64,
     /// Every shading evaluation over M²·w·h, in percent: (shaded + reshaded) / total.
     pub work_percent: f64,
-    /// histogram[i]: pixels that shaded i + 1 samples, for i + 1 in 1…M².
+    /// `histogram[i]`: pixels that shaded i + 1 samples, for i + 1 in 1…M².
     pub histogram: Vec<u64>,
 }
 

@@ -57,7 +57,7 @@ pub struct Geometry {
 
 /// How fast the truth's content moves: over every frame pair, the motion from the frame before
 /// of the covered pixels (those with geometry) whose point moved at all (by at least
-/// [`SPEED_BIN`]), in pixels, and what share of the frame they are. A path's nominal speed is
+/// `SPEED_BIN`), in pixels, and what share of the frame they are. A path's nominal speed is
 /// its background's or the frame centre's; an orbit's content at the pivot moves slower, and an
 /// object crossing a still view is what moves, however little of the frame it covers.
 #[derive(Debug, Clone, Default)]

@@ -81,7 +81,7 @@ pub struct RunArgs {
     #[arg(long, value_name = "MODEL")]
     pub jod_display: Option<String>,
     /// Write every frame of each sequence that ColorVideoVDP saw (the warm-up's first),
-    /// display-encoded, as <scene>/frames/<sequence>/<mode>/<NNN>.png (the truth's as `truth`),
+    /// display-encoded, as `<scene>/frames/<sequence>/<mode>/<NNN>.png` (the truth's as `truth`),
     /// with sequence.json beside them, for a video metric or an encoder of your own
     #[arg(long)]
     pub keep_frames: bool,
@@ -375,7 +375,7 @@ pub struct RunPlan {
     /// Bytes the render targets of one scene's modes may take together; `None`: 90% of the
     /// memory available after the scene's upload.
     pub memory_limit: Option<u64>,
-    /// reports/<run-id>, created by [`create_run_dir`].
+    /// `reports/<run-id>`, created by [`create_run_dir`].
     pub run_dir: PathBuf,
     pub run_id: String,
 }
@@ -502,7 +502,7 @@ const STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(60);
 
 /// Removes the temporary files and staging folders (`<name>.tmp-<pid>`) that killed processes
 /// left under `dir`, down to `depth` folders; those of live processes, and any written to in
-/// the last [`STALE_AFTER`], are left alone. Returns how many went.
+/// the last `STALE_AFTER`, are left alone. Returns how many went.
 pub fn remove_stale_temporaries(dir: &Path, depth: u32) -> usize {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return 0;

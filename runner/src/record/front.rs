@@ -81,7 +81,7 @@ impl<'a> FrontPoint<'a> {
     }
 
     /// Whether `self` is faster than `other` with confidence, pair by pair (see
-    /// [`Self::log_ratios`]), and saves at least `margin` of the other's time (the median of
+    /// `log_ratios`), and saves at least `margin` of the other's time (the median of
     /// their ratios at most 1 − `margin`): statistically and practically
     /// cheaper, as the gate calls a slowdown only past its tolerance.
     pub fn cheaper_by(&self, other: &FrontPoint, margin: f64) -> bool {

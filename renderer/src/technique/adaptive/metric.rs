@@ -114,7 +114,7 @@ pub fn clamp_count(k: f64, total: u32) -> u32 {
 /// - A window partly covered by geometry sits on a silhouette against the background: both
 ///   metrics are infinite there. A wholly uncovered window has nothing to anti-alias: zero.
 /// - The variance is computed in two passes (mean, then mean squared deviation), which cannot
-///   go negative or cancel the way E[d²] − E[d]² does at large depths. The shader uses the
+///   go negative or cancel the way `E[d²] − E[d]²` does at large depths. The shader uses the
 ///   equally stable shifted form, Σ(d − d₀)² − (Σ(d − d₀))²/n, in one pass.
 /// - The mean normal of opposite normals is zero: the cone is then the widest possible (1).
 /// - 1 − min |n̄·n| is clamped at zero before the square root.

@@ -17,7 +17,7 @@ pub enum ExtraSamples {
 /// The depth statistic of the geometry metric.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DepthMetric {
-    /// The variance relative to the squared mean depth, Var(d) / E[d]²: free of the scene's
+    /// The variance relative to the squared mean depth, `Var(d) / E[d]²`: free of the scene's
     /// unit, so a scene and its copy scaled ×1000 take the same samples. The default.
     Relative,
     /// The variance in view-space units², the paper's literal metric: the same geometry

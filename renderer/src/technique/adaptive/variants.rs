@@ -45,7 +45,7 @@ pub const SURFACE_COS: f32 = 0.97;
 pub const SURFACE_GAP: f32 = 0.01;
 
 impl Reconstruction {
-    /// Whether a pixel of `n` of `m`² samples reads [`sample_cells`] rather than averaging
+    /// Whether a pixel of `n` of `m`² samples reads [`sample_cells`](super::cells::sample_cells) rather than averaging
     /// alike.
     pub fn weighted(self, m: u32, n: u32) -> bool {
         self != Reconstruction::Equal && n > 1 && n < m * m

@@ -388,6 +388,16 @@ fn five_decimals(value: f64) -> String {
     format!("{value:.5}")
 }
 
+/// A share in [0, 1] as a percentage to two decimals.
+fn hundredths_of_percent(share: f64) -> String {
+    format!("{:.2}", share * 100.0)
+}
+
+/// An MSE in thousandths, to two decimals.
+fn thousandths(mse: f64) -> String {
+    format!("{:.2}", mse * 1e3)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

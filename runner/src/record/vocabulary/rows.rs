@@ -338,13 +338,3 @@ const fn lag_row(
         front_margin: None,
     }
 }
-
-/// A share in [0, 1] as a percentage to two decimals.
-fn hundredths_of_percent(share: f64) -> String {
-    format!("{:.2}", share * 100.0)
-}
-
-/// An MSE in thousandths, to two decimals.
-fn thousandths(mse: f64) -> String {
-    format!("{:.2}", mse * 1e3)
-}

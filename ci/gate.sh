@@ -25,8 +25,8 @@
 # measured again in as many fresh processes a side, once, and decided on all the processes
 # (`compare --confirm-runs`). Where the change cannot move a frame's time
 # (`gate_strategy` in ci/lib.sh: only baselines, docs or tests changed, or only code that works on
-# what the rounds left, such as the metric, compare or the report), no base is built and no time is
-# measured: one process measures quality and is compared with the baselines. Without a usable base
+# what the rounds left, such as the metric, compare or the report, or elsewhere only comments,
+# blank lines and spacing), no base is built and no time is measured: one process measures quality and is compared with the baselines. Without a usable base
 # (no git history), one run is compared with the baselines and time is gated only on the machine
 # that blessed them.
 #
@@ -182,7 +182,7 @@ case $strategy in
     baselines) echo "ci/gate.sh: no base commit (no git history?): time is gated against the baselines only on the machine that blessed them" >&2 ;;
     unchanged) echo "ci/gate.sh: the code is the base's (${base:0:12}): time cannot have moved and is not measured" >&2 ;;
     untimed)
-        echo "ci/gate.sh: no code that can move a frame's time changed since the base (${base:0:12}), so time is not measured; what changed:" >&2
+        echo "ci/gate.sh: no code that can move a frame's time changed since the base (${base:0:12}), comments, blank lines and spacing aside, so time is not measured; what changed:" >&2
         git diff --name-only "$base" -- "${binary_paths[@]}" | sed 's/^/    /' >&2
         ;;
 esac

@@ -46,19 +46,27 @@ timing_paths=("${binary_paths[@]}" ':(exclude)cvvdp' ':(exclude)runner/src/measu
     ':(exclude)ci/gate.sh' ':(exclude)ci/suite.sh' ':(exclude)ci/nightly.sh' ':(exclude)ci/test.sh'
     ':(exclude)ci/injections' ':(exclude).ci')
 
+# A line that is only a comment: `//` (Rust, WGSL), or `#` then a space or the line's end (TOML,
+# shell), which no Rust attribute (`#[`, `#![`) and no shebang (`#!`) is.
+comment_line='^[[:space:]]*(//|#([[:space:]]|$))'
+# A change whose every changed line is a comment, blank or only respaced renders and times
+# every frame as the base does (the binary differs only in the line numbers its panics name).
+code_only=(--ignore-all-space --ignore-blank-lines --ignore-matching-lines="$comment_line")
+
 # gate_strategy BASE: how the gate measures time against the commit BASE (empty where there is
 # no history), from what the working tree changed since it:
 #   baselines  no base: one run is gated against the baselines, time only on the machine that
 #              blessed them;
 #   unchanged  the binary is the base's: time cannot have moved;
-#   untimed    code changed, none of it code that can move a frame's time;
+#   untimed    code changed, none of it code that can move a frame's time (comments, blank
+#              lines and spacing do not count);
 #   ab         the head and the base are built and timed against each other.
 gate_strategy() {
     if [ -z "$1" ]; then
         echo baselines
     elif git diff --quiet "$1" -- "${binary_paths[@]}"; then
         echo unchanged
-    elif git diff --quiet "$1" -- "${timing_paths[@]}"; then
+    elif git diff --quiet "${code_only[@]}" "$1" -- "${timing_paths[@]}"; then
         echo untimed
     else
         echo ab

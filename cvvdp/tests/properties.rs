@@ -3,7 +3,7 @@
 //! temporal channels, masking or pooling is broken, even where a broken stage keeps every
 //! score in [0, 10].
 
-mod common;
+use crate::common;
 
 use aabench_cvvdp::{Cvvdp, Display, Frame};
 use serde_json::Value;

@@ -5,7 +5,7 @@
 //! broken stage (a table, a filter, the pyramid's borders, the masking, the pooling) fails here
 //! even where the total hides it.
 
-mod common;
+use crate::common;
 
 use aabench_cvvdp::Display;
 use common::{fixtures, score};

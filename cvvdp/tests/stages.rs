@@ -5,7 +5,7 @@
 //! (`heatmaps.json`, by `fixtures/make_heatmaps.py`). A stage that breaks fails here by name,
 //! before the scores of `reference.rs` say only that something moved.
 
-mod common;
+use crate::common;
 
 use aabench_cvvdp::csf::{CastleCsf, Channel};
 use aabench_cvvdp::masking::PhaseBlur;

@@ -9,7 +9,7 @@
 //! windows, zero constants on a silhouette, the area weights' hand-worked values) are unit
 //! tests in `src/technique/adaptive/`, and `tests/properties.rs` checks it over hostile inputs.
 
-mod support;
+use crate::support;
 
 use aabench_renderer::adaptive::{self, MetricSet};
 use aabench_renderer::scene::generate::Generator;

@@ -12,7 +12,7 @@
 //! and the geometry probe's motion vectors on it are its projected motion to a fiftieth of a
 //! pixel while the wall behind stays still.
 
-mod support;
+use crate::support;
 
 use std::path::{Path, PathBuf};
 

@@ -8,7 +8,7 @@
 //! properties (anchors in f64, bad parameters naming their field, round trips, zero-mean grain)
 //! are unit tests in `src/color.rs`, and `tests/properties.rs` checks them over hostile inputs.
 
-mod support;
+use crate::support;
 
 use aabench_renderer::color::{ColorSettings, Dither, Tonemap, Transfer};
 use aabench_renderer::scene::generate::Generator;

@@ -8,7 +8,7 @@
 //! reference-4x4 than reference-2x2. A scene reuses the pipelines that earlier scenes on the
 //! device compiled, and renders the same bits with them.
 
-mod support;
+use crate::support;
 
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::{ColorSettings, DisplayImage, Gpu, RenderSettings, SceneRenderer};

@@ -8,7 +8,7 @@
 //! `src/graph/tests.rs`; a swapped or mistyped binding is refused in a unit test of
 //! `src/bindings.rs`.
 
-mod support;
+use crate::support;
 
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::{Light, LightKind, Lighting, Shadow};

@@ -13,7 +13,7 @@
 //! encodings, JPEG textures, and 16-bit and grey PNGs. Extensions aabench does not read are a
 //! warning when optional and an error naming them when required.
 
-mod support;
+use crate::support;
 
 use aabench_renderer::scene::load_gltf;
 use serde_json::{Value, json};

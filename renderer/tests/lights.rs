@@ -5,7 +5,7 @@
 //! Scenes with only point lights compile their shaders without the light-kind arithmetic (the
 //! `LIGHT_KINDS` feature), and a point light shades to the same HDR bits with it as without.
 
-mod support;
+use crate::support;
 
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::scene::{Light, LightKind, Lighting};

@@ -11,7 +11,7 @@
 //! the extension defines; and textures packed into shared pages render as if each had a layer
 //! of its own. How materials and their textures are imported is tested in `tests/import.rs`.
 
-mod support;
+use crate::support;
 
 use aabench_renderer::scene::write::glb;
 use aabench_renderer::scene::{Camera, Light, LightKind, Lighting, Scene, UvTransform, load_gltf};

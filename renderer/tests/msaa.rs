@@ -3,7 +3,7 @@
 //! edges that an alpha test cuts out of a texture included: its sample mask's bits are the
 //! standard sample positions in order.
 
-mod support;
+use crate::support;
 
 use std::sync::Arc;
 

@@ -1,7 +1,7 @@
 //! Omnidirectional shadows on lavapipe: cube faces hold what lies along their axes, occluded
 //! points are dark and visible ones lit, and PCF's penumbra widens with its radius.
 
-mod support;
+use crate::support;
 
 use aabench_renderer::scene::shadow::face_and_coordinates;
 use aabench_renderer::scene::{

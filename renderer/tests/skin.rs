@@ -9,7 +9,7 @@
 //! head keeps its shape, its feet move further than its hips, and every vertex blends joints
 //! whose weights sum to one. On lavapipe its motion vectors hold each limb's own motion.
 
-mod support;
+use crate::support;
 
 use std::path::PathBuf;
 

@@ -1,7 +1,7 @@
 //! SMAA 1x: its lookup textures are the reference's, it changes only pixels beside an edge, and
 //! it brings hard edges nearer their truth.
 
-mod support;
+use crate::support;
 
 use aabench_renderer::scene::generate::Generator;
 use aabench_renderer::smaa::{LOOKUP_TEXTURES, PRESET_HIGH};

@@ -5,7 +5,7 @@
 //! still camera, the same twin with the point's place in the frame before taken from the
 //! object's track.
 
-mod support;
+use crate::support;
 
 use aabench_renderer::adaptive::STABLE_DEPTH_TOLERANCE;
 use aabench_renderer::scene::Camera;

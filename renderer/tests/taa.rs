@@ -2,7 +2,7 @@
 //! and a moving object's own, in a jittered frame), a history that belongs to its mode alone,
 //! and an image that converges below deferred-1x1's error on a still camera.
 
-mod support;
+use crate::support;
 
 use aabench_renderer::scene::Camera;
 use aabench_renderer::{DisplayImage, GBufferImages, taa};

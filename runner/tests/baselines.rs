@@ -3,7 +3,7 @@
 //! (whole run records) is compared as it was blessed, and `aabench upgrade` rewrites it into
 //! exactly what a bless of the same runs writes. Real runs on lavapipe, real files and exits.
 
-mod support;
+use crate::support;
 
 use std::path::{Path, PathBuf};
 

@@ -10,7 +10,7 @@ use aabench::manifest::Manifest;
 use aabench::plan::Tier;
 use aabench_renderer::{ExtraSamples, Gpu, Mode, SceneRenderer};
 
-mod support;
+use crate::support;
 
 fn scene_file(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes").join(format!("{name}.json"))

@@ -16,7 +16,7 @@
 //! reference-4x4. Every case's numbers are printed, with the measure without motion
 //! compensation (`instability`) beside.
 
-mod support;
+use crate::support;
 
 use aabench::manifest::motion::MotionSpec;
 use aabench::measure::temporal::{self, Flow, Geometry, PairError};

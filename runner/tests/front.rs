@@ -1,7 +1,7 @@
 //! The error-against-run-time front in a real run of the texture stress scene, and what the
 //! `-cells` variant recovers there against the truth.
 
-mod support;
+use crate::support;
 
 use serde_json::Value;
 use support::*;

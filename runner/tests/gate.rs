@@ -8,7 +8,7 @@
 //! verdicts as the unsharded run. The statistics, tolerances, fronts, shard selection, input
 //! hashing and XML escaping behind these are unit tests in `src/`.
 
-mod support;
+use crate::support;
 
 use std::path::{Path, PathBuf};
 use std::process::Output;

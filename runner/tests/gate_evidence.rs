@@ -6,7 +6,7 @@
 //! The machine probes, the confidence reached by four processes a side, and a stray process
 //! are unit tests in `src/machine.rs` and `src/compare/ab.rs`.
 
-mod support;
+use crate::support;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

@@ -5,7 +5,7 @@
 //! outside `#[cfg(test)]` modules, doc comments and comments. Inside each folder module, its
 //! children use each other in no cycle either, read from `crate::`, `super::` and `self::` paths.
 
-mod source;
+use crate::source;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};

@@ -11,7 +11,7 @@
 //! file lacks, or one that cannot play, is refused naming the manifest, the field, the file and
 //! the animation.
 
-mod support;
+use crate::support;
 
 use aabench::measure::temporal::{self, Flow, Geometry, PairError};
 use aabench_renderer::scene::Camera;

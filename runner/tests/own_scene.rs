@@ -8,7 +8,7 @@
 use aabench_renderer::scene::write::{GltfWriter, MaterialDesc, MeshData};
 use serde_json::json;
 
-mod support;
+use crate::support;
 
 use support::*;
 

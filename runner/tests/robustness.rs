@@ -15,7 +15,7 @@ use std::process::{Command, Stdio};
 use aabench::manifest::Manifest;
 use serde_json::json;
 
-mod support;
+use crate::support;
 
 use support::*;
 

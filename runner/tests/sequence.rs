@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{Value, json};
 
-mod support;
+use crate::support;
 
 use support::*;
 

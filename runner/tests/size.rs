@@ -9,7 +9,7 @@
 //! first (lines kept, `source::blank_non_code`), so a `'{'` or a `"}"` never opens or closes a
 //! body.
 
-mod source;
+use crate::source;
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};

@@ -4,7 +4,7 @@
 //! shard rendered and compared with the baselines of its scenes alone, the verdicts joined into
 //! one, and joins that must not be made refused or failed.
 
-mod support;
+use crate::support;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -130,16 +130,17 @@ fn the_gate_times_a_change_only_where_it_can_move_a_frames_time() {
     git(&["add", "."]);
     git(&["-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "base"]);
     let lib = repository().join("ci/lib.sh");
-    let strategy = |changed: &[&str]| {
-        for file in changed {
-            std::fs::write(repo.join(file), "1\n").unwrap();
+    let edited = |edits: &[(&str, &str)]| {
+        for (file, text) in edits {
+            std::fs::write(repo.join(file), text).unwrap();
         }
         let script = format!("source '{}' && gate_strategy HEAD", lib.display());
         let output = Command::new("bash").current_dir(&repo).args(["-c", &script]).output().unwrap();
         git(&["checkout", "-q", "--", "."]);
-        assert!(output.status.success(), "{changed:?}: {}", stderr(&output));
+        assert!(output.status.success(), "{edits:?}: {}", stderr(&output));
         String::from_utf8(output.stdout).unwrap().trim().to_string()
     };
+    let strategy = |changed: &[&str]| edited(&changed.iter().map(|file| (*file, "1\n")).collect::<Vec<_>>());
     assert_eq!(strategy(&[]), "unchanged");
     assert_eq!(
         strategy(&["docs/gate.md", "runner/tests/cli.rs", "baselines/p/quick/edge.json"]),
@@ -155,6 +156,24 @@ fn the_gate_times_a_change_only_where_it_can_move_a_frames_time() {
     }
     for timed in timed {
         assert_eq!(strategy(&[timed, "runner/src/report/mod.rs"]), "ab", "{timed}");
+    }
+    // Comments, blank lines and spacing move no frame's time; an attribute, a shebang or code
+    // beside a comment may.
+    for (file, text) in [
+        ("renderer/src/lib.rs", "0\n// Why it is so.\n"),
+        ("renderer/src/lib.rs", "/// What it is.\n  0\n\n"),
+        ("shaders/fxaa.wgsl", "// A note.\n0\n"),
+        ("ci/lib.sh", "0\n# A note.\n#\n"),
+    ] {
+        assert_eq!(edited(&[(file, text)]), "untimed", "{file}: {text:?}");
+    }
+    for (file, text) in [
+        ("renderer/src/lib.rs", "#[inline]\n0\n"),
+        ("renderer/src/lib.rs", "0\n// Why it is so.\n1\n"),
+        ("renderer/src/lib.rs", "0 // Why it is so.\n"),
+        ("ci/lib.sh", "#!/bin/sh\n0\n"),
+    ] {
+        assert_eq!(edited(&[(file, text)]), "ab", "{file}: {text:?}");
     }
     let output = Command::new("bash")
         .current_dir(&repo)

@@ -14,7 +14,7 @@
 # into DIR (a CI artifact).
 #
 # The base is REF, or else the commit that last changed a baseline file (the build they were blessed
-# from). When the base's code differs from the working tree's, the gate builds the base beside
+# from), or the bless before it where that commit is the one checked out (`blessed_base`). When the base's code differs from the working tree's, the gate builds the base beside
 # the head and runs both at the quick tier in alternating processes ($AABENCH_GATE_PROCESSES a
 # side, default 4, of $AABENCH_GATE_REPETITIONS rounds each, default 3), after one head process
 # that measures quality and the sequences while the base builds. The alternating processes
@@ -86,8 +86,7 @@ resolve_base() {
             exit 2
         }
     else
-        # A baseline file's commit: a README or a note beside them is no bless.
-        git log -1 --format=%H -- ':(glob)baselines/**/*.json' 2>/dev/null
+        blessed_base
     fi
 }
 base=$(resolve_base) || exit 2

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Shared by ci/gate.sh and ci/nightly.sh: set up, build, and run aabench into a fresh folder; and
-# what of a change can move a frame's time, which decides how the gate measures it.
+# which commit the gate times against and what of a change can move a frame's time, which decide
+# how the gate measures it.
 
 # Sets up the machine and builds the release binary; exits 2 on failure.
 build_aabench() {
@@ -23,6 +24,22 @@ run_fresh() {
     if [ -z "$run_dir" ]; then
         echo "ci: the run wrote nothing (exit $run_code)" >&2
         exit 2
+    fi
+}
+
+# blessed_base: the commit the gate times against unless told another, the last that changed a
+# baseline file (a README or a note beside them is no bless): the build the baselines were blessed
+# from. Where that is the commit checked out (CI on a commit that re-blessed), its code would be
+# its own base and never timed, so the bless before it is the base: a change that moves images
+# is timed like any other. Nothing where there is no such commit (no history, a shallow clone).
+blessed_base() {
+    local baselines=':(glob)baselines/**/*.json'
+    local last
+    last=$(git log -1 --format=%H -- "$baselines" 2>/dev/null || true)
+    if [ -n "$last" ] && [ "$last" = "$(git rev-parse --verify --quiet HEAD)" ]; then
+        git log -1 --format=%H HEAD^ -- "$baselines" 2>/dev/null || true
+    else
+        echo "$last"
     fi
 }
 

@@ -183,6 +183,48 @@ fn the_gate_times_a_change_only_where_it_can_move_a_frames_time() {
     assert_eq!(String::from_utf8_lossy(&output.stdout).trim(), "baselines");
 }
 
+/// The gate's base is the last bless, or the bless before it where the last is the commit
+/// checked out: a commit that re-blessed and changed code has that code timed, not taken as its
+/// own base.
+#[test]
+fn a_commit_that_re_blessed_is_timed_against_the_bless_before_it() {
+    let ws = Workspace::new("base");
+    let repo = ws.dir.join("repo");
+    std::fs::create_dir_all(repo.join("baselines/p/quick")).unwrap();
+    let git = |args: &[&str]| {
+        let output = Command::new("git").current_dir(&repo).args(args).output().unwrap();
+        assert!(output.status.success(), "git {args:?}: {}", stderr(&output));
+        String::from_utf8(output.stdout).unwrap().trim().to_string()
+    };
+    let lib = repository().join("ci/lib.sh");
+    let base = || {
+        let script = format!("source '{}' && blessed_base", lib.display());
+        let output = Command::new("bash").current_dir(&repo).args(["-c", &script]).output().unwrap();
+        assert!(output.status.success(), "{}", stderr(&output));
+        String::from_utf8(output.stdout).unwrap().trim().to_string()
+    };
+    let commit = |files: &[(&str, &str)]| {
+        for (file, text) in files {
+            std::fs::write(repo.join(file), text).unwrap();
+        }
+        git(&["add", "."]);
+        git(&["-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "c"]);
+        git(&["rev-parse", "HEAD"])
+    };
+    git(&["init", "-q"]);
+    let first = commit(&[("baselines/p/quick/edge.json", "0\n"), ("lib.rs", "0\n")]);
+    assert_eq!(base(), "", "the only bless is the commit checked out: no base before it");
+    let code = commit(&[("lib.rs", "1\n")]);
+    assert_eq!(base(), first, "a commit of code after the bless");
+    let bless = commit(&[("baselines/p/quick/edge.json", "1\n"), ("lib.rs", "2\n")]);
+    assert_ne!(bless, code);
+    assert_eq!(base(), first, "the re-bless checked out is timed against the bless before it");
+    commit(&[("baselines/p/quick/README.md", "notes\n")]);
+    assert_eq!(base(), bless, "a note beside the baselines is no bless");
+    std::fs::write(repo.join("lib.rs"), "3\n").unwrap();
+    assert_eq!(base(), bless, "uncommitted code after the bless");
+}
+
 fn arg(path: &Path) -> &str {
     path.to_str().unwrap()
 }

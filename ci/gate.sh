@@ -5,7 +5,12 @@
 # ratios shift 15–40 % between CPU generations, so numbers blessed on another machine cannot
 # decide time here.
 #
-#   ci/gate.sh [--base REF] [--shard I/N] [--verdict-out DIR] [aabench run arguments…]
+#   ci/gate.sh [--base REF] [--shard I/N] [--verdict-out DIR] [--alongside CMD] [aabench run arguments…]
+#
+# With --alongside CMD the gate runs the shell command CMD (`.ci/run`: the tests) beside its work
+# that gives no time, the head's quality process and the base's build, and waits for it before
+# any process it times: on 2 cores the quality process and the tests took 420 s side by side
+# against about 630 s one after the other. CMD failing fails the gate (exit 4) after its verdict.
 #
 # With --shard I/N the gate renders scenes I, I+N, … of the suite in every process (not in the
 # fresh processes that confirm a regression: they render the scenes named), and compares them
@@ -32,8 +37,9 @@
 #
 # Writes summary.md, junit.xml, verdict.json and the HTML report into the first head run's
 # folder. Exits with compare's code: 0 nothing regressed, 1 a regression (or the run compared
-# less than its baselines hold), 2 an error, 3 a scene failed. With $GITHUB_STEP_SUMMARY set,
-# the summary is appended to it. AABENCH_GATE_FAIL_ON=all|quality overrides `--fail-on auto`.
+# less than its baselines hold), 2 an error, 3 a scene failed; else 4 where the command run
+# alongside failed. With $GITHUB_STEP_SUMMARY set, the summary is appended to it.
+# AABENCH_GATE_FAIL_ON=all|quality overrides `--fail-on auto`.
 set -uo pipefail
 invoked_from=$PWD
 cd "$(dirname "$0")/.."
@@ -42,6 +48,7 @@ source ci/lib.sh
 base_ref=""
 shard_args=()
 verdict_out=""
+alongside=""
 run_args=()
 while [ $# -gt 0 ]; do
     case "$1" in
@@ -51,6 +58,8 @@ while [ $# -gt 0 ]; do
         --shard=*) shard_args=(--shard "${1#--shard=}"); shift ;;
         --verdict-out) verdict_out=${2:?ci/gate.sh: --verdict-out needs a folder}; shift 2 ;;
         --verdict-out=*) verdict_out=${1#--verdict-out=}; shift ;;
+        --alongside) alongside=${2:?ci/gate.sh: --alongside needs a command}; shift 2 ;;
+        --alongside=*) alongside=${1#--alongside=}; shift ;;
         *) run_args+=("$1"); shift ;;
     esac
 done
@@ -120,11 +129,11 @@ alternate() {
 
 # start_quality ARGS...: starts the head's process that measures every mode's quality and the
 # sequences, which compare checks against the baselines, in the background (quality_pid, its
-# output in $gate_dir/quality.log). Where the base's processes time alone it gives no time, so
-# it renders one round without a warm-up and needs no machine to itself: it runs while the
-# base is built.
+# output in $gate_dir/quality.log). It gives no time (where the base's processes time alone,
+# or where nothing is timed), so it renders one round without a warm-up and needs no machine to
+# itself: it runs while the base is built and the --alongside command runs.
 start_quality() {
-    echo "ci/gate.sh: the head's quality process, while the base is made ready" >&2
+    echo "ci/gate.sh: the head's quality process, which gives no time, in the background" >&2
     "$head_bin" run --tier quick --repetitions 1 --warmup 0 --sequences on --out "$gate_dir/head" "$@" \
         >"$gate_dir/quality.log" 2>&1 &
     quality_pid=$!
@@ -138,6 +147,17 @@ finish_quality() {
     run_code=$?
     trap - EXIT
     cat "$gate_dir/quality.log" >&2
+}
+
+# run_alongside: runs the --alongside command, if any, and sets alongside_code to its exit code.
+alongside_code=0
+run_alongside() {
+    [ -n "$alongside" ] || return 0
+    echo "ci/gate.sh: beside the work that gives no time: $alongside" >&2
+    local began_alongside=$SECONDS
+    bash -c "$alongside"
+    alongside_code=$?
+    echo "ci/gate.sh: '$alongside' exited $alongside_code after $((SECONDS - began_alongside)) s" >&2
 }
 
 # measure_quality ARGS...: against a base that measures quality in every process, the head's
@@ -188,16 +208,19 @@ esac
 
 if [ "$strategy" != ab ]; then
     # Without a base, one run's 25 rounds are gated against the baselines of the machine that
-    # blessed them. Where the change cannot have moved a frame's time, a timing gate could only
-    # find noise: one process measures quality and the sequences, in one round without a
-    # warm-up (as the A/B gate's quality process does), and compare compares no time.
-    single_args=(--repetitions 25)
-    if [ "$strategy" != baselines ]; then
+    # blessed them, alone. Where the change cannot have moved a frame's time, a timing gate could
+    # only find noise: one process measures quality and the sequences, in one round without a
+    # warm-up (the A/B gate's quality process), and compare compares no time.
+    if [ "$strategy" = baselines ]; then
+        run_alongside
+        "$head_bin" run --tier quick --repetitions 25 "${shard_args[@]}" --out "$gate_dir/head" "${run_args[@]}"
+        run_code=$?
+    else
         [ "$fail_on" = auto ] && fail_on=quality
-        single_args=(--repetitions 1 --warmup 0 --sequences on)
+        start_quality "${shard_args[@]}" "${run_args[@]}"
+        run_alongside
+        finish_quality
     fi
-    "$head_bin" run --tier quick "${single_args[@]}" "${shard_args[@]}" --out "$gate_dir/head" "${run_args[@]}"
-    run_code=$?
     head_runs=("$gate_dir"/head/*/)
     base_args=()
 else
@@ -217,6 +240,7 @@ else
     toolchain=$( (rustc -vV && echo "${RUSTFLAGS:-}") | sha256sum | cut -c1-12)
     cached_base="${AABENCH_GATE_BASE_CACHE:-$base_target/bins}/$base-$toolchain/aabench"
     start_quality "${shard_args[@]}" "${run_args[@]}"
+    run_alongside
     if [ -x "$cached_base" ]; then
         echo "ci/gate.sh: the base ${base:0:12}, built before: $cached_base" >&2
     else
@@ -299,6 +323,10 @@ fi
 # A scene that failed already fails compare; this keeps a run that went wrong otherwise from
 # passing unnoticed.
 if [ "$code" -eq 0 ] && [ "$run_code" -ne 0 ]; then code=$run_code; fi
+if [ "$alongside_code" -ne 0 ]; then
+    echo "ci/gate.sh: '$alongside' failed (exit $alongside_code), so the gate fails" >&2
+    if [ "$code" -eq 0 ]; then code=4; fi
+fi
 "$head_bin" report "$run_dir" >/dev/null || echo "ci/gate.sh: the HTML report could not be written" >&2
 if [ -n "$verdict_out" ]; then
     mkdir -p "$verdict_out" && cp "$run_dir/summary.md" "$run_dir/junit.xml" "$run_dir/verdict.json" "$verdict_out/" ||

@@ -7,10 +7,10 @@
 #
 #   ci/gate.sh [--base REF] [--shard I/N] [--verdict-out DIR] [--alongside CMD] [aabench run arguments…]
 #
-# With --alongside CMD the gate runs the shell command CMD (`.ci/run`: the tests) beside its work
-# that gives no time, the head's quality process and the base's build, and waits for it before
-# any process it times: on 2 cores the quality process and the tests took 420 s side by side
-# against about 630 s one after the other. CMD failing fails the gate (exit 4) after its verdict.
+# With --alongside CMD the gate runs the shell command CMD (`.ci/run`: the tests) beside the
+# head's quality process, which gives no time, and ends it before the base's build and any
+# process it times: on 2 cores the quality process and the tests took 420 s side by side against
+# about 630 s one after the other. CMD failing fails the gate (exit 4) after its verdict.
 #
 # With --shard I/N the gate renders scenes I, I+N, … of the suite in every process (not in the
 # fresh processes that confirm a regression: they render the scenes named), and compares them
@@ -131,7 +131,7 @@ alternate() {
 # sequences, which compare checks against the baselines, in the background (quality_pid, its
 # output in $gate_dir/quality.log). It gives no time (where the base's processes time alone,
 # or where nothing is timed), so it renders one round without a warm-up and needs no machine to
-# itself: it runs while the base is built and the --alongside command runs.
+# itself: it runs beside the --alongside command and the base's build.
 start_quality() {
     echo "ci/gate.sh: the head's quality process, which gives no time, in the background" >&2
     "$head_bin" run --tier quick --repetitions 1 --warmup 0 --sequences on --out "$gate_dir/head" "$@" \

@@ -31,13 +31,16 @@ run_fresh() {
 # baseline file (a README or a note beside them is no bless): the build the baselines were blessed
 # from. Where that is the commit checked out (CI on a commit that re-blessed), its code would be
 # its own base and never timed, so the bless before it is the base: a change that moves images
-# is timed like any other. Nothing where there is no such commit (no history, a shallow clone).
+# is timed like any other. Along first parents, so that a pull request's merge commit that
+# re-blesses is that commit, not the branch's bless. Nothing where there is no such commit or no
+# whole history to find it in (a shallow clone's oldest commit seems to add every file).
 blessed_base() {
     local baselines=':(glob)baselines/**/*.json'
     local last
-    last=$(git log -1 --format=%H -- "$baselines" 2>/dev/null || true)
+    if [ "$(git rev-parse --is-shallow-repository 2>/dev/null)" != false ]; then return 0; fi
+    last=$(git log -1 --first-parent --format=%H -- "$baselines" 2>/dev/null || true)
     if [ -n "$last" ] && [ "$last" = "$(git rev-parse --verify --quiet HEAD)" ]; then
-        git log -1 --format=%H HEAD^ -- "$baselines" 2>/dev/null || true
+        git log -1 --first-parent --format=%H HEAD^ -- "$baselines" 2>/dev/null || true
     else
         echo "$last"
     fi
@@ -64,11 +67,14 @@ timing_paths=("${binary_paths[@]}" ':(exclude)cvvdp' ':(exclude)runner/src/measu
     ':(exclude)ci/injections' ':(exclude).ci')
 
 # A line that is only a comment: `//` (Rust, WGSL), or `#` then a space or the line's end (TOML,
-# shell), which no Rust attribute (`#[`, `#![`) and no shebang (`#!`) is.
-comment_line='^[[:space:]]*(//|#([[:space:]]|$))'
-# A change whose every changed line is a comment, blank or only respaced renders and times
-# every frame as the base does (the binary differs only in the line numbers its panics name).
-code_only=(--ignore-all-space --ignore-blank-lines --ignore-matching-lines="$comment_line")
+# shell), which no Rust attribute (`#[`, `#![`) and no shebang (`#!`) is; or a blank line (git
+# drops a block of changed lines only where every line matches, and a comment is often added
+# with a blank line before it).
+comment_line=$'^[[:space:]]*(//|#([[:space:]]|$))|^[[:blank:]\r]*\n'
+# A change whose every changed line is a comment, blank or only respaced (more or less space
+# where there was some: `"a b"` to `"ab"` is a change) renders and times every frame as the
+# base does (the binary differs only in the line numbers its panics name).
+code_only=(--ignore-space-change --ignore-blank-lines --ignore-matching-lines="$comment_line")
 
 # gate_strategy BASE: how the gate measures time against the commit BASE (empty where there is
 # no history), from what the working tree changed since it:

@@ -161,7 +161,8 @@ fn the_gate_times_a_change_only_where_it_can_move_a_frames_time() {
     // beside a comment may.
     for (file, text) in [
         ("renderer/src/lib.rs", "0\n// Why it is so.\n"),
-        ("renderer/src/lib.rs", "/// What it is.\n  0\n\n"),
+        ("renderer/src/lib.rs", "/// What it is.\n0  \n\n"),
+        ("renderer/src/lib.rs", "0\n\n// Why it is so.\n"),
         ("shaders/fxaa.wgsl", "// A note.\n0\n"),
         ("ci/lib.sh", "0\n# A note.\n#\n"),
     ] {
@@ -197,12 +198,13 @@ fn a_commit_that_re_blessed_is_timed_against_the_bless_before_it() {
         String::from_utf8(output.stdout).unwrap().trim().to_string()
     };
     let lib = repository().join("ci/lib.sh");
-    let base = || {
+    let base_in = |dir: &Path| {
         let script = format!("source '{}' && blessed_base", lib.display());
-        let output = Command::new("bash").current_dir(&repo).args(["-c", &script]).output().unwrap();
+        let output = Command::new("bash").current_dir(dir).args(["-c", &script]).output().unwrap();
         assert!(output.status.success(), "{}", stderr(&output));
         String::from_utf8(output.stdout).unwrap().trim().to_string()
     };
+    let base = || base_in(&repo);
     let commit = |files: &[(&str, &str)]| {
         for (file, text) in files {
             std::fs::write(repo.join(file), text).unwrap();
@@ -223,6 +225,19 @@ fn a_commit_that_re_blessed_is_timed_against_the_bless_before_it() {
     assert_eq!(base(), bless, "a note beside the baselines is no bless");
     std::fs::write(repo.join("lib.rs"), "3\n").unwrap();
     assert_eq!(base(), bless, "uncommitted code after the bless");
+    // A pull request's merge commit that brings a re-bless is timed against the main line's.
+    git(&["checkout", "-q", "-b", "pr"]);
+    let branch_bless = commit(&[("baselines/p/quick/edge.json", "2\n"), ("lib.rs", "4\n")]);
+    git(&["checkout", "-q", "-"]);
+    commit(&[("other.rs", "0\n")]);
+    git(&["-c", "user.name=t", "-c", "user.email=t@t", "merge", "-q", "--no-ff", "-m", "m", "pr"]);
+    assert_ne!(base(), branch_bless);
+    assert_eq!(base(), bless, "the merge re-blessed: the main line's bless before it");
+    // A shallow clone's oldest commit seems to add every file: it has no base to give.
+    let shallow = ws.dir.join("shallow");
+    let url = format!("file://{}", repo.display());
+    git(&["clone", "-q", "--depth", "2", &url, arg(&shallow)]);
+    assert_eq!(base_in(&shallow), "", "a shallow clone");
 }
 
 fn arg(path: &Path) -> &str {

@@ -19,21 +19,22 @@
 # into DIR (a CI artifact).
 #
 # The base is REF, or else the commit that last changed a baseline file (the build they were blessed
-# from), or the bless before it where that commit is the one checked out (`blessed_base`). When the base's code differs from the working tree's, the gate builds the base beside
-# the head and runs both at the quick tier in alternating processes ($AABENCH_GATE_PROCESSES a
-# side, default 4, of $AABENCH_GATE_REPETITIONS rounds each, default 3), after one head process
-# that measures quality and the sequences while the base builds. The alternating processes
-# time alone (`--quality off`, where the base's build knows it) the modes the gate times
-# (`aabench modes --tier quick --timed-by-gate`: the unstalled ones and one stalled);
-# `aabench compare` then decides time with the process as the unit, per scene and pooled over
-# the scenes. The scenes of a suspect time (regressed, or noisy with its interval above 0) are
-# measured again in as many fresh processes a side, once, and decided on all the processes
-# (`compare --confirm-runs`). Where the change cannot move a frame's time
-# (`gate_strategy` in ci/lib.sh: only baselines, docs or tests changed, or only code that works on
-# what the rounds left, such as the metric, compare or the report, or elsewhere only comments,
-# blank lines and spacing), no base is built and no time is measured: one process measures quality and is compared with the baselines. Without a usable base
-# (no git history), one run is compared with the baselines and time is gated only on the machine
-# that blessed them.
+# from), or the bless before it where that commit is the one checked out (`blessed_base`). When the
+# base's code differs from the working tree's, the gate builds the base beside the head and runs
+# both at the quick tier in alternating processes ($AABENCH_GATE_PROCESSES a side, default 4, of
+# $AABENCH_GATE_REPETITIONS rounds each, default 3), after one head process that measures quality
+# and the sequences while the base builds. The alternating processes time alone (`--quality off`,
+# where the base's build knows it) the modes the gate times (`aabench modes --tier quick
+# --timed-by-gate`: the unstalled ones and one stalled); `aabench compare` then decides time with
+# the process as the unit, per scene and pooled over the scenes. The scenes of a suspect time
+# (regressed, or noisy with its interval above 0) are measured again in as many fresh processes a
+# side, once, and decided on all the processes (`compare --confirm-runs`). Where the change cannot
+# move a frame's time (`gate_strategy` in ci/lib.sh: only baselines, docs or tests changed, or only
+# code that works on what the rounds left, such as the metric, compare or the report, or elsewhere
+# only comments, blank lines and spacing), no base is built and no time is measured: one process
+# measures quality and is compared with the baselines. Without a usable base (no git history, or a
+# shallow clone), one run is compared with the baselines and time is gated only on the machine that
+# blessed them.
 #
 # Writes summary.md, junit.xml, verdict.json and the HTML report into the first head run's
 # folder. Exits with compare's code: 0 nothing regressed, 1 a regression (or the run compared
